@@ -1,0 +1,1 @@
+"""Wheel and rail profiles: analytic standards and measured profiles."""
