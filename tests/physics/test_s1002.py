@@ -29,7 +29,9 @@ def test_s1002_is_vectorised_and_nan_outside_range():
 def test_s1002_profile_is_continuous():
     # The published coefficients leave jumps of 1.2e-4 mm at y=-35 and 3.7e-5 mm at y=-26
     # (reference README); nothing larger may appear between neighbouring samples except the
-    # steep flange flank, whose slope is bounded by atan(2.75) ~ 70 deg.
+    # steep flange flank, whose slope is bounded by atan(2.75) ~ 70 deg. The flange back
+    # (y < -68) turns vertical at y = -70 (arc H's tangent) and is left out of the check.
     y, z = s1002_profile(step_mm=0.01)
     assert np.all(np.isfinite(z))
-    assert np.max(np.abs(np.diff(z))) < 0.01 * 2.8
+    keep = y[1:] > -68.0
+    assert np.max(np.abs(np.diff(z))[keep]) < 0.01 * 2.8
