@@ -1,0 +1,606 @@
+"""Rigid wheel-rail contact geometry of a wheelset on a straight track, with optional yaw.
+
+For a prescribed lateral shift of the wheelset, the roll angle and the height of the
+wheelset are solved so that each wheel touches its rail (minimum vertical gap zero on both
+sides), and every contact point is reported: the primary (gap 0) and, where the profiles
+approach each other a second time within a tolerance, a secondary patch (two-point contact,
+typically tread + flange).  Background: seed 000 §V, seed 002 §2, seed 004 §2 (contact search
+before Hertz/FASTSIM); the case is the Manchester contact benchmark (``reference/README.md``).
+
+Frames and signs (read this before using the results)
+------------------------------------------------------
+Track frame (ISO 8855-like, seen from behind in the running direction):
+  x along the track (running direction), **y lateral, positive to the LEFT**, z up.
+  Origin: track centre line, at the height of the top of the (un-inclined) rails.
+  The rails are upright rail profiles turned about their top by the inclination, with the
+  gauge points (``gauge_height_mm`` below the highest point of each inclined rail, innermost
+  point) at y = +/- gauge_mm / 2.
+Wheelset pose:
+  ``shift_mm`` lateral displacement of the wheelset centre, **positive towards the left
+  rail** (so the left flange closes up).  ``roll_rad`` rotation about +x, **positive when the
+  left wheel rises**.  ``height_mm`` vertical displacement of the axle from its nominal
+  position (tape circles of radius r0 standing on the rail tops at z = 0).
+Wheel frame (per wheel, DESIGN.md): ``y_wheel_mm`` from the tape circle, negative towards the
+  flange, i.e. positive towards the wheel's outer (field) face for both wheels; z = radius
+  increase over the nominal radius r0.  The left wheel's tape circle is at y_ws = +d/2, the
+  right one at -d/2 in the wheelset frame, d = flange_back_distance + 2 * tape offset (1500).
+Rail frame (per rail): ``y_rail_mm`` in the rail profile's own frame (upright rail, top at
+  (0, 0), gauge side y < 0 — as ``profiles.rails``); for a rail given already inclined
+  (``rail_inclination = 0``) its own frame as given.
+Contact angle ``contact_angle_rad`` (delta): angle of the common tangent to the track plane,
+  measured in the wheel's outward-lateral / downward plane: delta = atan(d z_down / d u) with u
+  lateral away from the track centre, taken from the rail's tangent (the rail is prismatic,
+  so the contact normal lies in the cross-section, with or without yaw).  **Negative on a
+  normal tread and on the flange** (the rail pushes the wheel towards the track centre):
+  about -0.03 on the tread, -1.2 on the S1002 flange.  This is CONTACT's sign for the right
+  wheel (and minus CONTACT's printed value for its mirrored left wheel).
+Rolling radius ``rolling_radius_mm`` = r0 + z_wheel at the contact point.
+Curvatures for Hertz: the undeformed gap near the contact is A x^2 + B y^2 (seed 000 eq. 9),
+  ``curvature_a_per_mm`` = A = cos(gamma) / (2 r), the wheel's circumferential curvature
+  (gamma = profile angle in the wheel frame; a straight rail adds nothing), and
+  ``curvature_b_per_mm`` = B = (k_wheel + k_rail) / 2 with k the lateral profile curvatures,
+  positive where a surface is convex towards the other body.  A or B is negative where the
+  sum is not convex (conformal contact); Hertz then does not apply.
+Yaw ``yaw_rad`` (psi, about +z, positive turning the front of the wheelset to the left): the
+  wheels are surfaces of revolution and the rails prismatic, so for each wheel circle the
+  point nearest the rail is turned about the axle by theta with tan(theta) = sin(psi) x rail
+  slope (the stationary point of the vertical gap); a flange contact then leads or trails the
+  axle (``x_track_mm``) and the effective flangeway shrinks (by ~0.3 mm at 15 mrad).  The
+  curvatures A, B keep their zero-yaw form (their yaw change is second order).  With yaw = 0
+  the result is the 2D cross-section through the axle.
+Two-point contact: a second local minimum of the gap whose gap is at most
+  ``two_point_gap_mm`` (default 0.05 mm: above the elastic approach of the bodies under a
+  10 kN wheel load, 16-36 um in the Manchester A-2.2 results, so a second point that close
+  can carry load once the first is compressed; heavier loads approach further) and which
+  is separated from the primary by a rise of the gap of at least ``separation_mm``.  Its gap
+  is reported so that a normal-contact model can share the load itself.
+
+All solutions are vectorised over shifts: ``contact_table`` for an array of shifts is the main
+entry point; ``contact_points`` is a convenience for one shift.  Valid for shifts up to a few
+mm beyond flange contact (before the flange climbs over the rail) and |yaw| <= 0.1 rad.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
+
+_FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class WheelsetTrack:
+    """A wheelset (left wheel profile, mirrored right wheel) on a track (two rails).
+
+    Parameters
+    ----------
+    wheel : wheel profile in the wheel frame (DESIGN.md), used for the left wheel and, mirrored,
+        for the right wheel unless ``wheel_right`` is given
+    rail : rail profile in the upright rail frame (gauge side y < 0), used for both rails unless
+        ``rail_right`` is given; it is inclined by ``rail_inclination`` here
+    nominal_radius_mm : r0, the wheel radius at the tape circle [mm]
+    flange_back_distance_mm : distance between the wheels' back faces [mm]
+    tape_circle_offset_mm : tape circle from the back face [mm] (70)
+    gauge_mm : track gauge [mm], measured ``gauge_height_mm`` below the rail top
+    rail_inclination : inclination slope (1/40, 1/20; 0 for a rail given already inclined)
+    wheel_sample_mm : arc-length spacing of the wheel samples of the contact search [mm]; the
+        gap minimum is refined by a parabola between samples
+    """
+
+    wheel: ProfileCurve
+    rail: ProfileCurve
+    wheel_right: ProfileCurve | None = None
+    rail_right: ProfileCurve | None = None
+    nominal_radius_mm: float = 460.0
+    flange_back_distance_mm: float = 1360.0
+    tape_circle_offset_mm: float = 70.0
+    gauge_mm: float = 1435.0
+    gauge_height_mm: float = 14.0
+    rail_inclination: float = 1.0 / 40.0
+    wheel_sample_mm: float = 0.2
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def tape_circle_distance_mm(self) -> float:
+        """Lateral distance between the two tape circles [mm] (1500 for 1360 + 2 x 70)."""
+        return self.flange_back_distance_mm + 2.0 * self.tape_circle_offset_mm
+
+
+def s1002_60e1(rail_inclination: float = 1.0 / 40.0, nominal_radius_mm: float = 460.0,
+               rail: str = "60E1") -> WheelsetTrack:
+    """S1002 wheels on 60E1 (or 60E2) rails, gauge 1435 mm at 14 mm, flange backs 1360 mm:
+    the Manchester benchmark geometry of ``reference/README.md`` (rails 1:40 by default)."""
+    return WheelsetTrack(wheel=s1002_curve(), rail=rail_curve(rail),
+                         nominal_radius_mm=nominal_radius_mm, rail_inclination=rail_inclination)
+
+
+# ------------------------------------------------------------------------------------------
+# prepared samples
+# ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Side:
+    """Wheel samples (wheelset frame) and rail envelope (track frame) of one side."""
+
+    sign: float                   # +1 left, -1 right
+    wheel: ProfileCurve
+    rail: ProfileCurve
+    s_wheel: _FloatArray          # arc length of the wheel samples [mm]
+    y_ws: _FloatArray             # wheel sample, lateral, wheelset frame [mm]
+    z_ws: _FloatArray             # wheel sample, vertical, wheelset frame [mm] (= -(r0 + z))
+    rail_y: _FloatArray           # rail upper envelope, track y ascending [mm]
+    rail_z: _FloatArray           # rail height [mm]
+    rail_slope: _FloatArray       # dz/dy in the track frame [-]
+    rail_s: _FloatArray           # arc length on the rail curve [mm]
+    rail_offset_mm: float         # track |y| of the rail frame origin
+    inclination_rad: float
+
+
+def _rail_envelope(rail: ProfileCurve, inclination: float, gauge_mm: float,
+                   gauge_height_mm: float, sign: float
+                   ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray, float]:
+    s = rail.sample(0.05)
+    y_r, z_r = rail.point(s)
+    alpha = np.arctan(inclination)
+    y_i = y_r * np.cos(alpha) - z_r * np.sin(alpha)
+    z_i = y_r * np.sin(alpha) + z_r * np.cos(alpha)
+    # gauge point: innermost point gauge_height_mm below the top of the inclined rail
+    z_gauge = z_i.max() - gauge_height_mm
+    top = int(np.argmax(z_i))
+    below = np.flatnonzero(z_i[: top + 1] < z_gauge)
+    if below.size == 0:
+        raise ValueError("rail profile does not reach gauge_height_mm below its top on the "
+                         "gauge side (y < 0)")
+    k = below[-1]
+    frac = (z_gauge - z_i[k]) / (z_i[k + 1] - z_i[k])
+    y_gauge = y_i[k] + frac * (y_i[k + 1] - y_i[k])
+    offset = gauge_mm / 2.0 - y_gauge
+    y_t = sign * (offset + y_i)
+    # upper envelope seen from above: keep points that advance in track y
+    order = np.arange(y_t.size) if sign > 0 else np.arange(y_t.size)[::-1]
+    y_o, z_o, s_o = y_t[order], z_i[order], s[order]
+    keep = y_o > np.maximum.accumulate(np.concatenate([[-np.inf], y_o[:-1]]))
+    y_o, z_o, s_o = y_o[keep], z_o[keep], s_o[keep]
+    slope = np.gradient(z_o, y_o)
+    return y_o, z_o, slope, s_o, float(offset)
+
+
+def _prepare(wt: WheelsetTrack) -> tuple[_Side, _Side]:
+    if "sides" in wt._cache:
+        return wt._cache["sides"]
+    sides = []
+    for sign, wheel, rail in ((1.0, wt.wheel, wt.rail),
+                              (-1.0, wt.wheel_right or wt.wheel, wt.rail_right or wt.rail)):
+        s_w = wheel.sample(wt.wheel_sample_mm)
+        y_w, z_w = wheel.point(s_w)
+        ry, rz, rslope, rs, offset = _rail_envelope(rail, wt.rail_inclination, wt.gauge_mm,
+                                                    wt.gauge_height_mm, sign)
+        sides.append(_Side(sign, wheel, rail, s_w,
+                           sign * (wt.tape_circle_distance_mm / 2.0 + y_w),
+                           -(wt.nominal_radius_mm + z_w), ry, rz, rslope, rs, offset,
+                           float(np.arctan(wt.rail_inclination))))
+    result = (sides[0], sides[1])
+    wt._cache["sides"] = result
+    return result
+
+
+# ------------------------------------------------------------------------------------------
+# gap evaluation
+# ------------------------------------------------------------------------------------------
+def _points(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray, r0: float,
+            axial: _FloatArray, radius: _FloatArray, grid: bool
+            ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+    """Track coordinates (x, y, z) of the lowest points of wheel circles, height 0.
+
+    ``axial`` [mm] is the circle's position along the axle (wheelset frame), ``radius`` [mm] its
+    radius; pose arrays have shape (N,), circle arrays (M,) with ``grid`` (results (N, M)) or
+    (N,) without (one circle per pose, results (N,)).
+    Without yaw the lowest point of a circle is straight below the axle.  With yaw psi the
+    point of a circle nearest to the (prismatic) rail is turned by theta about the axle, where
+    the vertical gap is stationary: tan(theta) = sin(psi) * rail slope there (a fixed point,
+    three iterations; the contraction factor is r * psi^2 / R_rail < 0.05).  The point then
+    leads (x > 0) or trails the axle by r sin(theta).
+    """
+    def col(a: _FloatArray) -> _FloatArray:
+        return a[:, None] if grid else a
+
+    c, s = np.cos(col(roll)), np.sin(col(roll))
+    cy, sy = np.cos(col(yaw)), np.sin(col(yaw))
+    theta = np.zeros(np.broadcast_shapes(np.shape(axial), np.shape(col(yaw))))
+    lateral = axial * cy
+    vertical = -radius * np.cos(theta)
+    y = col(shift) + lateral * c - vertical * s
+    for _ in range(3 if np.any(yaw != 0.0) else 0):
+        slope = np.interp(y, side.rail_y, side.rail_slope, left=0.0, right=0.0)
+        theta = np.arctan(slope * sy)
+        lateral = radius * np.sin(theta) * sy + axial * cy
+        vertical = -radius * np.cos(theta)
+        y = col(shift) + lateral * c - vertical * s
+    z = r0 + lateral * s + vertical * c
+    x = radius * np.sin(theta) * cy - axial * sy
+    return x, y, z
+
+
+def _gaps(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray, r0: float
+          ) -> tuple[_FloatArray, _FloatArray]:
+    """Vertical gaps (N, M) of the wheel samples over the rail and their track y, height 0."""
+    _, y, z = _points(side, shift, roll, yaw, r0, side.y_ws, -side.z_ws, grid=True)
+    z_rail = np.interp(y, side.rail_y, side.rail_z, left=np.nan, right=np.nan)
+    gap = z - z_rail
+    return np.where(np.isfinite(gap), gap, np.inf), y
+
+
+def _refine(gap: _FloatArray, idx: NDArray[np.intp]) -> tuple[_FloatArray, _FloatArray]:
+    """Parabolic refinement of a sampled minimum: (minimum value, offset in samples)."""
+    rows = np.arange(gap.shape[0])
+    m = gap.shape[1]
+    g0 = gap[rows, idx]
+    gm = gap[rows, np.clip(idx - 1, 0, m - 1)]
+    gp = gap[rows, np.clip(idx + 1, 0, m - 1)]
+    with np.errstate(invalid="ignore"):
+        curv = gm - 2.0 * g0 + gp
+    ok = (idx > 0) & (idx < m - 1) & np.isfinite(curv) & (curv > 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(ok, 0.5 * (gm - gp) / np.where(ok, curv, 1.0), 0.0)
+    t = np.clip(t, -0.5, 0.5)
+    with np.errstate(invalid="ignore"):
+        value = g0 - 0.25 * (gm - gp) * t
+    return np.where(ok, value, g0), t
+
+
+def _min_gap(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray, r0: float
+             ) -> tuple[_FloatArray, _FloatArray]:
+    """Minimum gap (N,) and its derivative with respect to roll (N,) (yaw neglected in it)."""
+    gap, y = _gaps(side, shift, roll, yaw, r0)
+    idx = np.argmin(gap, axis=1)
+    value, _ = _refine(gap, idx)
+    rows = np.arange(gap.shape[0])
+    yw, zw = side.y_ws[idx], side.z_ws[idx]
+    c, s = np.cos(roll), np.sin(roll)
+    slope = np.interp(y[rows, idx], side.rail_y, side.rail_slope)
+    dz = yw * c - zw * s
+    dy = -yw * s - zw * c
+    return value, dz - slope * dy
+
+
+def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray, r0: float,
+                tol_mm: float = 1e-9, max_iter: int = 60) -> tuple[_FloatArray, _FloatArray]:
+    """Roll (N,) with equal minimum gaps on both sides, and that gap (N,) at height 0.
+
+    The gap difference F = g_left - g_right grows with roll (the left wheel lifts), so a
+    Newton iteration safeguarded by bisection on [-0.1, 0.1] rad converges."""
+    n = shift.size
+    lo, hi = np.full(n, -0.1), np.full(n, 0.1)
+    roll = np.zeros(n)
+    gap = np.zeros(n)
+    for _ in range(max_iter):
+        g_left, d_left = _min_gap(sides[0], shift, roll, yaw, r0)
+        g_right, d_right = _min_gap(sides[1], shift, roll, yaw, r0)
+        f = g_left - g_right
+        gap = 0.5 * (g_left + g_right)
+        if not np.all(np.isfinite(f)):
+            raise ValueError("a wheel is off its rail for some shift (no rail under the wheel)")
+        if np.all(np.abs(f) < tol_mm):
+            break
+        hi = np.where(f > 0, roll, hi)
+        lo = np.where(f <= 0, roll, lo)
+        df = d_left - d_right
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = roll - f / df
+        bad = ~np.isfinite(step) | (step <= lo) | (step >= hi) | (df <= 0)
+        roll = np.where(np.abs(f) < tol_mm, roll, np.where(bad, 0.5 * (lo + hi), step))
+    return roll, gap
+
+
+# ------------------------------------------------------------------------------------------
+# results
+# ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ContactPatches:
+    """One kind of contact patch (primary or secondary) on one wheel, for N shifts.
+
+    Every field is an array of shape (N,); fields are NaN where ``valid`` is False.
+
+    valid : the patch exists (always True for the primary)
+    gap_mm : undeformed vertical gap at the patch [mm] (0 for the primary)
+    y_wheel_mm, z_wheel_mm : contact point in the wheel frame [mm]
+    y_rail_mm, z_rail_mm : contact point in the rail frame [mm]
+    x_track_mm, y_track_mm, z_track_mm : contact point in the track frame [mm] (y positive to
+        the left; x ahead of the wheelset centre, non-zero only with yaw: the wheel centres
+        themselves sit at x = -/+ (d/2) sin(yaw) for the left/right wheel)
+    contact_angle_rad : delta [rad], negative on tread and flange (module docstring)
+    wheel_angle_rad : profile angle in the wheel frame atan(dz/dy) [rad] (roll excluded)
+    rolling_radius_mm : r0 + z_wheel [mm]
+    curvature_a_per_mm, curvature_b_per_mm : Hertz A (rolling) and B (lateral) [1/mm]
+    wheel_curvature_per_mm, rail_curvature_per_mm : lateral profile curvatures [1/mm],
+        positive where convex towards the other body
+    """
+
+    valid: NDArray[np.bool_]
+    gap_mm: _FloatArray
+    y_wheel_mm: _FloatArray
+    z_wheel_mm: _FloatArray
+    y_rail_mm: _FloatArray
+    z_rail_mm: _FloatArray
+    x_track_mm: _FloatArray
+    y_track_mm: _FloatArray
+    z_track_mm: _FloatArray
+    contact_angle_rad: _FloatArray
+    wheel_angle_rad: _FloatArray
+    rolling_radius_mm: _FloatArray
+    curvature_a_per_mm: _FloatArray
+    curvature_b_per_mm: _FloatArray
+    wheel_curvature_per_mm: _FloatArray
+    rail_curvature_per_mm: _FloatArray
+
+    def row(self, i: int) -> ContactPoint | None:
+        """The patch of shift number ``i`` as a scalar ``ContactPoint`` (None if absent)."""
+        if not self.valid[i]:
+            return None
+        values = {name: float(getattr(self, name)[i]) for name in _POINT_FIELDS}
+        return ContactPoint(**values)
+
+
+@dataclass(frozen=True)
+class ContactPoint:
+    """One contact point of one wheel (fields as ``ContactPatches``, scalars)."""
+
+    gap_mm: float
+    y_wheel_mm: float
+    z_wheel_mm: float
+    y_rail_mm: float
+    z_rail_mm: float
+    x_track_mm: float
+    y_track_mm: float
+    z_track_mm: float
+    contact_angle_rad: float
+    wheel_angle_rad: float
+    rolling_radius_mm: float
+    curvature_a_per_mm: float
+    curvature_b_per_mm: float
+    wheel_curvature_per_mm: float
+    rail_curvature_per_mm: float
+
+
+_POINT_FIELDS = tuple(ContactPoint.__dataclass_fields__)
+
+
+@dataclass(frozen=True)
+class WheelContacts:
+    """Primary (gap 0) and secondary (two-point) patches of one wheel over N shifts."""
+
+    primary: ContactPatches
+    secondary: ContactPatches
+
+
+@dataclass(frozen=True)
+class ContactTable:
+    """Contact geometry for an array of lateral shifts (see the module docstring for signs).
+
+    shift_mm : wheelset lateral shift [mm], positive towards the left rail
+    yaw_rad : wheelset yaw [rad] (input), positive turning the front to the left
+    roll_rad : wheelset roll [rad], positive when the left wheel rises
+    height_mm : vertical displacement of the axle from nominal [mm]
+    left, right : contact patches of each wheel
+    """
+
+    shift_mm: _FloatArray
+    yaw_rad: _FloatArray
+    roll_rad: _FloatArray
+    height_mm: _FloatArray
+    left: WheelContacts
+    right: WheelContacts
+
+    @property
+    def rolling_radius_difference_mm(self) -> _FloatArray:
+        """Delta r = r_left - r_right at the primary patches [mm]; > 0 for a left shift."""
+        return self.left.primary.rolling_radius_mm - self.right.primary.rolling_radius_mm
+
+    @property
+    def two_point(self) -> NDArray[np.bool_]:
+        """True where either wheel has a secondary patch."""
+        return self.left.secondary.valid | self.right.secondary.valid
+
+
+@dataclass(frozen=True)
+class WheelsetContact:
+    """Contact geometry at one shift: pose and all contact points per wheel."""
+
+    shift_mm: float
+    yaw_rad: float
+    roll_rad: float
+    height_mm: float
+    left: tuple[ContactPoint, ...]
+    right: tuple[ContactPoint, ...]
+
+    @property
+    def rolling_radius_difference_mm(self) -> float:
+        """r_left - r_right at the primary patches [mm]."""
+        return self.left[0].rolling_radius_mm - self.right[0].rolling_radius_mm
+
+
+def _patches(wt: WheelsetTrack, side: _Side, shift: _FloatArray, roll: _FloatArray,
+             yaw: _FloatArray, height: _FloatArray, gap: _FloatArray, idx: NDArray[np.intp],
+             valid: NDArray[np.bool_]) -> ContactPatches:
+    idx = np.where(valid, idx, 0)
+    gap_value, t = _refine(gap, idx)
+    step = side.s_wheel[1] - side.s_wheel[0]
+    s_w = np.clip(side.s_wheel[idx] + t * step, 0.0, side.wheel.length_mm)
+    y_w, z_w = side.wheel.point(s_w)
+    wheel_angle = side.wheel.tangent_angle_at(s_w)
+    wheel_angle = np.arctan(np.tan(wheel_angle))  # fold into (-pi/2, pi/2)
+    r0 = wt.nominal_radius_mm
+    radius = r0 + z_w
+    axial = side.sign * (wt.tape_circle_distance_mm / 2.0 + y_w)
+    x_t, y_t, z_t = _points(side, shift, roll, yaw, r0, axial, radius, grid=False)
+    z_t = z_t + height
+    # the rail is prismatic, so the contact normal is the rail's normal in the cross-section:
+    # delta from the rail's tangent angle in the track frame (inclined, mirrored for the right)
+    s_r = np.interp(y_t, side.rail_y, side.rail_s)
+    y_r, z_r = side.rail.point(s_r)
+    rail_angle = np.arctan(np.tan(side.rail.tangent_angle_at(s_r)))
+    delta = -(rail_angle + side.inclination_rad)
+    k_wheel = -side.wheel.curvature_at(s_w)
+    k_rail = -side.rail.curvature_at(s_r)
+    curv_a = np.cos(wheel_angle) / (2.0 * radius)
+    curv_b = 0.5 * (k_wheel + k_rail)
+
+    def masked(a: ArrayLike) -> _FloatArray:
+        return np.where(valid, np.asarray(a, dtype=float), np.nan)
+
+    return ContactPatches(
+        valid=valid, gap_mm=masked(np.maximum(gap_value, 0.0)), x_track_mm=masked(x_t),
+        y_wheel_mm=masked(y_w), z_wheel_mm=masked(z_w), y_rail_mm=masked(y_r),
+        z_rail_mm=masked(z_r), y_track_mm=masked(y_t), z_track_mm=masked(z_t),
+        contact_angle_rad=masked(delta), wheel_angle_rad=masked(wheel_angle),
+        rolling_radius_mm=masked(radius), curvature_a_per_mm=masked(curv_a),
+        curvature_b_per_mm=masked(curv_b), wheel_curvature_per_mm=masked(k_wheel),
+        rail_curvature_per_mm=masked(k_rail),
+    )
+
+
+def _secondary(gap: _FloatArray, primary: NDArray[np.intp], two_point_gap_mm: float,
+               separation_mm: float) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """Best second local minimum of each row's gap, separated from the primary by a rise."""
+    n, m = gap.shape
+    cols = np.arange(m)[None, :]
+    p = primary[:, None]
+    finite = np.where(np.isfinite(gap), gap, 1e30)
+    # running maximum of the gap walking away from the primary, in both directions
+    ahead = np.where(cols >= p, finite, -np.inf)
+    run_ahead = np.maximum.accumulate(ahead, axis=1)
+    behind = np.where(cols <= p, finite, -np.inf)[:, ::-1]
+    run_behind = np.maximum.accumulate(behind, axis=1)[:, ::-1]
+    barrier = np.where(cols >= p, run_ahead, run_behind)
+    interior = np.zeros_like(finite, dtype=bool)
+    interior[:, 1:-1] = (finite[:, 1:-1] <= finite[:, :-2]) & (finite[:, 1:-1] < finite[:, 2:])
+    candidate = (interior & (cols != p) & (finite <= two_point_gap_mm)
+                 & (barrier - finite >= separation_mm))
+    score = np.where(candidate, finite, np.inf)
+    idx = np.argmin(score, axis=1)
+    return idx, np.isfinite(score[np.arange(n), idx])
+
+
+def _pose_arrays(shifts_mm: ArrayLike, yaw_rad: ArrayLike) -> tuple[_FloatArray, _FloatArray]:
+    shift = np.atleast_1d(np.asarray(shifts_mm, dtype=float))
+    yaw = np.broadcast_to(np.asarray(yaw_rad, dtype=float), shift.shape).copy()
+    if shift.ndim != 1:
+        raise ValueError("shifts_mm must be a scalar or a 1-D array")
+    if np.any(np.abs(yaw) > 0.1):
+        raise ValueError("yaw_rad beyond 0.1 rad: the yaw correction is for small angles")
+    return shift, yaw
+
+
+def contact_table(wt: WheelsetTrack, shifts_mm: ArrayLike, yaw_rad: ArrayLike = 0.0,
+                  two_point_gap_mm: float = 0.05, separation_mm: float = 0.005) -> ContactTable:
+    """Contact geometry for many lateral shifts at once.
+
+    Parameters
+    ----------
+    wt : wheelset and track
+    shifts_mm : lateral shifts of the wheelset [mm] (N,), positive towards the left rail
+    yaw_rad : wheelset yaw [rad], scalar or (N,), positive turning the front to the left
+        (counter-clockwise seen from above); 0 = the 2D cross-section (module docstring)
+    two_point_gap_mm : largest gap [mm] at which a second minimum counts as a contact patch
+    separation_mm : minimum rise of the gap [mm] between two minima for them to be separate
+        patches (smaller rises are one conformal patch)
+
+    Returns
+    -------
+    ContactTable with the solved roll and height and the contact patches of both wheels.
+    """
+    shift, yaw = _pose_arrays(shifts_mm, yaw_rad)
+    sides = _prepare(wt)
+    r0 = wt.nominal_radius_mm
+    roll, gap0 = _solve_roll(sides, shift, yaw, r0)
+    height = -gap0
+    wheels = []
+    for side in sides:
+        gap, _ = _gaps(side, shift, roll, yaw, r0)
+        gap = gap + height[:, None]
+        primary = np.argmin(gap, axis=1)
+        second, has_second = _secondary(gap, primary, two_point_gap_mm, separation_mm)
+        wheels.append(WheelContacts(
+            primary=_patches(wt, side, shift, roll, yaw, height, gap, primary,
+                             np.ones(shift.size, dtype=bool)),
+            secondary=_patches(wt, side, shift, roll, yaw, height, gap, second, has_second),
+        ))
+    return ContactTable(shift, yaw, roll, height, wheels[0], wheels[1])
+
+
+def wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left",
+              yaw_rad: ArrayLike = 0.0) -> tuple[_FloatArray, _FloatArray]:
+    """Vertical gap between one wheel and its rail along the wheel profile, at the solved pose.
+
+    Parameters
+    ----------
+    wt : wheelset and track
+    shifts_mm : lateral shifts [mm] (N,), positive towards the left rail
+    side : ``"left"`` or ``"right"``
+    yaw_rad : wheelset yaw [rad], scalar or (N,) (as ``contact_table``)
+
+    Returns
+    -------
+    (y_wheel_mm (M,), gap_mm (N, M)): the wheel samples' lateral positions in the wheel frame
+    [mm] and the undeformed vertical gap [mm] (0 at the primary contact, inf where no rail is
+    below).  A normal-contact model can use it to find every point within its approach.
+    """
+    if side not in ("left", "right"):
+        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    shift, yaw = _pose_arrays(shifts_mm, yaw_rad)
+    sides = _prepare(wt)
+    roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm)
+    chosen = sides[0] if side == "left" else sides[1]
+    gap, _ = _gaps(chosen, shift, roll, yaw, wt.nominal_radius_mm)
+    y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
+    return y_wheel, gap - gap0[:, None]
+
+
+def contact_points(wt: WheelsetTrack, lateral_shift_mm: float, yaw_rad: float = 0.0,
+                   two_point_gap_mm: float = 0.05) -> WheelsetContact:
+    """Contact geometry at one lateral shift [mm] (positive towards the left rail) and yaw
+    [rad] (positive turning the front to the left).
+
+    Returns the pose and, per wheel, the primary contact point followed by a secondary one
+    where there is two-point contact."""
+    table = contact_table(wt, [lateral_shift_mm], yaw_rad=yaw_rad,
+                          two_point_gap_mm=two_point_gap_mm)
+
+    def points(wheel: WheelContacts) -> tuple[ContactPoint, ...]:
+        found = (wheel.primary.row(0), wheel.secondary.row(0))
+        return tuple(p for p in found if p is not None)
+
+    return WheelsetContact(float(table.shift_mm[0]), float(table.yaw_rad[0]),
+                           float(table.roll_rad[0]), float(table.height_mm[0]),
+                           points(table.left), points(table.right))
+
+
+def equivalent_conicity(table: ContactTable, amplitude_mm: ArrayLike,
+                        method: str = "harmonic") -> _FloatArray:
+    """Equivalent conicity of the wheelset for a lateral amplitude [mm].
+
+    ``method="harmonic"`` (default): harmonic linearisation of Delta r(y) (the first Fourier
+    coefficient of Delta r over a sinusoidal oscillation of amplitude y_hat, the principle of
+    EN 15302's linearisation): lambda = 1/(2 pi y_hat) * integral_0^2pi Delta r(y_hat sin t)
+    sin t dt.  ``method="secant"``: lambda = Delta r(y_hat) / (2 y_hat).  For a cone of
+    half-angle tan(gamma) both give gamma.  Delta r is interpolated linearly in the table, which
+    must cover +/- amplitude.
+    """
+    amp = np.atleast_1d(np.asarray(amplitude_mm, dtype=float))
+    shifts = table.shift_mm
+    order = np.argsort(shifts)
+    dr = table.rolling_radius_difference_mm[order]
+    shifts = shifts[order]
+    if np.any(amp <= 0) or amp.max() > min(-shifts[0], shifts[-1]) + 1e-12:
+        raise ValueError("amplitude must be > 0 and covered by the table's shifts on both sides")
+    if method == "secant":
+        return np.interp(amp, shifts, dr) / (2.0 * amp)
+    if method != "harmonic":
+        raise ValueError(f"unknown method {method!r}; use 'harmonic' or 'secant'")
+    theta = (np.arange(512) + 0.5) * (2.0 * np.pi / 512)
+    y = amp[:, None] * np.sin(theta)[None, :]
+    values = np.interp(y, shifts, dr)
+    first_harmonic = np.mean(values * np.sin(theta)[None, :], axis=1) * 2.0
+    return first_harmonic / (2.0 * amp)
