@@ -1,0 +1,237 @@
+"""Rigid alignment of a measured wheel profile to its reference profile.
+
+Seed 000 §IV.A corrects the position of a measured profile by minimising the mean distance
+between the measured and the reference curve over a lateral shift X, a vertical shift Y and a
+rotation alpha (eq. 2, solved there by Hooke–Jeeves pattern search). DESIGN.md "The hybrid
+model" step 1 asks for the same three-parameter least-squares fit. Here it is solved by
+Gauss–Newton with iteratively reweighted least squares, because the fit must run in well under
+a millisecond per profile:
+
+* model: a measured point (y, z) maps to (y', z') = R(theta) (y, z) + (dy, dz), rotation about
+  the tape-circle origin;
+* residual: the vertical gap z' - z_ref(y') scaled by 1 / sqrt(1 + z_ref'(y')^2), i.e. the
+  first-order normal distance (seed 000's point-to-curve distance d_k);
+* which points: only parts of the wheel that do not wear, so that wear does not pull the fit:
+  the flange back ``FIT_WINDOWS_MM[0]`` (-69 <= y <= -58: never in rail contact except on
+  check rails) and the field-side end of the tread ``FIT_WINDOWS_MM[1]`` (40 <= y <= 58:
+  beyond the running band of seed 001 Figs. 6-7, whose tread wear ends near y = +30). The two
+  windows are ~100 mm apart, so rotation is well determined; the steep flange back fixes the
+  lateral shift. If a window has fewer than ``MIN_WINDOW_POINTS`` points, all points in the
+  reference's range are used instead (noted by ``used_windows = False``);
+* robustness: Huber weights (c = 1.345 sigma, sigma from the MAD of the residuals) drop the
+  influence of outliers and of any wear that reaches into the windows.
+
+The reference height is tabulated once per reference function on a 0.01 mm grid (linear
+interpolation error < 1e-5 mm for S1002, whose smallest radius is 12 mm) with its slope.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+
+ReferenceHeight = Callable[[ArrayLike], NDArray[np.float64]]
+
+#: Lateral windows [mm] of unworn wheel used for the fit: flange back, field-side end.
+FIT_WINDOWS_MM: tuple[tuple[float, float], tuple[float, float]] = ((-69.0, -58.0), (40.0, 58.0))
+#: Fewest points per window before falling back to the whole profile.
+MIN_WINDOW_POINTS = 8
+#: Largest |dz/dy| of the reference used in a residual; steeper points are left out.
+_MAX_SLOPE = 8.0
+_TABLE_Y_MIN_MM = -80.0
+_TABLE_Y_MAX_MM = 80.0
+_TABLE_STEP_MM = 0.01
+
+
+@dataclass(frozen=True)
+class ReferenceTable:
+    """A reference profile tabulated for fast interpolation.
+
+    Attributes
+    ----------
+    y_mm : ascending lateral grid [mm] covering where the reference is defined
+    z_mm : reference height [mm]
+    slope : dz/dy of the reference [-] (central differences of the function)
+    """
+
+    y_mm: NDArray[np.float64]
+    z_mm: NDArray[np.float64]
+    slope: NDArray[np.float64]
+
+    def height_mm(self, y_mm: ArrayLike) -> NDArray[np.float64]:
+        """Reference height at y [mm]; NaN outside the tabulated range."""
+        return np.interp(y_mm, self.y_mm, self.z_mm, left=np.nan, right=np.nan)
+
+
+@lru_cache(maxsize=16)
+def reference_table(reference_height: ReferenceHeight = s1002_height_mm) -> ReferenceTable:
+    """Tabulate ``reference_height`` (y [mm] -> z [mm], NaN where undefined), cached."""
+    n = int(round((_TABLE_Y_MAX_MM - _TABLE_Y_MIN_MM) / _TABLE_STEP_MM)) + 1
+    y = np.linspace(_TABLE_Y_MIN_MM, _TABLE_Y_MAX_MM, n)
+    z = np.asarray(reference_height(y), dtype=float)
+    h = 1e-4
+    slope = (np.asarray(reference_height(y + h)) - np.asarray(reference_height(y - h))) / (2 * h)
+    defined = np.isfinite(z)
+    if defined.sum() < 2:
+        raise ValueError("reference profile is undefined on -80 <= y <= 80 mm")
+    first, last = np.flatnonzero(defined)[[0, -1]]
+    y, z, slope = y[first : last + 1], z[first : last + 1], slope[first : last + 1]
+    # one-sided differences at the ends of the definition range
+    slope = np.where(np.isfinite(slope), slope, np.gradient(z, y))
+    return ReferenceTable(y_mm=y, z_mm=z, slope=slope)
+
+
+@dataclass(frozen=True)
+class AlignedProfile:
+    """A profile moved onto its reference (seed 000 §IV.A).
+
+    Attributes
+    ----------
+    y_mm, z_mm : aligned coordinates [mm], ascending y
+    lateral_shift_mm, vertical_shift_mm : translation applied after the rotation [mm]
+    rotation_rad : rotation applied about the origin [rad], positive counter-clockwise in
+        the (y, z) plane
+    rms_residual_mm : RMS normal distance to the reference over the fitted points [mm]
+    n_used : number of points in the fit
+    used_windows : True if the unworn windows were used, False if the whole profile was
+    """
+
+    y_mm: NDArray[np.float64]
+    z_mm: NDArray[np.float64]
+    lateral_shift_mm: float
+    vertical_shift_mm: float
+    rotation_rad: float
+    rms_residual_mm: float
+    n_used: int
+    used_windows: bool = True
+
+
+def _fit_mask(y: NDArray, table: ReferenceTable, windows) -> tuple[NDArray, bool]:
+    inside = (y >= table.y_mm[0]) & (y <= table.y_mm[-1])
+    masks = [(y >= lo) & (y <= hi) for lo, hi in windows]
+    if all(int(m.sum()) >= MIN_WINDOW_POINTS for m in masks):
+        return np.logical_or.reduce(masks) & inside, True
+    return inside, False
+
+
+def _solve3(a: NDArray, b: NDArray) -> tuple[float, float, float]:
+    """Solve the 3x3 system a x = b by Cramer's rule (cheaper than LAPACK at this size)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a.tolist()
+    b0, b1, b2 = b.tolist()
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    scale = abs(a00 * a11 * a22) + 1e-300
+    if not np.isfinite(det) or abs(det) < 1e-12 * scale:
+        raise ValueError("alignment is singular: the profile lacks the shape to fix the fit")
+    x0 = (b0 * c00 + a01 * (b2 * a12 - b1 * a22) + a02 * (b1 * a21 - b2 * a11)) / det
+    x1 = (a00 * (b1 * a22 - b2 * a12) + b0 * c01 + a02 * (b2 * a10 - b1 * a20)) / det
+    x2 = (a00 * (b2 * a11 - b1 * a21) + a01 * (b1 * a20 - b2 * a10) + b0 * c02) / det
+    return x0, x1, x2
+
+
+def align_to_reference(
+    y_mm: ArrayLike,
+    z_mm: ArrayLike,
+    reference_height: ReferenceHeight = s1002_height_mm,
+    *,
+    windows_mm: tuple[tuple[float, float], ...] = FIT_WINDOWS_MM,
+    max_iterations: int = 10,
+    tolerance: float = 1e-3,
+    robust: bool = True,
+) -> AlignedProfile:
+    """Least-squares rigid alignment (lateral, vertical shift, rotation) to a reference.
+
+    Parameters
+    ----------
+    y_mm, z_mm : cleaned profile [mm], ascending y, wheel frame (approximately placed)
+    reference_height : vectorised reference z(y) [mm], NaN where undefined (default S1002)
+    windows_mm : lateral windows [mm] of unworn profile the fit uses (see module doc)
+    max_iterations : Gauss–Newton steps at most
+    tolerance : stop when the parameter step is below this [mm, rad]
+    robust : Huber reweighting of the residuals
+
+    Returns
+    -------
+    AlignedProfile
+
+    Seed 000 §IV.A eq. (2) (objective), solved by Gauss–Newton/IRLS instead of pattern search.
+    """
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    table = reference_table(reference_height)
+    mask, used_windows = _fit_mask(y, table, windows_mm)
+    yf, zf = y[mask], z[mask]
+    if yf.size < 3:
+        raise ValueError("profile does not overlap its reference profile; cannot align")
+
+    dy = dz = theta = 0.0
+    cutoff = np.inf
+    ty, tz, ts = table.y_mm, table.z_mm, table.slope
+    y_lo, y_hi = float(ty[0]), float(ty[-1])
+    check_points = True
+    for iteration in range(max_iterations):
+        c, s = math.cos(theta), math.sin(theta)
+        yr = c * yf - s * zf
+        zr = s * yf + c * zf
+        yp = yr + dy
+        if check_points or yp.min() <= y_lo or yp.max() >= y_hi:
+            # keep points inside the reference's range and off its near-vertical parts
+            slope = np.interp(yp, ty, ts)
+            good = (yp > y_lo) & (yp < y_hi) & (np.abs(slope) < _MAX_SLOPE)
+            if good.sum() < 3:
+                raise ValueError("profile does not overlap its reference profile; cannot align")
+            if not good.all():
+                yf, zf, yr, zr, yp = yf[good], zf[good], yr[good], zr[good], yp[good]
+            check_points = False
+        z_ref = np.interp(yp, ty, tz)
+        slope = np.interp(yp, ty, ts)
+        norm = 1.0 / np.sqrt(1.0 + slope * slope)
+        residual = (zr + dz - z_ref) * norm
+        jac = np.stack((-slope * norm, norm, (yr + slope * zr) * norm))
+        # rows: d(residual)/d(dy, dz, theta); d(z' - f(y'))/dtheta = yr + f' zr
+        if robust and iteration >= 1:
+            # Huber weights, scale from the MAD of the current residuals
+            abs_r = np.abs(residual)
+            half = abs_r.size // 2
+            cutoff = 1.345 * max(1.4826 * float(np.partition(abs_r, half)[half]), 1e-3)
+            jw = jac * np.minimum(1.0, cutoff / np.maximum(abs_r, 1e-300))
+        else:
+            jw = jac
+        step = _solve3(jw @ jac.T, -(jw @ residual))
+        dy += step[0]
+        dz += step[1]
+        theta += step[2]
+        if iteration >= 2 and abs(step[0]) + abs(step[1]) + 100.0 * abs(step[2]) < tolerance:
+            break
+
+    c, s = np.cos(theta), np.sin(theta)
+    y_al = c * y - s * z + dy
+    z_al = s * y + c * z + dz
+    if theta != 0.0 and np.any(np.diff(y_al) <= 0.0):
+        order = np.argsort(y_al, kind="stable")
+        y_al, z_al = y_al[order], z_al[order]
+    # final residual at the solution
+    yp = c * yf - s * zf + dy
+    z_ref = np.interp(yp, table.y_mm, table.z_mm, left=np.nan, right=np.nan)
+    slope = np.interp(yp, table.y_mm, table.slope)
+    good = np.isfinite(z_ref) & (np.abs(slope) < _MAX_SLOPE)
+    r = (s * yf[good] + c * zf[good] + dz - z_ref[good]) / np.sqrt(1.0 + slope[good] ** 2)
+    rms = float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
+    return AlignedProfile(
+        y_mm=y_al,
+        z_mm=z_al,
+        lateral_shift_mm=dy,
+        vertical_shift_mm=dz,
+        rotation_rad=theta,
+        rms_residual_mm=rms,
+        n_used=int(good.sum()),
+        used_windows=used_windows,
+    )

@@ -1,0 +1,138 @@
+"""One call per measured profile: clean, align, wear curve, wear areas, flange parameters.
+
+This is DESIGN.md "The hybrid model" steps 1–2 for a single measurement (seed 001 §3.1, seed
+000 §IV.A), the call the import service makes for each profile it stores.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.statistics.alignment import ReferenceHeight, align_to_reference
+from wearcast.statistics.cleaning import CleanedProfile, clean_profile
+from wearcast.statistics.profile_parameters import FlangeParameters, flange_parameters
+from wearcast.statistics.wear_curves import (
+    DEFAULT_GRID_Y_MM,
+    DEFAULT_SPLIT_Y_MM,
+    WearAreas,
+    wear_areas_mm2,
+    wear_curve_mm,
+)
+
+
+@dataclass(frozen=True)
+class ProcessedProfile:
+    """A measured profile reduced to what the statistical model uses.
+
+    Attributes
+    ----------
+    cleaned : the cleaned profile before alignment (``CleanedProfile``)
+    y_aligned_mm, z_aligned_mm : the aligned profile [mm]
+    lateral_shift_mm, vertical_shift_mm, rotation_rad : alignment applied [mm, mm, rad]
+    rms_residual_mm : RMS normal distance to the reference over the fitted points [mm]
+    n_used : points used by the alignment fit
+    grid_y_mm : lateral grid of the wear curve [mm]
+    wear_mm : wear curve w = z_ref - z_worn on the grid [mm], NaN where no data
+    areas : flange/tread wear areas [mm²]
+    parameters : Sd, Sh, qR of the aligned profile [mm]
+    """
+
+    cleaned: CleanedProfile
+    y_aligned_mm: NDArray[np.float64]
+    z_aligned_mm: NDArray[np.float64]
+    lateral_shift_mm: float
+    vertical_shift_mm: float
+    rotation_rad: float
+    rms_residual_mm: float
+    n_used: int
+    grid_y_mm: NDArray[np.float64]
+    wear_mm: NDArray[np.float64]
+    areas: WearAreas
+    parameters: FlangeParameters
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Corrections made while cleaning."""
+        return self.cleaned.notes
+
+
+def process_profile(
+    y_mm: ArrayLike,
+    z_mm: ArrayLike,
+    *,
+    reference_height: ReferenceHeight = s1002_height_mm,
+    grid_y_mm: ArrayLike = DEFAULT_GRID_Y_MM,
+    split_y_mm: float = DEFAULT_SPLIT_Y_MM,
+) -> ProcessedProfile:
+    """Clean, align and reduce one measured profile.
+
+    Parameters
+    ----------
+    y_mm, z_mm : raw points [mm] in the wheel frame (instrument order is fine)
+    reference_height : reference profile z(y) [mm] (default S1002)
+    grid_y_mm : lateral grid of the wear curve [mm]
+    split_y_mm : flange/tread boundary [mm] (seed 001: -30)
+
+    Returns
+    -------
+    ProcessedProfile
+
+    Raises
+    ------
+    ValueError : the profile cannot be used (see ``clean_profile``) or aligned.
+    """
+    cleaned = clean_profile(y_mm, z_mm)
+    aligned = align_to_reference(cleaned.y_mm, cleaned.z_mm, reference_height)
+    grid = np.asarray(grid_y_mm, dtype=float)
+    wear = wear_curve_mm(aligned.y_mm, aligned.z_mm, grid, reference_height)
+    return ProcessedProfile(
+        cleaned=cleaned,
+        y_aligned_mm=aligned.y_mm,
+        z_aligned_mm=aligned.z_mm,
+        lateral_shift_mm=aligned.lateral_shift_mm,
+        vertical_shift_mm=aligned.vertical_shift_mm,
+        rotation_rad=aligned.rotation_rad,
+        rms_residual_mm=aligned.rms_residual_mm,
+        n_used=aligned.n_used,
+        grid_y_mm=grid,
+        wear_mm=wear,
+        areas=wear_areas_mm2(grid, wear, split_y_mm),
+        parameters=flange_parameters(aligned.y_mm, aligned.z_mm),
+    )
+
+
+def process_profiles(
+    profiles: Iterable[tuple[ArrayLike, ArrayLike]],
+    *,
+    reference_height: ReferenceHeight = s1002_height_mm,
+    grid_y_mm: ArrayLike = DEFAULT_GRID_Y_MM,
+    split_y_mm: float = DEFAULT_SPLIT_Y_MM,
+) -> list[ProcessedProfile | ValueError]:
+    """``process_profile`` for many profiles; a profile that cannot be used yields its
+    ``ValueError`` in its place instead of stopping the batch.
+
+    Parameters
+    ----------
+    profiles : iterable of (y_mm, z_mm) raw point arrays [mm]
+
+    Returns
+    -------
+    list, one ``ProcessedProfile`` or ``ValueError`` per input, in input order.
+    """
+    grid = np.asarray(grid_y_mm, dtype=float)
+    out: list[ProcessedProfile | ValueError] = []
+    for y, z in profiles:
+        try:
+            out.append(
+                process_profile(
+                    y, z, reference_height=reference_height, grid_y_mm=grid,
+                    split_y_mm=split_y_mm,
+                )
+            )
+        except ValueError as exc:
+            out.append(exc)
+    return out
