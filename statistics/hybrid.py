@@ -1,0 +1,520 @@
+"""The hybrid wear model of seed 001: route weighting, calibration and prediction.
+
+* Weighted wear measure of a route (seed 001 eq. 2): P = sum_i c_i P_i, c_i the route share
+  of curve class i, P_i the curve-radius table value for the wheel's bogie type, wheelset
+  position, rail and region.
+* Calibration (eq. 3): k_m = c_s P_m. With calibration wheels that see different P_j (other
+  bogie types, axles, sides or routes) we fit the through-origin slope of wear area against
+  P_j s_j over all calibration measurements (the same robust fan-shaped fit as the wear rate,
+  :mod:`wearcast.statistics.wear_rates`); when all P_j are equal to P_m this slope is exactly
+  k_m / P_m. The relative standard error and spread of that slope are kept as the relative
+  uncertainty of c_s.
+* Prediction (eq. 4): k_s = c_s P_s per region, A(s) = A_0 + k_s s, wear curves from the
+  wear states, flange and tread joined with a moving average (§2.4), worn profile
+  z = z_ref - w, and Sd/Sh/qR per mileage.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike, NDArray
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.statistics.profile_parameters import flange_parameters
+from wearcast.statistics.routes import DIRECTIONS, Route, rail_for
+from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, DEFAULT_SPLIT_Y_MM
+from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, normal_quantile
+from wearcast.statistics.wear_states import (
+    WearStates,
+    build_wear_states,
+    join_regions,
+    wear_curves_at_areas,
+)
+from wearcast.statistics.wear_tables import (
+    MEASURES,
+    REGIONS,
+    WearTable,
+    compile_wear_table,
+    table_value,
+)
+
+RUNNING_MODES = ("lead", "mixed")
+QUANTILES = (0.1, 0.5, 0.9)
+MEASUREMENT_COLUMNS = (
+    "wheel_id", "bogie_type", "axle", "side", "mileage_km", "route",
+    "flange_area_mm2", "tread_area_mm2",
+)
+
+
+class UnknownBogieTypeError(ValueError):
+    """The model (its wear table) does not cover the requested bogie type."""
+
+
+def _check_choice(value: Any, allowed: Sequence[Any], name: str) -> None:
+    if value not in allowed:
+        raise ValueError(f"{name}: must be one of {tuple(allowed)}, got {value!r}")
+
+
+def wheelset_weights(axle: int, running_mode: str) -> dict[str, float]:
+    """Share of the distance a wheelset runs leading/trailing (seed 001 §4).
+
+    ``lead``: axle 1 always leads, axle 2 always trails; ``mixed``: each leads half the time.
+    """
+    _check_choice(axle, (1, 2), "axle")
+    _check_choice(running_mode, RUNNING_MODES, "running_mode")
+    if running_mode == "mixed":
+        return {"leading": 0.5, "trailing": 0.5}
+    return {"leading": 1.0} if axle == 1 else {"trailing": 1.0}
+
+
+def weighted_wear_measure(
+    route: Route,
+    table: pd.DataFrame | WearTable,
+    *,
+    bogie_type: str,
+    axle: int,
+    side: str,
+    running_mode: str,
+    region: str,
+    measure: str,
+) -> float:
+    """Weighted wear measure P = sum_i c_i P_i of a wheel on a route (seed 001 eq. 2).
+
+    Parameters
+    ----------
+    route : curve classes with their shares c_i
+    table : curve-radius table (long DataFrame or compiled)
+    bogie_type : bogie type in the table
+    axle : 1 or 2, the wheelset's position in its bogie (DESIGN.md "Sides and curves")
+    side : 'left' or 'right' side of the vehicle
+    running_mode : 'lead' (axle 1 always leads) or 'mixed' (half leading, half trailing)
+    region : 'flange' or 'tread'
+    measure : 'tau_max' or 't_gamma'
+
+    Returns
+    -------
+    P in the unit of the table's measure. The rail of each class is tangent on tangent
+    track; in a curve bending towards the wheel's side the wheel runs on the low rail,
+    otherwise on the high rail (in a left curve the right wheels run on the high rail).
+
+    Raises RadiusOutOfTableError for a class tighter than the table covers.
+    """
+    _check_choice(side, DIRECTIONS, "side")
+    _check_choice(region, REGIONS, "region")
+    _check_choice(measure, MEASURES, "measure")
+    wt = compile_wear_table(table)
+    if bogie_type not in wt.bogie_types:
+        raise UnknownBogieTypeError(
+            f"bogie_type: {bogie_type!r} is not in the wear table (has {wt.bogie_types})"
+        )
+    weights = wheelset_weights(axle, running_mode)
+    total = 0.0
+    for c in route.classes:
+        if c.share == 0.0:
+            continue
+        rail = rail_for(c, side)
+        p_i = sum(
+            w * table_value(wt, bogie_type, ws, rail, c.radius_m, region, measure)
+            for ws, w in weights.items()
+        )
+        total += c.share * p_i
+    return total
+
+
+@dataclass(frozen=True)
+class RegionCalibration:
+    """Calibration of one region (seed 001 eq. 3).
+
+    Attributes
+    ----------
+    c_s : calibration factor [mm²/(km · measure unit)]
+    c_s_rel_std_error : relative standard error of c_s [-]
+    c_s_rel_spread : relative spread of individual measurements' c_s [-]
+    p_m : mean weighted wear measure of the calibration measurements
+    rate : the calibration fleet's wear rate k_m (area over mileage)
+    """
+
+    c_s: float
+    c_s_rel_std_error: float
+    c_s_rel_spread: float
+    p_m: float
+    rate: WearRate
+
+    @property
+    def c_s_rel_predictive(self) -> float:
+        """Relative std of a single wheel's rate: hypot(rel. spread, rel. std error)."""
+        return math.hypot(self.c_s_rel_std_error, self.c_s_rel_spread)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "c_s": self.c_s,
+            "c_s_rel_std_error": self.c_s_rel_std_error,
+            "c_s_rel_spread": self.c_s_rel_spread,
+            "p_m": self.p_m,
+            "rate": self.rate.to_dict(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> RegionCalibration:
+        return cls(
+            c_s=float(data["c_s"]),
+            c_s_rel_std_error=float(data["c_s_rel_std_error"]),
+            c_s_rel_spread=float(data["c_s_rel_spread"]),
+            p_m=float(data["p_m"]),
+            rate=WearRate.from_dict(data["rate"]),
+        )
+
+
+@dataclass(frozen=True)
+class HybridModel:
+    """A calibrated hybrid model: wear states plus per-region calibration factors."""
+
+    measure: str
+    running_mode: str
+    states: WearStates
+    flange: RegionCalibration
+    tread: RegionCalibration
+    bogie_types: tuple[str, ...]
+    join_window_mm: float = 4.0
+    reference_profile: str = "S1002"
+
+    def region(self, region: str) -> RegionCalibration:
+        _check_choice(region, REGIONS, "region")
+        return self.flange if region == "flange" else self.tread
+
+    @property
+    def grid_y_mm(self) -> np.ndarray:
+        return self.states.grid_y_mm
+
+    @property
+    def split_y_mm(self) -> float:
+        return self.states.split_y_mm
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "measure": self.measure,
+            "running_mode": self.running_mode,
+            "states": self.states.to_dict(),
+            "flange": self.flange.to_dict(),
+            "tread": self.tread.to_dict(),
+            "bogie_types": list(self.bogie_types),
+            "join_window_mm": self.join_window_mm,
+            "reference_profile": self.reference_profile,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> HybridModel:
+        return cls(
+            measure=str(data["measure"]),
+            running_mode=str(data["running_mode"]),
+            states=WearStates.from_dict(data["states"]),
+            flange=RegionCalibration.from_dict(data["flange"]),
+            tread=RegionCalibration.from_dict(data["tread"]),
+            bogie_types=tuple(data["bogie_types"]),
+            join_window_mm=float(data.get("join_window_mm", 4.0)),
+            reference_profile=str(data.get("reference_profile", "S1002")),
+        )
+
+
+def _route_lookup(route_by_wheel: Route | Mapping[Any, Route], row_route: Any,
+                  wheel_id: Any) -> Route:
+    if isinstance(route_by_wheel, Route):
+        return route_by_wheel
+    if row_route is not None and row_route in route_by_wheel:
+        return route_by_wheel[row_route]
+    if wheel_id in route_by_wheel:
+        return route_by_wheel[wheel_id]
+    raise ValueError(f"route: no route given for wheel {wheel_id!r} (route {row_route!r})")
+
+
+def calibrate(
+    measurements: pd.DataFrame,
+    route_by_wheel: Route | Mapping[Any, Route],
+    table: pd.DataFrame | WearTable,
+    *,
+    wear_curves_mm: ArrayLike,
+    measure: str,
+    running_mode: str,
+    grid_y_mm: ArrayLike = DEFAULT_GRID_Y_MM,
+    split_y_mm: float = DEFAULT_SPLIT_Y_MM,
+    n_states: int | None = None,
+    join_window_mm: float = 4.0,
+) -> HybridModel:
+    """Calibrate the hybrid model on measured wheels with known routes (seed 001 §2.3).
+
+    Parameters
+    ----------
+    measurements : one row per measurement with columns ``wheel_id, bogie_type, axle (1|2),
+        side (left|right), mileage_km`` [km since reprofiling], ``route`` (route name; may be
+        absent when ``route_by_wheel`` is one Route), ``flange_area_mm2, tread_area_mm2``
+    route_by_wheel : one Route for all, or a mapping from route name (the ``route`` column)
+        or else from ``wheel_id`` to Route
+    table : curve-radius table
+    wear_curves_mm : (n, g) wear curves of the measurements on ``grid_y_mm`` [mm]
+    measure : 'tau_max' or 't_gamma'
+    running_mode : 'lead' or 'mixed'
+    grid_y_mm, split_y_mm : common lateral grid and flange/tread split [mm]
+
+    Returns
+    -------
+    HybridModel with wear states, per-region wear rate k_m, mean P_m and c_s (module
+    docstring: the through-origin slope of area on P_j s_j, = k_m / P_m for equal P_j).
+    """
+    _check_choice(measure, MEASURES, "measure")
+    _check_choice(running_mode, RUNNING_MODES, "running_mode")
+    if not isinstance(measurements, pd.DataFrame):
+        raise ValueError("measurements: must be a pandas DataFrame")
+    need = [c for c in MEASUREMENT_COLUMNS if c not in measurements.columns]
+    if "route" in need and isinstance(route_by_wheel, Route):
+        need.remove("route")
+    if need:
+        raise ValueError(f"{need[0]}: column missing from measurements")
+    if measurements.empty:
+        raise ValueError("measurements: no rows")
+    wt = compile_wear_table(table)
+    if measure not in wt.measures:
+        raise ValueError(f"measure: the wear table has no {measure!r} rows")
+    df = measurements.reset_index(drop=True)
+    mileage = pd.to_numeric(df["mileage_km"], errors="coerce").to_numpy(dtype=float)
+    if not np.all(np.isfinite(mileage)) or np.any(mileage < 0):
+        raise ValueError("mileage_km: must be finite and >= 0")
+    curves = np.asarray(wear_curves_mm, dtype=float)
+    grid = np.asarray(grid_y_mm, dtype=float)
+    if curves.shape != (len(df), grid.size):
+        raise ValueError(
+            f"wear_curves_mm: must have shape ({len(df)}, {grid.size}), got {curves.shape}"
+        )
+    areas = {
+        r: pd.to_numeric(df[f"{r}_area_mm2"], errors="coerce").to_numpy(dtype=float)
+        for r in REGIONS
+    }
+    for r, a in areas.items():
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{r}_area_mm2: must be finite")
+    axles = pd.to_numeric(df["axle"], errors="coerce")
+    routes_col = df["route"] if "route" in df.columns else pd.Series([None] * len(df))
+    # P_j for every distinct wheel position, not per row
+    keys = list(zip(routes_col, df["wheel_id"], df["bogie_type"].astype(str), axles,
+                    df["side"], strict=True))
+    cache: dict[tuple[Any, ...], dict[str, float]] = {}
+    p = {r: np.empty(len(df)) for r in REGIONS}
+    for j, (route_name, wheel_id, bogie, axle, side) in enumerate(keys):
+        route = _route_lookup(route_by_wheel, route_name, wheel_id)
+        key = (route, bogie, axle, side)
+        if key not in cache:
+            if bogie not in wt.bogie_types:
+                raise UnknownBogieTypeError(
+                    f"bogie_type: {bogie!r} (row {j}) is not in the wear table"
+                )
+            cache[key] = {
+                r: weighted_wear_measure(
+                    route, wt, bogie_type=bogie, axle=int(axle) if axle in (1, 2) else axle,
+                    side=side, running_mode=running_mode, region=r, measure=measure,
+                )
+                for r in REGIONS
+            }
+        for r in REGIONS:
+            p[r][j] = cache[key][r]
+    regions = {}
+    for r in REGIONS:
+        informative = (mileage > 0) & (p[r] > 0)
+        if informative.sum() < 2:
+            raise ValueError(
+                f"{r}: need at least 2 measurements with mileage > 0 on routes where the "
+                f"weighted wear measure P_m > 0 to calibrate c_s"
+            )
+        fit = fit_ratio(p[r] * mileage, areas[r])
+        rate = fit_wear_rate(mileage, areas[r])
+        scale = abs(fit.slope) if fit.slope != 0 else 1.0
+        regions[r] = RegionCalibration(
+            c_s=fit.slope,
+            c_s_rel_std_error=fit.std_error / scale,
+            c_s_rel_spread=fit.spread / scale,
+            p_m=float(np.mean(p[r][informative])),
+            rate=rate,
+        )
+    states = build_wear_states(
+        grid, curves, areas["flange"], areas["tread"], split_y_mm=split_y_mm, n_states=n_states
+    )
+    return HybridModel(
+        measure=measure,
+        running_mode=running_mode,
+        states=states,
+        flange=regions["flange"],
+        tread=regions["tread"],
+        bogie_types=wt.bogie_types,
+        join_window_mm=join_window_mm,
+    )
+
+
+def _nan_to_none(values: np.ndarray) -> list[float | None]:
+    return [float(v) if math.isfinite(v) else None for v in np.asarray(values, dtype=float)]
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Prediction for one wheel on one route (seed 001 §2.4).
+
+    Arrays over mileage have length M; ``*_area_mm2`` and ``*_rate_mm2_per_km`` carry the
+    quantiles in ``quantiles`` (default P10/P50/P90) along their first axis. Curves, profile
+    and parameters are those of the median (P50) areas.
+    """
+
+    mileage_km: np.ndarray
+    quantiles: tuple[float, ...]
+    weighted_measure: dict[str, float]
+    flange_rate_mm2_per_km: np.ndarray
+    tread_rate_mm2_per_km: np.ndarray
+    flange_area_mm2: np.ndarray
+    tread_area_mm2: np.ndarray
+    grid_y_mm: np.ndarray
+    wear_mm: np.ndarray
+    z_mm: np.ndarray
+    sd_mm: np.ndarray
+    sh_mm: np.ndarray
+    qr_mm: np.ndarray
+    extrapolated: np.ndarray
+    start_areas_mm2: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def any_extrapolated(self) -> bool:
+        return bool(np.any(self.extrapolated))
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "mileage_km": self.mileage_km.tolist(),
+            "quantiles": list(self.quantiles),
+            "weighted_measure": dict(self.weighted_measure),
+            "flange_rate_mm2_per_km": self.flange_rate_mm2_per_km.tolist(),
+            "tread_rate_mm2_per_km": self.tread_rate_mm2_per_km.tolist(),
+            "flange_area_mm2": self.flange_area_mm2.tolist(),
+            "tread_area_mm2": self.tread_area_mm2.tolist(),
+            "grid_y_mm": self.grid_y_mm.tolist(),
+            "wear_mm": self.wear_mm.tolist(),
+            "z_mm": self.z_mm.tolist(),
+            "sd_mm": _nan_to_none(self.sd_mm),
+            "sh_mm": _nan_to_none(self.sh_mm),
+            "qr_mm": _nan_to_none(self.qr_mm),
+            "extrapolated": self.extrapolated.tolist(),
+            "start_areas_mm2": dict(self.start_areas_mm2),
+        }
+        return out
+
+
+def region_rates(model: HybridModel, route: Route, table: pd.DataFrame | WearTable, *,
+                 bogie_type: str, axle: int, side: str,
+                 quantiles: Sequence[float] = QUANTILES) -> tuple[dict[str, float],
+                                                                  dict[str, NDArray]]:
+    """Weighted measures P_s and rate quantiles k_s,q = c_s P_s (1 + z_q u) per region.
+
+    u is the relative predictive uncertainty of c_s (standard error and spread of the
+    calibration); rates are clipped at 0. Seed 001 eq. 4.
+    """
+    if bogie_type not in model.bogie_types:
+        raise UnknownBogieTypeError(
+            f"bogie_type: the model covers {model.bogie_types}, not {bogie_type!r}"
+        )
+    z = normal_quantile(np.asarray(quantiles, dtype=float))
+    p_s, rates = {}, {}
+    for r in REGIONS:
+        cal = model.region(r)
+        p_s[r] = weighted_wear_measure(
+            route, table, bogie_type=bogie_type, axle=axle, side=side,
+            running_mode=model.running_mode, region=r, measure=model.measure,
+        )
+        k = cal.c_s * p_s[r]
+        rates[r] = np.maximum(0.0, k * (1.0 + z * cal.c_s_rel_predictive))
+    return p_s, rates
+
+
+def profile_at_areas(model: HybridModel, flange_area_mm2: ArrayLike, tread_area_mm2: ArrayLike
+                     ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Wear curves, worn profiles and Sd/Sh/qR for given region areas (vectorised over M).
+
+    Returns (wear (M, g) [mm], z (M, g) [mm], params (M, 3) [mm] as Sd, Sh, qR,
+    extrapolated (M,) bool).
+    """
+    fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float))
+    ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float))
+    wf, ef = wear_curves_at_areas(model.states, "flange", fa)
+    wt_, et = wear_curves_at_areas(model.states, "tread", ta)
+    wear = join_regions(model.grid_y_mm, wf, wt_, model.split_y_mm, model.join_window_mm)
+    z = s1002_height_mm(model.grid_y_mm)[None, :] - wear
+    params = np.empty((wear.shape[0], 3))
+    for i in range(wear.shape[0]):
+        fp = flange_parameters(model.grid_y_mm, z[i])
+        params[i] = (fp.sd_mm, fp.sh_mm, fp.qr_mm)
+    return wear, z, params, ef | et
+
+
+def predict(
+    model: HybridModel,
+    route: Route,
+    table: pd.DataFrame | WearTable,
+    *,
+    bogie_type: str,
+    axle: int,
+    side: str,
+    mileage_km: ArrayLike,
+    start_areas_mm2: Mapping[str, float] | None = None,
+    quantiles: Sequence[float] = QUANTILES,
+) -> Prediction:
+    """Predict wear areas, wear curve, worn profile and Sd/Sh/qR of a wheel on a route.
+
+    Parameters
+    ----------
+    model : calibrated hybrid model
+    route : the route to predict for (its classes must lie within the table's radii)
+    table : curve-radius table with the model's measure (compile it once for speed)
+    bogie_type, axle (1|2), side ('left'|'right') : the wheel's position
+    mileage_km : (M,) mileages [km] from the start state
+    start_areas_mm2 : measured areas {'flange': ..., 'tread': ...} [mm²] of the start state
+        (default: new profile, 0)
+    quantiles : area quantiles to report (the curves use the median)
+
+    Returns
+    -------
+    Prediction. k_s = c_s P_s (seed 001 eq. 4), A(s) = A_0 + k_s s.
+    """
+    s = np.atleast_1d(np.asarray(mileage_km, dtype=float))
+    if s.ndim != 1 or np.any(~np.isfinite(s)) or np.any(s < 0):
+        raise ValueError("mileage_km: must be a list of finite mileages >= 0")
+    q = tuple(float(v) for v in quantiles)
+    if 0.5 not in q:
+        raise ValueError("quantiles: must include 0.5 (the median drives the wear curves)")
+    start = {r: 0.0 for r in REGIONS}
+    if start_areas_mm2:
+        for r, v in start_areas_mm2.items():
+            _check_choice(r, REGIONS, "start_areas_mm2")
+            if not math.isfinite(float(v)) or float(v) < 0:
+                raise ValueError(f"start_areas_mm2.{r}: must be finite and >= 0")
+            start[r] = float(v)
+    p_s, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
+                              quantiles=q)
+    areas = {r: start[r] + rates[r][:, None] * s[None, :] for r in REGIONS}
+    median = q.index(0.5)
+    wear, z, params, extrapolated = profile_at_areas(
+        model, areas["flange"][median], areas["tread"][median]
+    )
+    return Prediction(
+        mileage_km=s,
+        quantiles=q,
+        weighted_measure=p_s,
+        flange_rate_mm2_per_km=rates["flange"],
+        tread_rate_mm2_per_km=rates["tread"],
+        flange_area_mm2=areas["flange"],
+        tread_area_mm2=areas["tread"],
+        grid_y_mm=model.grid_y_mm,
+        wear_mm=wear,
+        z_mm=z,
+        sd_mm=params[:, 0],
+        sh_mm=params[:, 1],
+        qr_mm=params[:, 2],
+        extrapolated=extrapolated,
+        start_areas_mm2=start,
+    )

@@ -1,0 +1,131 @@
+import dataclasses
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from wearcast.statistics.hybrid import HybridModel, RegionCalibration
+from wearcast.statistics.profile_parameters import WheelLimits
+from wearcast.statistics.reprofiling import reprofiling_mileage
+from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
+from wearcast.statistics.wear_rates import WearRate
+from wearcast.statistics.wear_states import build_wear_states, region_area_mm2
+from wearcast.statistics.wear_tables import TABLE_COLUMNS
+
+Y = np.asarray(DEFAULT_GRID_Y_MM)
+SPLIT = -30.0
+ROUTE = Route("r", (RouteClass(None, None, 0.0, 100.0, 0.6),
+                    RouteClass(300.0, "left", 90.0, 60.0, 0.4)))
+TANGENT = Route("t", (RouteClass(None, None, 0.0, 100.0, 1.0),))
+
+
+def _table(tread_tangent=50.0):
+    rows = []
+    for ws in ("leading", "trailing"):
+        rows += [("motor", ws, "tangent", np.nan, "flange", "tau_max", 0.0),
+                 ("motor", ws, "tangent", np.nan, "tread", "tau_max", tread_tangent),
+                 ("motor", ws, "high", 250.0, "flange", "tau_max", 120.0),
+                 ("motor", ws, "low", 250.0, "flange", "tau_max", 1.0),
+                 ("motor", ws, "high", 250.0, "tread", "tau_max", 90.0),
+                 ("motor", ws, "low", 250.0, "tread", "tau_max", 70.0)]
+    return pd.DataFrame(rows, columns=TABLE_COLUMNS)
+
+
+def _model(c_flange=2e-5, c_tread=5e-6, rel=0.1):
+    """Hand-built model: flange-flank and tread wear shapes, states up to large areas."""
+    flange = np.exp(-0.5 * ((Y + 39.0) / 3.0) ** 2)
+    tread = np.exp(-0.5 * (Y / 14.0) ** 2)
+    flange /= region_area_mm2(Y, flange, SPLIT, "flange")
+    tread /= region_area_mm2(Y, tread, SPLIT, "tread")
+    a_f = np.linspace(1, 60, 30)
+    a_t = np.linspace(2, 200, 30)
+    curves = a_f[:, None] * flange + a_t[:, None] * tread
+    states = build_wear_states(Y, curves, a_f, a_t, split_y_mm=SPLIT, n_states=6)
+    rate = WearRate(1e-3, 1e-5, 1e-4, 30)
+
+    def cal(c):
+        return RegionCalibration(c_s=c, c_s_rel_std_error=0.01, c_s_rel_spread=rel, p_m=1.0,
+                                 rate=rate)
+
+    return HybridModel(measure="tau_max", running_mode="lead", states=states,
+                       flange=cal(c_flange), tread=cal(c_tread), bogie_types=("motor",))
+
+
+KW = {"bogie_type": "motor", "axle": 1, "side": "right"}
+
+
+def test_quantiles_are_ordered_and_the_governing_limit_is_met():
+    res = reprofiling_mileage(_model(), ROUTE, _table(), **KW)
+    assert res.reached and res.reason is None
+    assert 0 < res.mileage_p10_km < res.mileage_p50_km < res.mileage_p90_km
+    value = {"sd": res.sd_mm - 22.0, "sh": 36.0 - res.sh_mm, "qr": res.qr_mm - 6.5}
+    assert value[res.governing_limit] == pytest.approx(0.0, abs=1e-3)
+    assert all(v >= -1e-3 for v in value.values())
+    json.dumps(res.to_dict())
+
+
+def test_mileage_is_inversely_proportional_to_the_rate():
+    # areas grow as c_s P s, and the profile depends on areas only: doubling every c_s must
+    # halve the reprofiling mileage exactly
+    base = reprofiling_mileage(_model(), ROUTE, _table(), **KW)
+    previous = base.mileage_p50_km
+    for factor in (1.5, 2.0, 4.0):
+        res = reprofiling_mileage(_model(2e-5 * factor, 5e-6 * factor), ROUTE, _table(), **KW)
+        assert res.mileage_p50_km == pytest.approx(base.mileage_p50_km / factor, rel=1e-5)
+        assert res.mileage_p50_km < previous
+        assert res.governing_limit == base.governing_limit
+        previous = res.mileage_p50_km
+
+
+def test_no_wear_gives_infinity_with_a_reason():
+    res = reprofiling_mileage(_model(), TANGENT, _table(tread_tangent=0.0), **KW)
+    assert not res.reached and res.mileage_p10_km == np.inf
+    assert "zero wear rate" in res.reason
+    assert res.to_dict()["mileage_p50_km"] is None
+    slow = reprofiling_mileage(_model(), TANGENT, _table(), horizon_km=1_000.0, **KW)
+    assert not slow.reached and "horizon" in slow.reason
+
+
+def test_remaining_mileage_starts_from_the_measured_state():
+    model = _model()
+    full = reprofiling_mileage(model, ROUTE, _table(), **KW)
+    s0 = 0.4 * full.mileage_p50_km
+    start = {r: full.rates_mm2_per_km[r] * s0 for r in ("flange", "tread")}
+    rest = reprofiling_mileage(model, ROUTE, _table(), start_areas=start, **KW)
+    assert rest.mileage_p50_km == pytest.approx(full.mileage_p50_km - s0, rel=1e-5)
+    assert rest.equivalent_mileage_km["flange"] == pytest.approx(s0)
+    worn = {"flange": 1e4, "tread": 0.0}
+    done = reprofiling_mileage(model, ROUTE, _table(), start_areas=worn, **KW)
+    assert done.mileage_p50_km == 0.0 and "already" in done.reason
+
+
+def test_limits_are_configurable_and_validated():
+    strict = reprofiling_mileage(_model(), ROUTE, _table(), limits=WheelLimits(qr_min_mm=9.5),
+                                 **KW)
+    loose = reprofiling_mileage(_model(), ROUTE, _table(), **KW)
+    assert strict.mileage_p50_km <= loose.mileage_p50_km
+    with pytest.raises(ValueError, match="limits.sd_max_mm"):
+        reprofiling_mileage(_model(), ROUTE, _table(), limits={"sd_max_mm": 30.0}, **KW)
+    with pytest.raises(ValueError, match="start_areas.web"):
+        reprofiling_mileage(_model(), ROUTE, _table(), start_areas={"web": 1.0}, **KW)
+
+
+def test_wider_rate_uncertainty_widens_the_band_not_the_median():
+    narrow = reprofiling_mileage(_model(rel=0.05), ROUTE, _table(), **KW)
+    wide = reprofiling_mileage(_model(rel=0.2), ROUTE, _table(), **KW)
+    assert wide.mileage_p50_km == pytest.approx(narrow.mileage_p50_km, rel=1e-6)
+    assert wide.mileage_p10_km < narrow.mileage_p10_km
+    assert wide.mileage_p90_km > narrow.mileage_p90_km
+    assert dataclasses.is_dataclass(wide)
+
+
+def test_high_rail_wheel_is_governed_by_the_flange_and_tangent_track_by_the_tread():
+    # right wheel in a left curve runs on the high rail: flange wear, qR governs; the left
+    # (low-rail) wheel lasts longer; on tangent track only the tread wears and Sh governs
+    right = reprofiling_mileage(_model(), ROUTE, _table(), **KW)
+    left = reprofiling_mileage(_model(), ROUTE, _table(), **{**KW, "side": "left"})
+    tangent = reprofiling_mileage(_model(), TANGENT, _table(), **KW)
+    assert right.governing_limit == "qr"
+    assert left.mileage_p50_km > right.mileage_p50_km
+    assert tangent.governing_limit == "sh" and tangent.rates_mm2_per_km["flange"] == 0.0

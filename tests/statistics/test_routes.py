@@ -1,0 +1,103 @@
+import json
+
+import numpy as np
+import pytest
+from wearcast.statistics.routes import (
+    Route,
+    RouteClass,
+    cant_class_bounds_mm,
+    radius_class_bounds_m,
+    rail_for,
+    route_from_segments,
+    route_share_by_rail,
+)
+
+
+def test_radius_class_bounds_reproduce_seed_003_table_3():
+    # Seed 003 Table 3 (n_class = 7, Aosta line, radii 150 ... 8400 m): class bounds printed
+    # as whole metres. They are equally spaced in curvature; we agree to the printed rounding.
+    published = [150, 175, 209, 259, 342, 503, 948, 8400]
+    bounds = radius_class_bounds_m(150.0, 8400.0, 7)
+    assert np.allclose(bounds, published, atol=0.6)
+
+
+def test_cant_class_bounds_reproduce_seed_003_table_3():
+    # Seed 003 Table 3: superelevation subclasses 0-19, 20-39, ..., 100-119, 120-140 mm.
+    assert np.allclose(cant_class_bounds_mm(140.0, 7), [0, 20, 40, 60, 80, 100, 120, 140])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"radius_m": -5.0, "direction": "left"}, "radius_m"),
+        ({"radius_m": 300.0, "direction": None}, "direction"),
+        ({"radius_m": 300.0, "direction": "up"}, "direction"),
+        ({"radius_m": None, "direction": "left"}, "direction"),
+        ({"radius_m": 300.0, "direction": "left", "cant_mm": float("nan")}, "cant_mm"),
+        ({"radius_m": 300.0, "direction": "left", "speed_kmh": float("inf")}, "speed_kmh"),
+        ({"radius_m": 300.0, "direction": "left", "share": 1.5}, "share"),
+    ],
+)
+def test_route_class_rejects_bad_fields(kwargs, field):
+    base = {"cant_mm": 50.0, "speed_kmh": 60.0, "share": 0.5}
+    with pytest.raises(ValueError, match=field):
+        RouteClass(**{**base, **kwargs})
+
+
+def test_route_shares_must_sum_to_one():
+    c = RouteClass(None, None, 0.0, 100.0, 0.5)
+    with pytest.raises(ValueError, match="share"):
+        Route("r", (c,))
+    Route("r", (c, RouteClass(300.0, "left", 80.0, 60.0, 0.5005)))  # within 1e-3
+
+
+def test_route_round_trips_through_json():
+    route = Route("r", (RouteClass(None, None, 0, 100, 0.6), RouteClass(300, "right", 90, 60, 0.4)))
+    assert Route.from_dict(json.loads(json.dumps(route.to_dict()))) == route
+
+
+def test_rail_mapping_left_curve_puts_right_wheels_on_high_rail():
+    # DESIGN.md "Sides and curves": in a left curve the right wheels run on the high rail.
+    left_curve = RouteClass(400.0, "left", 80.0, 60.0, 1.0)
+    assert rail_for(left_curve, "right") == "high"
+    assert rail_for(left_curve, "left") == "low"
+    right_curve = RouteClass(400.0, "right", 80.0, 60.0, 1.0)
+    assert rail_for(right_curve, "left") == "high"
+    assert rail_for(RouteClass(None, None, 0.0, 100.0, 1.0), "left") == "tangent"
+
+
+def test_route_from_segments_weights_by_length():
+    segments = [
+        {"length_m": 600.0, "radius_m": None, "direction": None, "cant_mm": 0.0, "speed_kmh": 120},
+        {"length_m": 100.0, "radius_m": 300.0, "direction": "left", "cant_mm": 100.0,
+         "speed_kmh": 60},
+        {"length_m": 100.0, "radius_m": 320.0, "direction": "right", "cant_mm": 104.0,
+         "speed_kmh": 70},
+        {"length_m": 200.0, "radius_m": 2000.0, "direction": "left", "cant_mm": 10.0,
+         "speed_kmh": 100},
+    ]
+    route = route_from_segments(segments, name="x", n_class=3)
+    assert sum(c.share for c in route.classes) == pytest.approx(1.0)
+    tangent = [c for c in route.classes if c.radius_m is None]
+    assert len(tangent) == 1 and tangent[0].share == pytest.approx(0.6)
+    tight = sorted((c for c in route.classes if c.radius_m and c.radius_m < 1000),
+                   key=lambda c: c.direction)
+    # 300 and 320 m fall in the tightest of 3 curvature classes (300..2000 m), one per direction;
+    # representative radius = length-weighted mean over the radius class (seed 003 §5.3)
+    assert [c.direction for c in tight] == ["left", "right"]
+    assert tight[0].radius_m == pytest.approx(310.0)
+    assert tight[0].share == pytest.approx(0.1) and tight[0].cant_mm == pytest.approx(100.0)
+    assert tight[1].speed_kmh == pytest.approx(70.0)
+    wide = [c for c in route.classes if c.radius_m and c.radius_m > 1000]
+    assert len(wide) == 1 and wide[0].share == pytest.approx(0.2)
+    shares = route_share_by_rail(route, "right")
+    assert shares == pytest.approx({"high": 0.3, "low": 0.1, "tangent": 0.6})
+
+
+def test_route_from_segments_rejects_bad_segment():
+    with pytest.raises(ValueError, match=r"segments\[0\].length_m"):
+        route_from_segments([{"length_m": -1, "radius_m": None, "direction": None,
+                              "cant_mm": 0, "speed_kmh": 80}])
+    with pytest.raises(ValueError, match=r"segments\[0\].direction"):
+        route_from_segments([{"length_m": 10, "radius_m": 300, "direction": None,
+                              "cant_mm": 0, "speed_kmh": 80}])
