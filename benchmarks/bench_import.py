@@ -1,0 +1,116 @@
+"""Import throughput: long-CSV files of many 400-point profiles into a fresh SQLite database.
+
+    .venv/bin/python benchmarks/bench_import.py            # 10,000 and 100,000 profiles
+    .venv/bin/python benchmarks/bench_import.py --quick    # 1,000 and 10,000 profiles
+
+For each size: writes the file under a temporary directory (streamed in chunks; 100,000 x 400
+rows is ~3.5 GB), then imports it in a *fresh child process* through the service's import
+function (``wearcast.service.importing.import_upload``, not HTTP) into a fresh SQLite
+database, and prints profiles/s, points/s and the child's peak RSS
+(``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so each size's memory is measured alone.
+
+The profiles are the fleet twin's (``wearcast.statistics.fleet_twin``): a pool of realistic
+worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+POINTS = 400
+MILEAGES_PER_WHEEL = 6
+
+
+def _pool(points: int) -> list[tuple[str, list[str]]]:
+    """(metadata after wheel_id/vehicle_id, y,z lines) for a pool of twin measurements."""
+    from wearcast.statistics import fleet_twin
+
+    config = fleet_twin.example_fleet_config(seed=1, points_per_profile=points)
+    twin = fleet_twin.generate_fleet(config)
+    pool = []
+    for (_, _), g in twin.profiles.groupby(["wheel_id", "mileage_km"], sort=False):
+        r = g.iloc[0]
+        meta = (f"{r.bogie_type},{r.axle},{r.side},{r.mileage_km},")
+        tail = f",{r.measured_on},{r.route_id},{r.running_mode},{r.instrument_id},{r.load_t}"
+        yz = [f"{y:.3f},{z:.3f}" for y, z in zip(g.y_mm, g.z_mm, strict=True)]
+        pool.append((meta, [line + tail for line in yz]))
+    return pool
+
+
+def write_csv(path: Path, n_profiles: int, points: int = POINTS) -> int:
+    """Write ``n_profiles`` measurements (6 per wheel) to ``path``; returns bytes written."""
+    pool = _pool(points)
+    header = ("wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,y_mm,z_mm,measured_on,"
+              "route_id,running_mode,instrument_id,load_t\n")
+    with path.open("w", buffering=1 << 22) as f:
+        f.write(header)
+        for i in range(n_profiles):
+            wheel = i // MILEAGES_PER_WHEEL
+            # same wheel position and mileage sequence as a pool wheel, under a new id
+            meta, lines = pool[(wheel * MILEAGES_PER_WHEEL) % len(pool)
+                               + i % MILEAGES_PER_WHEEL]
+            prefix = f"W{wheel:07d},V{wheel // 8:06d},{meta}"
+            f.write("\n".join(prefix + line for line in lines))
+            f.write("\n")
+    return path.stat().st_size
+
+
+def import_once(csv_path: Path, work_dir: Path) -> dict[str, float]:
+    """Import one file into a fresh database (run in a child process)."""
+    from wearcast.service import importing
+    from wearcast.service.db import Database
+    from wearcast.service.settings import Settings
+
+    settings = Settings(data_dir=work_dir, database_url=None)
+    database = Database(settings)
+    database.migrate()
+    start = time.perf_counter()
+    with database.session_factory() as session, csv_path.open("rb") as stream:
+        result = importing.import_upload(session, settings.raw_dir, stream, csv_path.name,
+                                         chunk_size=settings.import_chunk_size)
+    seconds = time.perf_counter() - start
+    database.dispose()
+    peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+    return {"profiles": result.created, "points": result.points, "seconds": seconds,
+            "peak_rss_mb": peak_kib / 1024.0}
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description="long-CSV import throughput")
+    parser.add_argument("--quick", action="store_true", help="1,000 and 10,000 profiles")
+    parser.add_argument("--sizes", type=int, nargs="*", help="explicit profile counts")
+    parser.add_argument("--child", nargs=2, metavar=("CSV", "DIR"), help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child:
+        print(json.dumps(import_once(Path(args.child[0]), Path(args.child[1]))))
+        return
+    sizes = args.sizes or ([1_000, 10_000] if args.quick else [10_000, 100_000])
+    print(f"{'profiles':>9} {'file MB':>9} {'write s':>8} {'import s':>9} {'profiles/s':>11} "
+          f"{'points/s':>11} {'peak RSS MB':>12}")
+    for n in sizes:
+        with tempfile.TemporaryDirectory(prefix="wearcast-bench-") as tmp:
+            csv_path = Path(tmp) / f"profiles_{n}.csv"
+            t0 = time.perf_counter()
+            size = write_csv(csv_path, n)
+            write_s = time.perf_counter() - t0
+            child = subprocess.run([sys.executable, __file__, "--child", str(csv_path),
+                                    str(Path(tmp) / "data")],
+                                   capture_output=True, text=True, check=False)
+            if child.returncode != 0:
+                sys.exit(f"import of {n} profiles failed:\n{child.stderr[-3000:]}")
+            r = json.loads(child.stdout.strip().splitlines()[-1])
+            assert r["profiles"] == n, r
+            print(f"{n:>9,} {size / 1e6:>9.1f} {write_s:>8.1f} {r['seconds']:>9.1f} "
+                  f"{n / r['seconds']:>11,.0f} {r['points'] / r['seconds']:>11,.0f} "
+                  f"{r['peak_rss_mb']:>12.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
