@@ -1,0 +1,28 @@
+"""The FastAPI application: ``create_app()`` wires the database, error handlers and routers."""
+
+from __future__ import annotations
+
+from fastapi import FastAPI
+
+from wearcast.service.db import Database
+from wearcast.service.errors import install_handlers
+from wearcast.service.settings import Settings
+
+
+def create_app(settings: Settings | None = None, *, migrate: bool = True) -> FastAPI:
+    """An app serving the ``/v1`` contract on the database named by ``settings``.
+
+    ``migrate`` brings the schema to the newest revision first (the only way it is created).
+    """
+    from wearcast.service.routes import health, measurements, models, routes, wear_tables
+
+    database = Database(settings or Settings())
+    if migrate:
+        database.migrate()
+    app = FastAPI(title="wearcast", version="0.1.0",
+                  description="Wheel-profile wear and reprofiling-mileage prediction")
+    app.state.database = database
+    install_handlers(app)
+    for module in (health, measurements, routes, wear_tables, models):
+        app.include_router(module.router, prefix="/v1")
+    return app

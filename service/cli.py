@@ -1,0 +1,325 @@
+"""The ``wearcast`` command line: serve the API, import, calibrate, predict, reprofile, demo.
+
+Every command works on the database named by ``WEARCAST_DATABASE_URL`` (default a SQLite file
+in ``WEARCAST_DATA_DIR``, default ``./data``), migrates it first, and calls the same service
+layer as the HTTP routes (no HTTP in between). Errors a user can fix print the field and the
+reason and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any, TypeVar
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from wearcast.service.db import Database
+from wearcast.service.errors import ApiError
+from wearcast.service.settings import Settings
+
+app = typer.Typer(help="wearcast: wheel-profile wear and reprofiling-mileage prediction",
+                  no_args_is_help=True, add_completion=False)
+console = Console()
+err = Console(stderr=True)
+T = TypeVar("T")
+
+
+def _database() -> Database:
+    database = Database(Settings())
+    database.migrate()
+    return database
+
+
+@contextmanager
+def _session() -> Iterator[tuple[Database, Session]]:
+    database = _database()
+    try:
+        with database.session_factory() as session:
+            yield database, session
+    except ApiError as exc:
+        extra = "".join(f", {k} {v}" for k, v in exc.extra.items() if v is not None)
+        err.print(f"[red]error[/red] ({exc.status}) {exc.field}{extra}: {exc.reason}")
+        raise typer.Exit(2) from exc
+    finally:
+        database.dispose()
+
+
+def _show(data: Any) -> None:
+    if hasattr(data, "model_dump"):
+        data = data.model_dump(mode="json")
+    console.print_json(json.dumps(data))
+
+
+def _json_option(text: str | None, name: str) -> dict[str, Any]:
+    if not text:
+        return {}
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        err.print(f"[red]error[/red] {name}: not valid JSON ({exc.msg})")
+        raise typer.Exit(2) from exc
+    if not isinstance(value, dict):
+        err.print(f"[red]error[/red] {name}: must be a JSON object")
+        raise typer.Exit(2)
+    return value
+
+
+def _route_ref(value: str) -> int | str:
+    return int(value) if value.isdigit() else value
+
+
+@app.command()
+def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.0.1",
+          port: Annotated[int, typer.Option(help="TCP port")] = 8000,
+          load_example: Annotated[bool, typer.Option(
+              help="load the bundled example fleet when the database is empty")] = False,
+          ) -> None:
+    """Migrate the database, optionally load the example fleet, and serve the /v1 API."""
+    import uvicorn
+
+    from wearcast.service import models_db as db
+    from wearcast.service.app import create_app
+
+    settings = Settings()
+    database = Database(settings)
+    database.migrate()
+    if load_example:
+        with database.session_factory() as session:
+            empty = not session.scalar(select(func.count()).select_from(db.Measurement))
+        if empty:
+            try:
+                from wearcast.service.demo import load_example_fleet
+            except ImportError:
+                err.print("example fleet not available (wearcast.service.demo missing)")
+            else:
+                ids = load_example_fleet(database.session_factory, settings.raw_dir)
+                console.print(f"example fleet loaded: {ids}")
+        else:
+            console.print("database not empty: example fleet not loaded")
+    database.dispose()
+    console.print(f"serving {settings.resolved_database_url} on http://{host}:{port}/v1")
+    uvicorn.run(create_app(settings, migrate=False), host=host, port=port)
+
+
+@app.command()
+def migrate() -> None:
+    """Bring the database schema to the newest migration."""
+    database = _database()
+    console.print(f"migrated {database.settings.resolved_database_url}")
+    database.dispose()
+
+
+@app.command("import")
+def import_(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
+                                                 help="long CSV, parameter CSV, MiniProf, zip")],
+            manifest: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
+                                                          help="manifest CSV")] = None,
+            idempotency_key: Annotated[str | None, typer.Option(help="Idempotency-Key")]
+            = None) -> None:
+    """Import measurements (one transaction; a repeated file creates nothing)."""
+    from wearcast.service import importing
+
+    with _session() as (database, session), file.open("rb") as stream, Progress(
+            TextColumn("[bold]importing {task.description}"), BarColumn(),
+            TextColumn("{task.completed} measurements"), TimeElapsedColumn(),
+            console=err, transient=True) as progress:
+        task = progress.add_task(file.name, total=None)
+        result = importing.import_upload(
+            session, database.settings.raw_dir, stream, file.name,
+            manifest=manifest.read_bytes() if manifest else None,
+            manifest_name=manifest.name if manifest else None,
+            idempotency_key=idempotency_key, chunk_size=database.settings.import_chunk_size,
+            progress=lambda n: progress.advance(task, n))
+    _show(result.as_dict())
+
+
+@app.command()
+def route(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
+                                               help="JSON: {name, classes|segments, ...}")]
+          ) -> None:
+    """Store a route from a JSON file (the POST /v1/routes body, or a list of them)."""
+    from pydantic import ValidationError
+
+    from wearcast.service import route_store
+    from wearcast.service.schemas import RouteIn
+
+    data = json.loads(file.read_text())
+    with _session() as (_, session):
+        for body in data if isinstance(data, list) else [data]:
+            try:
+                parsed = RouteIn.model_validate(body)
+            except ValidationError as exc:
+                first = exc.errors()[0]
+                raise ApiError(422, ".".join(map(str, first["loc"])), first["msg"]) from exc
+            _show(route_store.route_out(route_store.create_route(session, parsed)))
+
+
+@app.command("wear-table")
+def wear_table(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
+                                                    help="curve-radius table CSV")],
+               name: Annotated[str | None, typer.Option(help="table name")] = None) -> None:
+    """Store a curve-radius wear table (CSV)."""
+    from wearcast.service import wear_table_store
+
+    with _session() as (_, session):
+        row = wear_table_store.upload_wear_table(session, file.read_bytes(), file.name, name)
+        _show(wear_table_store.wear_table_out(session, row, with_rows=False))
+
+
+@app.command()
+def calibrate(name: Annotated[str, typer.Option(help="model name")],
+              wear_table_id: Annotated[int, typer.Option(help="stored wear table id")],
+              route_id: Annotated[str, typer.Option("--route", help="calibration route")],
+              measure: Annotated[str, typer.Option(help="tau_max or t_gamma")] = "tau_max",
+              running_mode: Annotated[str, typer.Option(help="lead or mixed")] = "mixed",
+              filter: Annotated[str | None, typer.Option(
+                  help='JSON filter, e.g. \'{"bogie_type": "motor"}\'')] = None) -> None:
+    """Calibrate a hybrid model (seed 001 eq. 3) on the filtered measurements."""
+    from wearcast.service import model_store
+    from wearcast.service.schemas import ModelIn
+
+    body = _validated(ModelIn, {
+        "name": name, "measure": measure, "running_mode": running_mode,
+        "wear_table_id": wear_table_id,
+        "calibration": {"route_id": _route_ref(route_id),
+                        "filter": _json_option(filter, "filter")}})
+    with _session() as (_, session), console.status("calibrating"):
+        row = model_store.create_model(session, body)
+        _show(model_store.model_out(session, row))
+
+
+def _validated(model: Callable[..., T], data: dict[str, Any]) -> T:
+    from pydantic import ValidationError
+
+    try:
+        return model.model_validate(data)  # type: ignore[attr-defined, no-any-return]
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"]) or "input"
+        err.print(f"[red]error[/red] {field}: {first['msg']}")
+        raise typer.Exit(2) from exc
+
+
+@app.command()
+def predict(model_id: Annotated[int, typer.Argument(help="model id")],
+            route_id: Annotated[str, typer.Option("--route", help="route id or name")],
+            bogie_type: Annotated[str, typer.Option(help="motor or trailer")],
+            axle: Annotated[int, typer.Option(help="1 or 2")],
+            side: Annotated[str, typer.Option(help="left or right")],
+            mileage_km: Annotated[list[float], typer.Option(help="mileage [km], repeatable")],
+            picture: Annotated[Path | None, typer.Option(
+                help="also write the wear-area picture here (.svg or .png)")] = None) -> None:
+    """Predict wear areas, Sd/Sh/qR (and the worn profile) per mileage."""
+    from wearcast.service import model_store, pictures
+    from wearcast.service.schemas import PredictIn
+
+    body = _validated(PredictIn, {"route_id": _route_ref(route_id), "bogie_type": bogie_type,
+                                  "axle": axle, "side": side, "mileage_km": mileage_km})
+    with _session() as (_, session):
+        result = model_store.predict(session, model_id, body)
+        table = Table(title=f"model {model_id} on {result.route}: {bogie_type} axle {axle} "
+                      f"{side}")
+        for column in ("mileage [km]", "flange A P10/P50/P90 [mm²]",
+                       "tread A P10/P50/P90 [mm²]", "Sd", "Sh", "qR [mm]"):
+            table.add_column(column, justify="right")
+        for p in result.points:
+            table.add_row(f"{p.mileage_km:,.0f}", _band(p.flange_area_mm2),
+                          _band(p.tread_area_mm2), _num(p.sd_mm), _num(p.sh_mm), _num(p.qr_mm))
+        console.print(table)
+        if picture is not None:
+            fmt = "png" if picture.suffix.lower() == ".png" else "svg"
+            picture.write_bytes(pictures.wear_area_picture(
+                session, model_id, route_id=_route_ref(route_id), bogie_type=bogie_type,
+                axle=axle, side=side, max_mileage_km=max(max(mileage_km), 1.0), fmt=fmt))
+            console.print(f"wrote {picture}")
+
+
+def _num(value: float | None) -> str:
+    return "—" if value is None else f"{value:.2f}"
+
+
+def _band(q: Any) -> str:
+    return f"{q.p10:.1f} / {q.p50:.1f} / {q.p90:.1f}"
+
+
+@app.command()
+def reprofile(model_id: Annotated[int, typer.Argument(help="model id")],
+              route_id: Annotated[str, typer.Option("--route", help="route id or name")],
+              wheel_id: Annotated[str | None, typer.Option(
+                  help="start from this wheel's latest measurement")] = None,
+              bogie_type: Annotated[str | None, typer.Option()] = None,
+              axle: Annotated[int | None, typer.Option()] = None,
+              side: Annotated[str | None, typer.Option()] = None,
+              sd_min_mm: Annotated[float | None, typer.Option()] = None,
+              sh_max_mm: Annotated[float | None, typer.Option()] = None,
+              qr_min_mm: Annotated[float | None, typer.Option()] = None) -> None:
+    """Mileage to the first Sd/Sh/qR limit (P10/P50/P90) and the governing limit."""
+    from wearcast.service import model_store
+    from wearcast.service.schemas import ReprofilingIn
+
+    limits = {k: v for k, v in (("sd_min_mm", sd_min_mm), ("sh_max_mm", sh_max_mm),
+                                ("qr_min_mm", qr_min_mm)) if v is not None}
+    body = _validated(ReprofilingIn, {
+        "route_id": _route_ref(route_id), "wheel_id": wheel_id, "bogie_type": bogie_type,
+        "axle": axle, "side": side, "limits": limits or None})
+    with _session() as (_, session):
+        _show(model_store.reprofiling(session, model_id, body))
+
+
+@app.command()
+def picture(model_id: Annotated[int, typer.Argument(help="model id")],
+            kind: Annotated[str, typer.Argument(help="wear-area or profile")],
+            out: Annotated[Path, typer.Argument(help="output file (.svg or .png)")],
+            route_id: Annotated[str, typer.Option("--route", help="route id or name")],
+            bogie_type: Annotated[str, typer.Option()],
+            axle: Annotated[int, typer.Option()],
+            side: Annotated[str, typer.Option()],
+            mileage_km: Annotated[float, typer.Option(help="for the profile picture")]
+            = 100_000.0,
+            wheel_id: Annotated[str | None, typer.Option()] = None) -> None:
+    """Write a picture: wear area over mileage (Fig. 11) or the worn profile (Figs. 12–14)."""
+    from wearcast.service import pictures
+
+    if kind not in {"wear-area", "profile"}:
+        err.print("[red]error[/red] kind: must be wear-area or profile")
+        raise typer.Exit(2)
+    fmt = "png" if out.suffix.lower() == ".png" else "svg"
+    position = {"route_id": _route_ref(route_id), "bogie_type": bogie_type, "axle": axle,
+                "side": side, "wheel_id": wheel_id, "fmt": fmt}
+    with _session() as (_, session):
+        if kind == "wear-area":
+            image = pictures.wear_area_picture(session, model_id, **position)  # type: ignore[arg-type]
+        else:
+            image = pictures.profile_picture(session, model_id, mileage_km=mileage_km,
+                                             **position)  # type: ignore[arg-type]
+    out.write_bytes(image)
+    console.print(f"wrote {out}")
+
+
+@app.command()
+def demo(out_dir: Annotated[Path, typer.Option(help="where the demo database and pictures go")]
+         = Path("demo-output")) -> None:
+    """Run the example: calibrate on unit A's motor bogies and predict the rest."""
+    try:
+        from wearcast.service.demo import run_demo
+    except ImportError as exc:
+        err.print("the demo is not available (wearcast.service.demo missing)")
+        raise typer.Exit(1) from exc
+    run_demo(out_dir, echo=console.print)
+
+
+def main() -> None:
+    """Entry point of the ``wearcast`` script."""
+    app()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,352 @@
+"""The import pipeline: readers → profile processing → bulk inserts, one transaction per batch.
+
+``import_upload`` streams the records of an upload (long CSV, parameter CSV, MiniProf files
+with a manifest, or a zip of these; :mod:`wearcast.service.readers`), processes each profile
+(cleaning, alignment, wear curve, wear areas, recomputed Sd/Sh/qR;
+:func:`wearcast.statistics.processing.process_profile`) and inserts the measurements in chunks
+with ``session.execute(insert(...), rows)`` — no ORM object per row, points and wear curves as
+little-endian float32 blobs — so memory stays bounded however large the upload.
+
+Idempotency: a batch is identified by the SHA-256 of its content (file, and manifest when
+given) and optionally by an ``Idempotency-Key``; importing the same content or key again
+creates nothing and returns the first batch with ``duplicate=True``. A measurement whose
+(wheel_id, mileage_km) is already stored (or appears twice in the upload) is skipped and
+counted in ``duplicates``. Any error rolls the whole batch back (and removes the raw file it
+stored) and is reported with file, line, field and reason.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import math
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from itertools import islice
+from pathlib import Path
+from typing import Any, BinaryIO, TypeAlias
+
+import numpy as np
+from sqlalchemy import insert, select, tuple_
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from wearcast.service import models_db as db
+from wearcast.service import rawfiles
+from wearcast.service.errors import ApiError, Unprocessable
+from wearcast.service.readers.errors import ImportFileError
+from wearcast.service.readers.records import ParameterRecord, ProfileRecord
+
+Record: TypeAlias = ProfileRecord | ParameterRecord
+Progress = Callable[[int], None]
+
+DEFAULT_CHUNK = 500
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """What an import did: ``created`` measurements stored, ``duplicates`` skipped."""
+
+    batch_id: int
+    duplicate: bool
+    file_name: str
+    records: int
+    created: int
+    duplicates: int
+    points: int
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def import_file_error(exc: ImportFileError) -> ApiError:
+    """A reader's error as a 422 naming file, line, field and reason."""
+    field = exc.field or "file"
+    return Unprocessable(field, exc.reason, file=exc.file, line=exc.line)
+
+
+def f32(values: Any) -> bytes:
+    """Compact blob of an array: little-endian float32."""
+    return np.ascontiguousarray(values, dtype="<f4").tobytes()
+
+
+def from_f32(blob: bytes | None) -> np.ndarray | None:
+    return None if blob is None else np.frombuffer(blob, dtype="<f4").astype(float)
+
+
+def _finite_or_none(value: Any) -> float | None:
+    if value is None:
+        return None
+    number = float(value)
+    return number if math.isfinite(number) else None
+
+
+class _Registry:
+    """Per-import caches of wheels, vehicles and route names, checked for consistency."""
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+        self.wheels: dict[str, tuple[str, str, int, str]] = {}
+        self.vehicles: set[str] = set()
+        self.routes: dict[str, str] = {}
+        for route_id, name in session.execute(select(db.Route.id, db.Route.name)):
+            self.routes[str(route_id)] = name
+            self.routes[name] = name
+
+    def route_name(self, ref: str | None) -> str | None:
+        return None if ref is None else self.routes.get(str(ref), str(ref))
+
+    def ensure_wheels(self, records: list[Record]) -> None:
+        wanted = {r.meta.wheel_id for r in records} - self.wheels.keys()
+        if wanted:
+            for row in self.session.execute(
+                select(db.Wheel.wheel_id, db.Wheel.vehicle_id, db.Wheel.bogie_type,
+                       db.Wheel.axle, db.Wheel.side).where(db.Wheel.wheel_id.in_(wanted))
+            ):
+                self.wheels[row[0]] = (row[1], row[2], row[3], row[4])
+                self.vehicles.add(row[1])
+        new_wheels: dict[str, dict[str, Any]] = {}
+        for record in records:
+            meta = record.meta
+            position = (meta.vehicle_id, meta.bogie_type, int(meta.axle), meta.side)
+            known = self.wheels.get(meta.wheel_id)
+            if known is None:
+                self.wheels[meta.wheel_id] = position
+                new_wheels[meta.wheel_id] = {
+                    "wheel_id": meta.wheel_id, "vehicle_id": meta.vehicle_id,
+                    "bogie_type": meta.bogie_type, "axle": int(meta.axle), "side": meta.side}
+                continue
+            for name, have, got in zip(("vehicle_id", "bogie_type", "axle", "side"), known,
+                                       position, strict=True):
+                if have != got:
+                    raise ImportFileError(
+                        meta.source_file, f"wheel {meta.wheel_id!r} is stored with {name} "
+                        f"{have!r}, this measurement says {got!r}",
+                        line=meta.source_line, field=name)
+        if not new_wheels:
+            return
+        vehicles = {w["vehicle_id"] for w in new_wheels.values()} - self.vehicles
+        if vehicles:
+            stored = set(self.session.scalars(
+                select(db.Vehicle.vehicle_id).where(db.Vehicle.vehicle_id.in_(vehicles))))
+            fresh = sorted(vehicles - stored)
+            if fresh:
+                self.session.execute(insert(db.Vehicle), [{"vehicle_id": v} for v in fresh])
+            self.vehicles |= vehicles
+        self.session.execute(insert(db.Wheel), list(new_wheels.values()))
+
+
+def _process(record: ProfileRecord) -> Any:
+    from wearcast.statistics.processing import process_profile
+
+    meta = record.meta
+    if meta.reference_profile.upper() != "S1002":
+        raise ImportFileError(meta.source_file, f"reference profile {meta.reference_profile!r} "
+                              "is not supported (only S1002)", line=meta.source_line,
+                              field="reference_profile")
+    try:
+        return process_profile(record.y_mm, record.z_mm)
+    except ValueError as exc:
+        raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} at "
+                              f"{meta.mileage_km:g} km cannot be used: {exc}",
+                              line=meta.source_line, field="z_mm") from exc
+
+
+def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
+                    ) -> dict[str, Any]:
+    """The ``measurements`` row of one record (profiles processed here)."""
+    meta = record.meta
+    row: dict[str, Any] = {
+        "batch_id": batch_id, "wheel_id": meta.wheel_id, "mileage_km": float(meta.mileage_km),
+        "measured_on": meta.measured_on, "route_id": registry.route_name(meta.route_id),
+        "running_mode": meta.running_mode, "instrument_id": meta.instrument_id,
+        "load_t": meta.load_t, "reference_profile": meta.reference_profile,
+        "covariates": dict(meta.covariates), "source_file": meta.source_file or None,
+        "source_line": meta.source_line,
+    }
+    empty = dict.fromkeys(
+        ("y_mm", "z_mm", "wear_mm", "wear_grid_start_mm", "wear_grid_step_mm",
+         "flange_area_mm2", "tread_area_mm2", "lateral_shift_mm", "vertical_shift_mm",
+         "rotation_rad", "rms_residual_mm", "instrument_parameters", "reported_sd_mm",
+         "reported_sh_mm", "reported_qr_mm"))
+    row.update(empty)
+    if isinstance(record, ParameterRecord):
+        row.update(kind="parameters", n_points=0, sd_mm=float(record.sd_mm),
+                   sh_mm=float(record.sh_mm), qr_mm=float(record.qr_mm),
+                   reported_sd_mm=float(record.sd_mm), reported_sh_mm=float(record.sh_mm),
+                   reported_qr_mm=float(record.qr_mm))
+        return row
+    processed = _process(record)
+    from wearcast.statistics.profile_parameters import flange_parameters
+    from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
+
+    grid = np.asarray(getattr(processed, "grid_y_mm", DEFAULT_GRID_Y_MM))
+    reported = record.instrument_parameters or {}
+    # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument), not of
+    # the profile aligned to the reference: the alignment's lateral shift would move Sd.
+    params = flange_parameters(processed.cleaned.y_mm, processed.cleaned.z_mm)
+    row.update(
+        kind="profile", n_points=int(len(record.y_mm)), y_mm=f32(record.y_mm),
+        z_mm=f32(record.z_mm), wear_mm=f32(processed.wear_mm),
+        wear_grid_start_mm=float(grid[0]), wear_grid_step_mm=float(grid[1] - grid[0]),
+        flange_area_mm2=_finite_or_none(processed.areas.flange_mm2),
+        tread_area_mm2=_finite_or_none(processed.areas.tread_mm2),
+        sd_mm=_finite_or_none(params.sd_mm), sh_mm=_finite_or_none(params.sh_mm),
+        qr_mm=_finite_or_none(params.qr_mm),
+        lateral_shift_mm=float(processed.lateral_shift_mm),
+        vertical_shift_mm=float(processed.vertical_shift_mm),
+        rotation_rad=float(processed.rotation_rad),
+        rms_residual_mm=float(processed.rms_residual_mm),
+        instrument_parameters=dict(reported) or None,
+        reported_sd_mm=_finite_or_none(reported.get("sd_mm")),
+        reported_sh_mm=_finite_or_none(reported.get("sh_mm")),
+        reported_qr_mm=_finite_or_none(reported.get("qr_mm")),
+    )
+    return row
+
+
+@dataclass
+class _Counts:
+    records: int = 0
+    created: int = 0
+    duplicates: int = 0
+    points: int = 0
+
+
+def store_records(session: Session, records: Iterable[Record], batch_id: int | None, *,
+                  chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None,
+                  ) -> tuple[_Counts, list[int]]:
+    """Insert the records (chunked bulk inserts) inside the session's open transaction.
+
+    Returns the counts and, when ``batch_id`` is None, the new measurement ids (single posts).
+    Duplicates of stored measurements or of earlier records in ``records`` are skipped.
+    """
+    registry = _Registry(session)
+    counts = _Counts()
+    seen: set[tuple[str, float]] = set()
+    new_ids: list[int] = []
+    iterator: Iterator[Record] = iter(records)
+    while chunk := list(islice(iterator, chunk_size)):
+        counts.records += len(chunk)
+        keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
+        stored = {tuple(row) for row in session.execute(
+            select(db.Measurement.wheel_id, db.Measurement.mileage_km).where(
+                tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
+        ).all()}
+        fresh: list[Record] = []
+        for record, key in zip(chunk, keys, strict=True):
+            if key in stored or key in seen:
+                counts.duplicates += 1
+                continue
+            seen.add(key)
+            fresh.append(record)
+        if fresh:
+            registry.ensure_wheels(fresh)
+            rows = [measurement_row(r, batch_id, registry) for r in fresh]
+            counts.points += sum(r["n_points"] for r in rows)
+            if batch_id is None:
+                for row in rows:
+                    new_ids.append(session.execute(
+                        insert(db.Measurement).returning(db.Measurement.id), [row]).scalar_one())
+            else:
+                session.execute(insert(db.Measurement), rows)
+            counts.created += len(rows)
+        if progress is not None:
+            progress(len(chunk))
+    return counts, new_ids
+
+
+def _existing_batch(session: Session, *, checksum: str | None = None,
+                    key: str | None = None) -> db.ImportBatch | None:
+    if key is not None:
+        found = session.scalar(select(db.ImportBatch).where(db.ImportBatch.idempotency_key == key))
+        if found is not None:
+            return found
+    if checksum is not None:
+        return session.scalar(select(db.ImportBatch)
+                              .where(db.ImportBatch.checksum_sha256 == checksum))
+    return None
+
+
+def _duplicate(batch: db.ImportBatch) -> ImportResult:
+    return ImportResult(batch_id=batch.id, duplicate=True, file_name=batch.file_name,
+                        records=batch.n_records, created=0, duplicates=batch.n_records,
+                        points=0)
+
+
+def iter_records(stream: BinaryIO, file_name: str, manifest: bytes | None,
+                 manifest_name: str | None) -> Iterator[Record]:
+    """The records of an upload, from the readers (streamed)."""
+    from wearcast.service.readers.bundle import iter_upload
+
+    yield from iter_upload(stream, file_name, manifest=manifest)
+
+
+def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: str, *,
+                  manifest: bytes | None = None, manifest_name: str | None = None,
+                  idempotency_key: str | None = None, chunk_size: int = DEFAULT_CHUNK,
+                  progress: Progress | None = None) -> ImportResult:
+    """Import one upload atomically; see the module docstring for the rules."""
+    if idempotency_key is not None and not 1 <= len(idempotency_key) <= 200:
+        raise Unprocessable("Idempotency-Key", "must be 1 to 200 characters")
+    if idempotency_key is not None:
+        found = _existing_batch(session, key=idempotency_key)
+        if found is not None:
+            return _duplicate(found)
+    file_sha, size = rawfiles.sha256_of_stream(stream)
+    if size == 0:
+        raise Unprocessable("file", f"{file_name} is empty")
+    digest = hashlib.sha256(file_sha.encode())
+    if manifest is not None:
+        digest.update(b"\0manifest\0" + hashlib.sha256(manifest).hexdigest().encode())
+    checksum = digest.hexdigest()
+    found = _existing_batch(session, checksum=checksum)
+    if found is not None:
+        return _duplicate(found)
+    stored_files: list[rawfiles.StoredFile] = []
+    try:
+        stored_files.append(rawfiles.store(raw_dir, stream, file_sha))
+        if manifest is not None:
+            stored_files.append(rawfiles.store(raw_dir, io.BytesIO(manifest),
+                                               hashlib.sha256(manifest).hexdigest()))
+        batch = db.ImportBatch(checksum_sha256=checksum, idempotency_key=idempotency_key,
+                               file_name=file_name, n_records=0, n_created=0, n_duplicates=0,
+                               n_points=0)
+        session.add(batch)
+        session.flush()
+        for role, stored, name in zip(("file", "manifest"), stored_files,
+                                      (file_name, manifest_name or "manifest.csv"),
+                                      strict=False):
+            session.add(db.RawFile(batch_id=batch.id, role=role, name=name,
+                                   sha256=stored.sha256, size_bytes=stored.size_bytes,
+                                   storage_path=stored.relative_path))
+        session.flush()
+        records = iter_records(stream, file_name, manifest, manifest_name)
+        counts, _ = store_records(session, records, batch.id, chunk_size=chunk_size,
+                                  progress=progress)
+        if counts.records == 0:
+            raise Unprocessable("file", f"{file_name} holds no measurements")
+        batch.n_records, batch.n_created = counts.records, counts.created
+        batch.n_duplicates, batch.n_points = counts.duplicates, counts.points
+        session.commit()
+    except ImportFileError as exc:
+        _abort(session, raw_dir, stored_files)
+        raise import_file_error(exc) from exc
+    except IntegrityError as exc:
+        _abort(session, raw_dir, stored_files)
+        found = _existing_batch(session, checksum=checksum, key=idempotency_key)
+        if found is not None:  # a concurrent import of the same content won the race
+            return _duplicate(found)
+        raise Unprocessable("file", f"{file_name} conflicts with stored data: {exc.orig}") from exc
+    except BaseException:
+        _abort(session, raw_dir, stored_files)
+        raise
+    return ImportResult(batch_id=batch.id, duplicate=False, file_name=file_name,
+                        records=counts.records, created=counts.created,
+                        duplicates=counts.duplicates, points=counts.points)
+
+
+def _abort(session: Session, raw_dir: Path, stored_files: list[rawfiles.StoredFile]) -> None:
+    session.rollback()
+    for stored in stored_files:
+        rawfiles.discard(raw_dir, stored)

@@ -1,0 +1,252 @@
+"""Hybrid models in storage: calibrate, read, predict, remaining mileage to reprofiling.
+
+The modelling is :mod:`wearcast.statistics.hybrid` (seed 001 eqs. 2–4) and
+:mod:`wearcast.statistics.reprofiling`; this module loads the inputs from storage, calls them
+and turns their ``"field: reason"`` errors into 422s (unknown bogie type, radius outside the
+table, ...).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from sqlalchemy import func, insert, select
+from sqlalchemy.orm import Session
+
+from wearcast.service import measurement_store, route_store, wear_table_store
+from wearcast.service import models_db as db
+from wearcast.service.errors import ApiError, NotFound, Unprocessable, from_value_error
+from wearcast.service.schemas import (
+    ModelIn,
+    ModelOut,
+    OptionalQuantiles,
+    PredictIn,
+    PredictionAt,
+    PredictionOut,
+    QuantileValues,
+    ReprofilingIn,
+    ReprofilingOut,
+)
+from wearcast.statistics import hybrid
+from wearcast.statistics.routes import Route
+from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
+
+REGIONS = ("flange", "tread")
+
+
+def _statistics_error(exc: ValueError, route_field: str = "route") -> ApiError:
+    if isinstance(exc, RadiusOutOfTableError):
+        return Unprocessable(f"{route_field}.classes.radius_m", str(exc).partition(": ")[2])
+    return from_value_error(exc)
+
+
+def get_model_row(session: Session, model_id: int) -> db.Model:
+    row = session.get(db.Model, model_id)
+    if row is None:
+        raise NotFound("model_id", f"no model with id {model_id}")
+    return row
+
+
+@dataclass(frozen=True)
+class LoadedModel:
+    row: db.Model
+    model: hybrid.HybridModel
+    table: WearTable
+
+
+def load_model(session: Session, model_id: int) -> LoadedModel:
+    row = get_model_row(session, model_id)
+    return LoadedModel(row, hybrid.HybridModel.from_dict(row.state),
+                       wear_table_store.compiled_table(session, row.wear_table_id))
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+def create_model(session: Session, body: ModelIn) -> db.Model:
+    """Calibrate a model on the measurements the filter selects (profiles only) and store it.
+
+    Seed 001 eq. 3: c_s = k_m / P_m per region, P_m from the calibration route and the table.
+    """
+    table = wear_table_store.compiled_table(session, body.wear_table_id)
+    route_row = route_store.get_route(session, body.calibration.route_id, "calibration.route_id")
+    route = route_store.to_domain(route_row)
+    filter_ = dict(body.calibration.filter)
+    filter_.setdefault("kind", "profile")
+    ids = measurement_store.matching_ids(session, filter_, "calibration.filter")
+    frame, curves = measurement_store.calibration_frame(session, ids)
+    if frame.empty:
+        raise Unprocessable("calibration.filter", "no profile measurements match the filter")
+    usable = frame["flange_area_mm2"].notna() & frame["tread_area_mm2"].notna()
+    frame = frame[usable.to_numpy()].reset_index(drop=True)
+    curves_2d = np.vstack([c for c, ok in zip(curves, usable, strict=True) if ok]) \
+        if len(frame) else np.empty((0, 0))
+    if frame.empty:
+        raise Unprocessable("calibration.filter", "no matching measurement has wear areas")
+    frame["route"] = route.name
+    try:
+        model = hybrid.calibrate(frame, route, table, wear_curves_mm=curves_2d,
+                                 measure=body.measure, running_mode=body.running_mode)
+    except ValueError as exc:
+        raise _statistics_error(exc, "calibration.route_id") from exc
+    row = db.Model(name=body.name, measure=body.measure, running_mode=body.running_mode,
+                   wear_table_id=body.wear_table_id, route_id=route_row.id,
+                   spec=body.model_dump(mode="json"), state=_jsonable(model.to_dict()))
+    session.add(row)
+    session.flush()
+    used = frame["measurement_id"].astype(int).tolist()
+    for start in range(0, len(used), 5000):
+        session.execute(insert(db.ModelCalibrationMeasurement),
+                        [{"model_id": row.id, "measurement_id": m}
+                         for m in used[start:start + 5000]])
+    session.commit()
+    return row
+
+
+def model_out(session: Session, row: db.Model) -> ModelOut:
+    n = session.scalar(select(func.count()).select_from(db.ModelCalibrationMeasurement)
+                       .where(db.ModelCalibrationMeasurement.model_id == row.id)) or 0
+    state = row.state
+    summary: dict[str, Any] = {"bogie_types": state.get("bogie_types")}
+    for region in REGIONS:
+        cal = state[region]
+        summary[region] = {k: cal[k] for k in ("c_s", "c_s_rel_std_error", "c_s_rel_spread",
+                                               "p_m")}
+        summary[region]["rate"] = cal.get("rate")
+    return ModelOut(id=row.id, name=row.name, measure=row.measure,
+                    running_mode=row.running_mode, wear_table_id=row.wear_table_id,
+                    route_id=row.route_id, calibration=row.spec.get("calibration", {}),
+                    n_calibration_measurements=int(n), summary=summary)
+
+
+def _q(values: np.ndarray, quantiles: tuple[float, ...]) -> QuantileValues:
+    pick = {q: float(v) for q, v in zip(quantiles, values, strict=True)}
+    return QuantileValues(p10=pick[0.1], p50=pick[0.5], p90=pick[0.9])
+
+
+def _none_if_nan(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def run_prediction(loaded: LoadedModel, route: Route, *, bogie_type: str, axle: int,
+                   side: str, mileage_km: list[float],
+                   start_areas_mm2: dict[str, float] | None = None) -> hybrid.Prediction:
+    try:
+        return hybrid.predict(loaded.model, route, loaded.table, bogie_type=bogie_type,
+                              axle=axle, side=side, mileage_km=mileage_km,
+                              start_areas_mm2=start_areas_mm2)
+    except ValueError as exc:
+        raise _statistics_error(exc) from exc
+
+
+def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
+    """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
+    loaded = load_model(session, model_id)
+    route, route_row = route_store.resolve(session, body.route_id, body.route)
+    result = run_prediction(loaded, route, bogie_type=body.bogie_type, axle=body.axle,
+                            side=body.side, mileage_km=body.mileage_km)
+    return prediction_out(model_id, route_row.name if route_row else "inline", body, result)
+
+
+def prediction_out(model_id: int, route_name: str, body: PredictIn,
+                   result: hybrid.Prediction) -> PredictionOut:
+    q = result.quantiles
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+
+    points = []
+    for i, s in enumerate(result.mileage_km):
+        points.append(PredictionAt(
+            mileage_km=float(s), flange_area_mm2=_q(result.flange_area_mm2[:, i], q),
+            tread_area_mm2=_q(result.tread_area_mm2[:, i], q),
+            sd_mm=_none_if_nan(result.sd_mm[i]), sh_mm=_none_if_nan(result.sh_mm[i]),
+            qr_mm=_none_if_nan(result.qr_mm[i]), extrapolated=bool(result.extrapolated[i]),
+            wear_mm=[_none_if_nan(v) for v in result.wear_mm[i]],
+            z_mm=[_none_if_nan(v) for v in result.z_mm[i]]))
+    return PredictionOut(
+        model_id=model_id, route=route_name, bogie_type=body.bogie_type, axle=body.axle,
+        side=body.side, weighted_measure={k: float(v) for k, v in
+                                          result.weighted_measure.items()},
+        rates_mm2_per_km={"flange": _q(result.flange_rate_mm2_per_km, q),
+                          "tread": _q(result.tread_rate_mm2_per_km, q)},
+        start_areas_mm2={k: float(v) for k, v in result.start_areas_mm2.items()},
+        y_mm=result.grid_y_mm.tolist(),
+        reference_z_mm=s1002_height_mm(result.grid_y_mm).tolist(), points=points)
+
+
+def _latest_profile(session: Session, wheel_id: str) -> tuple[db.Wheel, db.Measurement]:
+    wheel = session.get(db.Wheel, wheel_id)
+    if wheel is None:
+        raise NotFound("wheel_id", f"no wheel {wheel_id!r}")
+    latest = session.scalar(
+        select(db.Measurement).where(db.Measurement.wheel_id == wheel_id,
+                                     db.Measurement.kind == "profile",
+                                     db.Measurement.flange_area_mm2.is_not(None),
+                                     db.Measurement.tread_area_mm2.is_not(None))
+        .order_by(db.Measurement.mileage_km.desc()).limit(1))
+    if latest is None:
+        raise Unprocessable("wheel_id", f"wheel {wheel_id!r} has no measured profile to start "
+                            "from")
+    return wheel, latest
+
+
+def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> ReprofilingOut:
+    """Mileage at which the first limit is crossed, P10/P50/P90, and the governing limit.
+
+    With ``wheel_id`` the wheel's position comes from storage and the remaining mileage
+    starts at its latest measured profile (its measured wear areas); ``mileage_km`` is then
+    that measurement's mileage plus the remaining mileage.
+    """
+    from wearcast.statistics import reprofiling as stat_reprofiling
+
+    loaded = load_model(session, model_id)
+    route, route_row = route_store.resolve(session, body.route_id, body.route)
+    start_mileage, start_id, start_areas = 0.0, None, None
+    bogie_type, axle, side = body.bogie_type, body.axle, body.side
+    if body.wheel_id is not None:
+        wheel, latest = _latest_profile(session, body.wheel_id)
+        for name, given, stored in (("bogie_type", bogie_type, wheel.bogie_type),
+                                    ("axle", axle, wheel.axle), ("side", side, wheel.side)):
+            if given is not None and given != stored:
+                raise Unprocessable(name, f"wheel {wheel.wheel_id!r} has {name} {stored!r}")
+        bogie_type, axle, side = wheel.bogie_type, wheel.axle, wheel.side
+        start_mileage, start_id = float(latest.mileage_km), latest.id
+        start_areas = {"flange": max(0.0, float(latest.flange_area_mm2 or 0.0)),
+                       "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}
+    limits = body.limits.model_dump(exclude_none=True) if body.limits else None
+    try:
+        result = stat_reprofiling.reprofiling_mileage(
+            loaded.model, route, loaded.table, bogie_type=str(bogie_type), axle=int(axle or 1),
+            side=str(side), limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
+            start_areas=start_areas)
+    except ValueError as exc:
+        raise _statistics_error(exc) from exc
+    remaining = [result.mileage_p10_km, result.mileage_p50_km, result.mileage_p90_km]
+
+    def opt(values: list[float], offset: float) -> OptionalQuantiles:
+        p10, p50, p90 = (offset + v if math.isfinite(v) else None for v in values)
+        return OptionalQuantiles(p10=p10, p50=p50, p90=p90)
+
+    return ReprofilingOut(
+        model_id=model_id, route=route_row.name if route_row else "inline",
+        wheel_id=body.wheel_id, bogie_type=str(bogie_type), axle=int(axle or 1),
+        side=str(side), start_mileage_km=start_mileage, start_measurement_id=start_id,
+        start_areas_mm2=start_areas or {"flange": 0.0, "tread": 0.0},
+        remaining_km=opt(remaining, 0.0), mileage_km=opt(remaining, start_mileage),
+        governing_limit=result.governing_limit, sd_mm=_none_if_nan(result.sd_mm),
+        sh_mm=_none_if_nan(result.sh_mm), qr_mm=_none_if_nan(result.qr_mm),
+        extrapolated=bool(result.extrapolated), reason=result.reason,
+        limits={k: float(v) for k, v in result.limits.items()})

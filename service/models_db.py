@@ -1,0 +1,196 @@
+"""Storage schema (SQLAlchemy 2 declarative tables).
+
+The schema is created only by the Alembic migrations (``wearcast.migrations``); this module is
+the metadata they are checked against. Profile points and wear curves are stored as compact
+little-endian float32 blobs (``ndarray.astype('<f4').tobytes()``); the wear curve is sampled on
+the grid named by ``wear_grid_start_mm``/``wear_grid_step_mm`` and the blob's length.
+Instrument-reported Sd/Sh/qR are kept beside the ones recomputed from the points; the
+recomputed ones are taken on the cleaned profile in the instrument's own (back-face
+referenced) frame, as the instrument does, not on the profile aligned to the reference.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Any
+
+from sqlalchemy import (
+    JSON,
+    Date,
+    DateTime,
+    Float,
+    ForeignKey,
+    Index,
+    Integer,
+    LargeBinary,
+    MetaData,
+    String,
+    UniqueConstraint,
+    func,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
+
+NAMING_CONVENTION = {
+    "ix": "ix_%(column_0_label)s",
+    "uq": "uq_%(table_name)s_%(column_0_name)s",
+    "ck": "ck_%(table_name)s_%(constraint_name)s",
+    "fk": "fk_%(table_name)s_%(column_0_name)s_%(referred_table_name)s",
+    "pk": "pk_%(table_name)s",
+}
+
+
+class Base(DeclarativeBase):
+    metadata = MetaData(naming_convention=NAMING_CONVENTION)
+    type_annotation_map = {dict[str, Any]: JSON, list[Any]: JSON}
+
+
+class ImportBatch(Base):
+    """One upload: its checksum (content of file + manifest) and idempotency key are unique."""
+
+    __tablename__ = "import_batches"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    checksum_sha256: Mapped[str] = mapped_column(String(64), unique=True)
+    idempotency_key: Mapped[str | None] = mapped_column(String(200), unique=True)
+    file_name: Mapped[str] = mapped_column(String(500))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+    n_records: Mapped[int] = mapped_column(Integer, default=0)
+    n_created: Mapped[int] = mapped_column(Integer, default=0)
+    n_duplicates: Mapped[int] = mapped_column(Integer, default=0)
+    n_points: Mapped[int] = mapped_column(Integer, default=0)
+
+
+class RawFile(Base):
+    """An uploaded file, kept on disk under ``<data_dir>/raw/<sha[:2]>/<sha>``."""
+
+    __tablename__ = "raw_files"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    batch_id: Mapped[int] = mapped_column(ForeignKey("import_batches.id", ondelete="CASCADE"),
+                                          index=True)
+    role: Mapped[str] = mapped_column(String(20))  # "file" or "manifest"
+    name: Mapped[str] = mapped_column(String(500))
+    sha256: Mapped[str] = mapped_column(String(64), index=True)
+    size_bytes: Mapped[int] = mapped_column(Integer)
+    storage_path: Mapped[str] = mapped_column(String(200))
+
+
+class Vehicle(Base):
+    __tablename__ = "vehicles"
+    vehicle_id: Mapped[str] = mapped_column(String(200), primary_key=True)
+
+
+class Wheel(Base):
+    """A wheel and its fixed position: vehicle, bogie type, axle (1|2), side."""
+
+    __tablename__ = "wheels"
+    wheel_id: Mapped[str] = mapped_column(String(200), primary_key=True)
+    vehicle_id: Mapped[str] = mapped_column(ForeignKey("vehicles.vehicle_id"), index=True)
+    bogie_type: Mapped[str] = mapped_column(String(20))
+    axle: Mapped[int] = mapped_column(Integer)
+    side: Mapped[str] = mapped_column(String(10))
+
+
+class Measurement(Base):
+    """One measured wheel profile (or parameter-only record) at a mileage."""
+
+    __tablename__ = "measurements"
+    __table_args__ = (UniqueConstraint("wheel_id", "mileage_km",
+                                       name="uq_measurements_wheel_id_mileage_km"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    batch_id: Mapped[int | None] = mapped_column(ForeignKey("import_batches.id"), index=True)
+    wheel_id: Mapped[str] = mapped_column(ForeignKey("wheels.wheel_id"), index=True)
+    mileage_km: Mapped[float] = mapped_column(Float)
+    kind: Mapped[str] = mapped_column(String(20))  # "profile" or "parameters"
+    measured_on: Mapped[dt.date | None] = mapped_column(Date)
+    route_id: Mapped[str | None] = mapped_column(String(200), index=True)
+    running_mode: Mapped[str | None] = mapped_column(String(20))
+    instrument_id: Mapped[str | None] = mapped_column(String(200))
+    load_t: Mapped[float | None] = mapped_column(Float)
+    reference_profile: Mapped[str] = mapped_column(String(100), default="S1002")
+    covariates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    source_file: Mapped[str | None] = mapped_column(String(500))
+    source_line: Mapped[int | None] = mapped_column(Integer)
+    instrument_parameters: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    n_points: Mapped[int] = mapped_column(Integer, default=0)
+    y_mm: Mapped[bytes | None] = mapped_column(LargeBinary)
+    z_mm: Mapped[bytes | None] = mapped_column(LargeBinary)
+    wear_mm: Mapped[bytes | None] = mapped_column(LargeBinary)
+    wear_grid_start_mm: Mapped[float | None] = mapped_column(Float)
+    wear_grid_step_mm: Mapped[float | None] = mapped_column(Float)
+    flange_area_mm2: Mapped[float | None] = mapped_column(Float)
+    tread_area_mm2: Mapped[float | None] = mapped_column(Float)
+    sd_mm: Mapped[float | None] = mapped_column(Float)
+    sh_mm: Mapped[float | None] = mapped_column(Float)
+    qr_mm: Mapped[float | None] = mapped_column(Float)
+    reported_sd_mm: Mapped[float | None] = mapped_column(Float)
+    reported_sh_mm: Mapped[float | None] = mapped_column(Float)
+    reported_qr_mm: Mapped[float | None] = mapped_column(Float)
+    lateral_shift_mm: Mapped[float | None] = mapped_column(Float)
+    vertical_shift_mm: Mapped[float | None] = mapped_column(Float)
+    rotation_rad: Mapped[float | None] = mapped_column(Float)
+    rms_residual_mm: Mapped[float | None] = mapped_column(Float)
+
+
+class Route(Base):
+    """A route as curve classes (shares sum to 1) with free attributes."""
+
+    __tablename__ = "routes"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    classes: Mapped[list[Any]] = mapped_column(JSON)
+    segments: Mapped[list[Any] | None] = mapped_column(JSON)
+    attributes: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
+class WearTable(Base):
+    """A curve-radius table of wear measures (uploaded or computed)."""
+
+    __tablename__ = "wear_tables"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    source: Mapped[str] = mapped_column(String(500))
+    sha256: Mapped[str] = mapped_column(String(64))
+    n_rows: Mapped[int] = mapped_column(Integer)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
+class WearTableRow(Base):
+    __tablename__ = "wear_table_rows"
+    __table_args__ = (Index("ix_wear_table_rows_table", "wear_table_id"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    wear_table_id: Mapped[int] = mapped_column(ForeignKey("wear_tables.id", ondelete="CASCADE"))
+    bogie_type: Mapped[str] = mapped_column(String(20))
+    wheelset: Mapped[str] = mapped_column(String(20))
+    rail: Mapped[str] = mapped_column(String(20))
+    radius_m: Mapped[float | None] = mapped_column(Float)
+    region: Mapped[str] = mapped_column(String(20))
+    measure: Mapped[str] = mapped_column(String(20))
+    value: Mapped[float] = mapped_column(Float)
+
+
+class Model(Base):
+    """A calibrated hybrid model: the request (spec) and the fitted state."""
+
+    __tablename__ = "models"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    measure: Mapped[str] = mapped_column(String(20))
+    running_mode: Mapped[str] = mapped_column(String(20))
+    wear_table_id: Mapped[int] = mapped_column(ForeignKey("wear_tables.id"))
+    route_id: Mapped[int] = mapped_column(ForeignKey("routes.id"))
+    spec: Mapped[dict[str, Any]] = mapped_column(JSON)
+    state: Mapped[dict[str, Any]] = mapped_column(JSON)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
+class ModelCalibrationMeasurement(Base):
+    """Which measurements a model was calibrated on."""
+
+    __tablename__ = "model_calibration_measurements"
+    model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"),
+                                          primary_key=True)
+    measurement_id: Mapped[int] = mapped_column(ForeignKey("measurements.id"), primary_key=True)

@@ -1,0 +1,96 @@
+"""Railway routes in storage: create (from curve classes or segments), list, resolve by id or name.
+
+The curve classes and their validation come from :mod:`wearcast.statistics.routes`
+(segments are binned as in seed 003 §5.3).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from wearcast.service import models_db as db
+from wearcast.service.errors import Conflict, NotFound, Unprocessable, from_value_error
+from wearcast.service.schemas import RouteIn, RouteOut, RouteSpec
+from wearcast.statistics import routes as stat_routes
+
+
+def build_route(spec: RouteSpec, name: str, field: str = "") -> stat_routes.Route:
+    """The statistics-core route for a request's classes or segments (422 naming the field)."""
+    try:
+        if spec.classes is not None:
+            classes = []
+            for i, c in enumerate(spec.classes):
+                try:
+                    classes.append(stat_routes.RouteClass(**c.model_dump()))
+                except ValueError as exc:
+                    raise from_value_error(exc, f"{field}classes[{i}]".lstrip(".")) from exc
+            return stat_routes.Route(name=name, classes=tuple(classes))
+        segments = [s.model_dump() for s in spec.segments or []]
+        return stat_routes.route_from_segments(segments, name=name)
+    except ValueError as exc:
+        raise from_value_error(exc, field.rstrip(".")) from exc
+
+
+def create_route(session: Session, body: RouteIn) -> db.Route:
+    """Store a route; 409 when its name is taken."""
+    route = build_route(body, body.name)
+    if session.scalar(select(db.Route.id).where(db.Route.name == body.name)) is not None:
+        raise Conflict("name", f"a route named {body.name!r} exists already")
+    row = db.Route(
+        name=body.name,
+        classes=[c.to_dict() for c in route.classes],
+        segments=[s.model_dump() for s in body.segments] if body.segments else None,
+        attributes=body.attributes,
+    )
+    session.add(row)
+    try:
+        session.commit()
+    except IntegrityError as exc:
+        session.rollback()
+        raise Conflict("name", f"a route named {body.name!r} exists already") from exc
+    return row
+
+
+def find_route(session: Session, id_or_name: int | str) -> db.Route | None:
+    """A stored route by its id (an int or a string of digits) or its unique name."""
+    if isinstance(id_or_name, int) or (isinstance(id_or_name, str) and id_or_name.isdigit()):
+        row = session.get(db.Route, int(id_or_name))
+        if row is not None:
+            return row
+    return session.scalar(select(db.Route).where(db.Route.name == str(id_or_name)))
+
+
+def get_route(session: Session, id_or_name: int | str, field: str = "route_id") -> db.Route:
+    row = find_route(session, id_or_name)
+    if row is None:
+        raise NotFound(field, f"no route with id or name {id_or_name!r}")
+    return row
+
+
+def to_domain(row: db.Route) -> stat_routes.Route:
+    return stat_routes.Route.from_dict({"name": row.name, "classes": row.classes})
+
+
+def resolve(session: Session, route_id: int | str | None, route: RouteSpec | None,
+            ) -> tuple[stat_routes.Route, db.Route | None]:
+    """The route a request names (by id/name) or gives inline."""
+    if route_id is not None:
+        row = get_route(session, route_id)
+        return to_domain(row), row
+    if route is None:
+        raise Unprocessable("route_id", "give either route_id or route")
+    return build_route(route, "inline", "route."), None
+
+
+def list_routes(session: Session) -> list[db.Route]:
+    return list(session.scalars(select(db.Route).order_by(db.Route.id)))
+
+
+def route_out(row: db.Route) -> RouteOut:
+    data: dict[str, Any] = {"id": row.id, "name": row.name, "classes": row.classes,
+                            "segments": row.segments, "attributes": row.attributes or {}}
+    return RouteOut.model_validate(data)

@@ -1,0 +1,76 @@
+"""``/v1/models``: calibrate a hybrid model, read it, predict, remaining mileage, pictures.
+
+Calibration and prediction are plain ``def`` endpoints: FastAPI runs them in its threadpool,
+off the event loop.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Query, Response
+
+from wearcast.service import model_store, pictures
+from wearcast.service.deps import SessionDep
+from wearcast.service.pictures import ImageFormat
+from wearcast.service.schemas import (
+    BogieType,
+    ModelIn,
+    ModelOut,
+    PredictIn,
+    PredictionOut,
+    ReprofilingIn,
+    ReprofilingOut,
+    Side,
+)
+
+router = APIRouter(tags=["models"])
+QueryAxle = Annotated[int, Query(ge=1, le=2, description="1 or 2")]
+
+
+@router.post("/models", response_model=ModelOut, status_code=201)
+def create_model(body: ModelIn, session: SessionDep) -> ModelOut:
+    return model_store.model_out(session, model_store.create_model(session, body))
+
+
+@router.get("/models/{model_id}", response_model=ModelOut)
+def get_model(model_id: int, session: SessionDep) -> ModelOut:
+    return model_store.model_out(session, model_store.get_model_row(session, model_id))
+
+
+@router.post("/models/{model_id}/predict", response_model=PredictionOut)
+def predict(model_id: int, body: PredictIn, session: SessionDep) -> PredictionOut:
+    return model_store.predict(session, model_id, body)
+
+
+@router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
+def reprofiling(model_id: int, body: ReprofilingIn, session: SessionDep) -> ReprofilingOut:
+    return model_store.reprofiling(session, model_id, body)
+
+
+@router.get("/models/{model_id}/pictures/wear-area", response_class=Response,
+            responses={200: {"content": {"image/svg+xml": {}, "image/png": {}}}})
+def wear_area_picture(model_id: int, session: SessionDep, route_id: str,
+                      bogie_type: BogieType, axle: QueryAxle, side: Side,
+                      wheel_id: str | None = None,
+                      max_mileage_km: Annotated[float | None, Query(gt=0, le=5e6)] = None,
+                      format: ImageFormat = "svg") -> Response:
+    """Wear area over mileage: prediction corridor and measured points (seed 001 Fig. 11)."""
+    image = pictures.wear_area_picture(session, model_id, route_id=route_id,
+                                       bogie_type=bogie_type, axle=axle, side=side,
+                                       wheel_id=wheel_id, max_mileage_km=max_mileage_km,
+                                       fmt=format)
+    return Response(content=image, media_type=pictures.MEDIA_TYPES[format])
+
+
+@router.get("/models/{model_id}/pictures/profile", response_class=Response,
+            responses={200: {"content": {"image/svg+xml": {}, "image/png": {}}}})
+def profile_picture(model_id: int, session: SessionDep, route_id: str,
+                    bogie_type: BogieType, axle: QueryAxle, side: Side,
+                    mileage_km: Annotated[float, Query(ge=0, le=5e6)],
+                    wheel_id: str | None = None, format: ImageFormat = "svg") -> Response:
+    """Predicted worn profile vs reference and measured profiles (seed 001 Figs. 12–14)."""
+    image = pictures.profile_picture(session, model_id, route_id=route_id,
+                                     bogie_type=bogie_type, axle=axle, side=side,
+                                     mileage_km=mileage_km, wheel_id=wheel_id, fmt=format)
+    return Response(content=image, media_type=pictures.MEDIA_TYPES[format])

@@ -1,0 +1,362 @@
+"""Request and response bodies of the ``/v1`` contract (pydantic v2), one family per resource.
+
+Numbers must be finite (NaN/inf are refused), unknown fields are refused, and enumerations
+accept only their documented values, so every bad input is a 422 naming its field.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+BogieType = Literal["motor", "trailer"]
+Axle = Literal[1, 2]
+Side = Literal["left", "right"]
+Direction = Literal["left", "right"]
+Measure = Literal["tau_max", "t_gamma"]
+RunningMode = Literal["lead", "mixed"]
+FilterValue = str | int | float | bool | None
+Filter = dict[str, FilterValue | list[FilterValue]]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+# --- routes -----------------------------------------------------------------------------
+
+class RouteClassIn(Strict):
+    radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
+    direction: Direction | None = Field(default=None, description="side the track bends towards")
+    cant_mm: float = Field(default=0.0, ge=0, le=250, description="cant [mm]")
+    speed_kmh: float = Field(gt=0, le=500, description="running speed [km/h]")
+    share: float = Field(ge=0, le=1, description="share of the route's length [-]")
+
+    @model_validator(mode="after")
+    def _direction_for_curves(self) -> RouteClassIn:
+        if self.radius_m is not None and self.direction is None:
+            raise ValueError("a curve class (radius_m given) needs a direction: left or right")
+        return self
+
+
+class SegmentIn(Strict):
+    length_m: float = Field(gt=0, description="segment length [m]")
+    radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
+    direction: Direction | None = None
+    cant_mm: float = Field(default=0.0, ge=0, le=250)
+    speed_kmh: float = Field(gt=0, le=500)
+
+    @model_validator(mode="after")
+    def _direction_for_curves(self) -> SegmentIn:
+        if self.radius_m is not None and self.direction is None:
+            raise ValueError("a curved segment (radius_m given) needs a direction: left or right")
+        return self
+
+
+class RouteSpec(Strict):
+    """A route given inline: curve classes or segments (exactly one of them)."""
+
+    classes: list[RouteClassIn] | None = Field(default=None, min_length=1)
+    segments: list[SegmentIn] | None = Field(default=None, min_length=1)
+    attributes: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one_of(self) -> RouteSpec:
+        if (self.classes is None) == (self.segments is None):
+            raise ValueError("give either classes or segments (exactly one)")
+        return self
+
+
+class RouteIn(RouteSpec):
+    name: str = Field(min_length=1, max_length=200)
+
+    @field_validator("name")
+    @classmethod
+    def _not_numeric(cls, name: str) -> str:
+        if name.strip().isdigit():
+            raise ValueError("a route name must not be a bare number (numbers are route ids)")
+        return name.strip()
+
+
+class RouteClassOut(BaseModel):
+    radius_m: float | None
+    direction: str | None
+    cant_mm: float
+    speed_kmh: float
+    share: float
+
+
+class RouteOut(BaseModel):
+    id: int
+    name: str
+    classes: list[RouteClassOut]
+    segments: list[dict[str, Any]] | None = None
+    attributes: dict[str, Any]
+
+
+# --- wear tables ------------------------------------------------------------------------
+
+class WearTableRowOut(BaseModel):
+    bogie_type: str
+    wheelset: str
+    rail: str
+    radius_m: float | None
+    region: str
+    measure: str
+    value: float
+
+
+class WearTableOut(BaseModel):
+    id: int
+    name: str
+    source: str
+    sha256: str
+    n_rows: int
+    rows: list[WearTableRowOut] | None = None
+
+
+# --- measurements -----------------------------------------------------------------------
+
+class ReportedParameters(Strict):
+    sd_mm: float | None = None
+    sh_mm: float | None = None
+    qr_mm: float | None = None
+
+
+class MeasurementIn(Strict):
+    """One measurement: a profile (``y_mm``/``z_mm``) or the parameters only."""
+
+    wheel_id: str = Field(min_length=1, max_length=200)
+    vehicle_id: str = Field(min_length=1, max_length=200)
+    bogie_type: BogieType
+    axle: Axle
+    side: Side
+    mileage_km: float = Field(ge=0)
+    measured_on: dt.date | None = None
+    route_id: int | str | None = None
+    running_mode: RunningMode | None = None
+    instrument_id: str | None = None
+    load_t: float | None = Field(default=None, ge=0)
+    reference_profile: str = "S1002"
+    covariates: dict[str, FilterValue] = Field(default_factory=dict)
+    y_mm: list[float] | None = None
+    z_mm: list[float] | None = None
+    sd_mm: float | None = None
+    sh_mm: float | None = None
+    qr_mm: float | None = None
+    instrument_parameters: ReportedParameters | None = None
+
+    @model_validator(mode="after")
+    def _points_or_parameters(self) -> MeasurementIn:
+        has_points = self.y_mm is not None or self.z_mm is not None
+        has_params = any(v is not None for v in (self.sd_mm, self.sh_mm, self.qr_mm))
+        if has_points:
+            if self.y_mm is None or self.z_mm is None:
+                raise ValueError("y_mm and z_mm must be given together")
+            if len(self.y_mm) != len(self.z_mm):
+                raise ValueError(f"y_mm has {len(self.y_mm)} points, z_mm {len(self.z_mm)}")
+            if len(self.y_mm) < 10:
+                raise ValueError("a profile needs at least 10 points")
+        elif has_params:
+            if any(v is None for v in (self.sd_mm, self.sh_mm, self.qr_mm)):
+                raise ValueError("a parameter-only measurement needs sd_mm, sh_mm and qr_mm")
+        else:
+            raise ValueError("give the profile (y_mm, z_mm) or the parameters (sd_mm, sh_mm, "
+                             "qr_mm)")
+        return self
+
+
+class MeasurementOut(BaseModel):
+    id: int
+    batch_id: int | None
+    wheel_id: str
+    vehicle_id: str
+    bogie_type: str
+    axle: int
+    side: str
+    mileage_km: float
+    kind: str
+    measured_on: dt.date | None
+    route_id: str | None
+    running_mode: str | None
+    instrument_id: str | None
+    load_t: float | None
+    reference_profile: str
+    covariates: dict[str, Any]
+    source_file: str | None
+    source_line: int | None
+    n_points: int
+    flange_area_mm2: float | None
+    tread_area_mm2: float | None
+    sd_mm: float | None
+    sh_mm: float | None
+    qr_mm: float | None
+    reported_sd_mm: float | None
+    reported_sh_mm: float | None
+    reported_qr_mm: float | None
+    lateral_shift_mm: float | None
+    vertical_shift_mm: float | None
+    rotation_rad: float | None
+    rms_residual_mm: float | None
+    y_mm: list[float] | None = None
+    z_mm: list[float] | None = None
+
+
+class MeasurementPage(BaseModel):
+    total: int
+    limit: int
+    offset: int
+    items: list[MeasurementOut]
+
+
+class ImportOut(BaseModel):
+    batch_id: int
+    duplicate: bool = Field(description="true when this content or key was imported before")
+    file_name: str
+    records: int = Field(description="records read from the upload")
+    created: int = Field(description="measurements stored by this batch")
+    duplicates: int = Field(description="measurements already present, skipped")
+    points: int
+
+
+# --- models -----------------------------------------------------------------------------
+
+class CalibrationIn(Strict):
+    route_id: int | str
+    filter: Filter = Field(default_factory=dict)
+
+
+class ModelIn(Strict):
+    name: str = Field(min_length=1, max_length=200)
+    measure: Measure
+    running_mode: RunningMode
+    wear_table_id: int
+    calibration: CalibrationIn
+
+
+class ModelOut(BaseModel):
+    id: int
+    name: str
+    measure: str
+    running_mode: str
+    wear_table_id: int
+    route_id: int
+    calibration: dict[str, Any]
+    n_calibration_measurements: int
+    summary: dict[str, Any]
+
+
+class RouteRef(Strict):
+    route_id: int | str | None = None
+    route: RouteSpec | None = None
+
+    @model_validator(mode="after")
+    def _one_route(self) -> RouteRef:
+        if (self.route_id is None) == (self.route is None):
+            raise ValueError("give either route_id or route (exactly one)")
+        return self
+
+
+class WheelPosition(RouteRef):
+    bogie_type: BogieType
+    axle: Axle
+    side: Side
+
+
+class PredictIn(WheelPosition):
+    mileage_km: list[float] = Field(min_length=1, max_length=1000)
+
+    @field_validator("mileage_km")
+    @classmethod
+    def _non_negative(cls, values: list[float]) -> list[float]:
+        for i, value in enumerate(values):
+            if value < 0:
+                raise ValueError(f"mileage_km[{i}] = {value} is negative")
+        return values
+
+
+class QuantileValues(BaseModel):
+    p10: float
+    p50: float
+    p90: float
+
+
+class PredictionAt(BaseModel):
+    mileage_km: float
+    flange_area_mm2: QuantileValues
+    tread_area_mm2: QuantileValues
+    sd_mm: float | None
+    sh_mm: float | None
+    qr_mm: float | None
+    extrapolated: bool
+    wear_mm: list[float | None]
+    z_mm: list[float | None]
+
+
+class PredictionOut(BaseModel):
+    model_id: int
+    route: str
+    bogie_type: str
+    axle: int
+    side: str
+    weighted_measure: dict[str, float]
+    rates_mm2_per_km: dict[str, QuantileValues]
+    start_areas_mm2: dict[str, float]
+    y_mm: list[float]
+    reference_z_mm: list[float]
+    points: list[PredictionAt]
+
+
+class Limits(Strict):
+    sd_min_mm: float | None = Field(default=None, gt=0)
+    sh_max_mm: float | None = Field(default=None, gt=0)
+    qr_min_mm: float | None = Field(default=None, gt=0)
+
+
+class ReprofilingIn(Strict):
+    route_id: int | str | None = None
+    route: RouteSpec | None = None
+    wheel_id: str | None = None
+    bogie_type: BogieType | None = None
+    axle: Axle | None = None
+    side: Side | None = None
+    limits: Limits | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> ReprofilingIn:
+        if (self.route_id is None) == (self.route is None):
+            raise ValueError("give either route_id or route (exactly one)")
+        if self.wheel_id is None and None in (self.bogie_type, self.axle, self.side):
+            raise ValueError("give wheel_id, or bogie_type, axle and side")
+        return self
+
+
+class OptionalQuantiles(BaseModel):
+    p10: float | None
+    p50: float | None
+    p90: float | None
+
+
+class ReprofilingOut(BaseModel):
+    """Mileages in km; ``None`` = no limit reached within the search horizon (see reason)."""
+
+    model_id: int
+    route: str
+    wheel_id: str | None
+    bogie_type: str
+    axle: int
+    side: str
+    start_mileage_km: float
+    start_measurement_id: int | None
+    start_areas_mm2: dict[str, float]
+    remaining_km: OptionalQuantiles
+    mileage_km: OptionalQuantiles
+    governing_limit: str | None
+    sd_mm: float | None
+    sh_mm: float | None
+    qr_mm: float | None
+    extrapolated: bool
+    reason: str | None
+    limits: dict[str, float]
