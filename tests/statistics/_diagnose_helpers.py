@@ -1,0 +1,57 @@
+"""Scenario builder for the discrepancy-finder tests (fleet twin, calibrate, diagnose)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics import hybrid
+from wearcast.statistics import twin_effects as te
+from wearcast.statistics.discrepancy import Diagnosis, diagnose
+
+TABLE = ft.synthetic_wear_table()
+
+#: Moderate strengths of every cause (the hidden-effect tests).
+EFFECTS = {
+    "none": ((), ()),
+    "traction": ((te.traction(1.3),), ()),
+    "running_direction": ((te.running_direction(TABLE, 0.8),), ()),
+    "curve_asymmetry": ((te.curve_asymmetry(TABLE, 0.7),), ()),
+    "flange_lubrication": ((te.flange_lubrication(0.5),), ()),
+    "wear_measure": ((te.wear_measure(TABLE),), ()),
+    "nonlinear_progression": ((te.nonlinear_progression(0.75),), ()),
+    "seasonal_friction": ((te.seasonal_friction(0.3),), ()),
+    "vehicle_load": ((te.vehicle_load(1.5),), ()),
+    "profile_misalignment": ((), (te.flange_tread_offset("MP-2", 0.3),)),
+}
+
+
+def run_scenario(wear_effects=(), profile_effects=(), seed=0, **kwargs):
+    """Generate the test fleet, calibrate on unit A's motor bogies as a user would, diagnose."""
+    cfg = te.scenario_config(seed=seed, wear_effects=wear_effects,
+                             profile_effects=profile_effects)
+    twin = ft.generate_fleet(cfg, TABLE)
+    df, curves = te.twin_measurements(twin)
+    routes, attrs = te.scenario_routes(cfg)
+    cal = (df["vehicle_id"].str.startswith("A") & (df["bogie_type"] == "motor")).to_numpy()
+    model = hybrid.calibrate(df[cal], routes, TABLE, wear_curves_mm=curves[cal],
+                             measure="tau_max", running_mode="mixed")
+    diagnosis = diagnose(model, df, curves, routes, TABLE,
+                         calibration_wheel_ids=set(df["wheel_id"][cal]),
+                         route_attributes=attrs, **kwargs)
+    return model, df, curves, routes, diagnosis
+
+
+@lru_cache(maxsize=16)
+def cached(name: str, seed: int = 0) -> tuple:
+    we, pe = EFFECTS[name]
+    return run_scenario(we, pe, seed=seed)
+
+
+def verdict_of(name: str, seed: int = 0) -> Diagnosis:
+    return cached(name, seed)[4]
+
+
+__all__ = ["EFFECTS", "TABLE", "cached", "np", "run_scenario", "verdict_of"]

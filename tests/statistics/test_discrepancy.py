@@ -1,0 +1,113 @@
+"""diagnose -> Diagnosis, apply_extension, figures and HTML report (pure API)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wearcast.statistics import hybrid
+from wearcast.statistics import twin_effects as te
+from wearcast.statistics.discrepancy import (
+    ExtendedModel,
+    _holm,
+    apply_extension,
+    diagnosis_figures,
+    report_html,
+)
+
+_spec = importlib.util.spec_from_file_location(
+    "_diagnose_helpers", Path(__file__).with_name("_diagnose_helpers.py"))
+helpers = sys.modules.get("_diagnose_helpers") or importlib.util.module_from_spec(_spec)
+if "_diagnose_helpers" not in sys.modules:
+    sys.modules["_diagnose_helpers"] = helpers
+    _spec.loader.exec_module(helpers)
+
+
+def test_holm_adjustment_matches_hand_computation():
+    # p = (0.01, 0.04, 0.03): sorted 0.01*3, 0.03*2, 0.04*1 -> 0.03, 0.06, 0.06 (monotone)
+    assert _holm([0.01, 0.04, 0.03]).tolist() == pytest.approx([0.03, 0.06, 0.06])
+
+
+def test_traction_extension_predicts_motor_treads_faster():
+    model, df, _, routes, diagnosis = helpers.cached("traction")
+    ext = apply_extension(model, diagnosis.finding("traction"))
+    assert isinstance(ext, ExtendedModel)
+    route = routes["aosta"]
+    motor = ext.predict(route, helpers.TABLE, bogie_type="motor", axle=1, side="left",
+                        mileage_km=[100_000.0])
+    trailer = ext.predict(route, helpers.TABLE, bogie_type="trailer", axle=1, side="left",
+                          mileage_km=[100_000.0])
+    base_m = hybrid.predict(model, route, helpers.TABLE, bogie_type="motor", axle=1,
+                            side="left", mileage_km=[100_000.0])
+    base_t = hybrid.predict(model, route, helpers.TABLE, bogie_type="trailer", axle=1,
+                            side="left", mileage_km=[100_000.0])
+    ratio_ext = motor.tread_area_mm2[1, 0] / trailer.tread_area_mm2[1, 0]
+    ratio_base = base_m.tread_area_mm2[1, 0] / base_t.tread_area_mm2[1, 0]
+    m = diagnosis.finding("traction").extension["parameters"]["tread_multiplier_motor"]
+    assert ratio_ext / ratio_base == pytest.approx(m, rel=1e-9)
+    again = ExtendedModel.from_dict(json.loads(json.dumps(ext.to_dict())))
+    assert again.rate_factors(route, helpers.TABLE, bogie_type="motor", axle=1, side="left") \
+        == ext.rate_factors(route, helpers.TABLE, bogie_type="motor", axle=1, side="left")
+
+
+def test_running_direction_extension_is_usable_for_prediction():
+    model, _, _, routes, diagnosis = helpers.cached("running_direction")
+    ext = apply_extension(model, diagnosis.finding("running_direction"))
+    a1 = ext.predict(routes["aosta"], helpers.TABLE, bogie_type="trailer", axle=1,
+                     side="left", mileage_km=[100_000.0], covariates={"running_mode": "mixed"})
+    a2 = ext.predict(routes["aosta"], helpers.TABLE, bogie_type="trailer", axle=2,
+                     side="left", mileage_km=[100_000.0], covariates={"running_mode": "mixed"})
+    # axle 1 leads 80 %: its flange wears more than axle 2's (base model: equal)
+    assert a1.flange_area_mm2[1, 0] > 1.5 * a2.flange_area_mm2[1, 0]
+
+
+def test_wear_measure_extension_is_a_plain_hybrid_model():
+    model, _, _, routes, diagnosis = helpers.cached("wear_measure")
+    ext = apply_extension(model, diagnosis.finding("wear_measure"))
+    assert isinstance(ext, hybrid.HybridModel) and ext.measure == "t_gamma"
+    out = hybrid.predict(ext, routes["metro"], helpers.TABLE, bogie_type="motor", axle=1,
+                         side="right", mileage_km=[50_000.0])
+    assert np.all(np.isfinite(out.tread_area_mm2))
+
+
+def test_nonlinear_extension_bends_the_wear_curve():
+    model, _, _, routes, diagnosis = helpers.cached("nonlinear_progression")
+    ext = apply_extension(model, diagnosis.finding("nonlinear_progression"))
+    out = ext.predict(routes["aosta"], helpers.TABLE, bogie_type="motor", axle=1, side="left",
+                      mileage_km=[50_000.0, 100_000.0])
+    # beta ~ 0.75: doubling the mileage multiplies the area by ~2^0.75, not 2
+    ratio = out.tread_area_mm2[1, 1] / out.tread_area_mm2[1, 0]
+    assert ratio == pytest.approx(2 ** 0.75, abs=0.1)
+
+
+def test_report_and_figures():
+    diagnosis = helpers.verdict_of("traction")
+    figs = diagnosis_figures(diagnosis)
+    assert set(figs) == {"residuals", "predicted_vs_measured"}
+    assert all(s.lstrip().startswith("<?xml") and "<svg" in s for s in figs.values())
+    page = report_html(diagnosis, figs)
+    assert "traction" in page and page.count("<svg") == 2
+    assert "Verdict: <b>traction</b>" in page
+
+
+def test_diagnosis_to_dict_contract():
+    d = helpers.verdict_of("flange_lubrication").to_dict()
+    assert d["verdict"] == "flange_lubrication"
+    f = d["findings"][0]
+    assert set(f) >= {"cause", "summary", "evidence", "extension", "gain"}
+    assert set(f["gain"]) >= {"before_error", "after_error", "relative", "ci95_low",
+                              "ci95_high"}
+    assert set(f["evidence"]) >= {"effect_size", "p_value", "subgroup", "interval"}
+    json.dumps(d)
+
+
+def test_scenario_routes_have_attributes():
+    cfg = te.scenario_config(seed=0)
+    routes, attrs = te.scenario_routes(cfg)
+    assert attrs["aosta_lubricated"]["flange_lubrication"] is True
+    assert set(routes) == {"aosta", "aosta_lubricated", "metro"}
