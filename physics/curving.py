@@ -1,0 +1,1051 @@
+"""Quasi-static curving of a two-axle bogie: wheelset shifts and yaws, contact forces.
+
+Model (Wickens / Elkins-Gostling style steady curving, solved as a nonlinear equilibrium):
+
+* Track: curvature kappa = +1/R for a curve to the vehicle's left (``direction="left"``), -1/R
+  for a right curve, 0 for tangent track; cant raises the outer rail. Track frame: x in the
+  running direction, y to the LEFT, z up. Axle 1 leads at x = +a, axle 2 at x = -a.
+* Unknowns (12): per wheelset i the lateral shift y_i [mm] of its contact frame (rail level),
+  its yaw psi_i [rad] relative to the local track tangent, the rolling-speed ratio
+  Omega r0 / V = 1 + e_i and the elastic approaches d_left, d_right of its wheels [mm]; the
+  bogie frame's lateral shift y_b [mm] and yaw psi_b [rad] (track tangent at the bogie centre).
+* Equations (12): per wheelset lateral force, yaw moment, axle pitch moment (traction torque)
+  and the vertical load of each wheel; bogie lateral force and yaw moment.
+* Roll: each wheel rises by its rigid-contact lift (contact table) less its approach; the roll
+  theta turns the contact points, a wheel radius below the axle, so the wheelset centre (where
+  the primary suspension acts) is at y_i - r0 theta. This lets the flange contact climb onto
+  the flank as in the rigid geometry with roll (``contact.geometry``).
+* Wheel loads: static Q plus the load transfer -+Q (a_unb/g)(h/b0) of the cant deficiency
+  (unbalanced lateral acceleration a_unb = V^2 kappa - g cant/1500 mm), larger on the outer
+  wheel. Prescribing each wheel's vertical load stands for the heave and roll equilibrium; the
+  gravitational stiffness comes through the lateral components N sin(delta) of the normal
+  forces.
+* Contacts: up to three patches per wheel from the local minima of a tabulated, smoothed
+  wheel-rail gap (:class:`ContactTable`), elastic (Hertz: N = (approach / delta_1)^1.5,
+  ``contact.hertz``), attributed to the flange when wheel y < -30 mm.
+* Creepages in each wheel's local frame (lateral axis towards that wheel's field side, the
+  right wheel's frame mirrored so both wheels are described alike): xi = 1 - kappa y_c - (1+e)
+  r/r0, eta = -s psi cos(delta), phi = (-(1+e) sin(delta)/r0 + s kappa cos(delta)) [1/m]; s = +1
+  left, -1 right; y_c the contact's distance from the track centre line. Creep forces: Kalker's
+  linear theory saturated by Shen-Hedrick-Elkins (``contact.creep``, smooth, spin included);
+  FASTSIM (``contact.fastsim``) on the final state only, for tau_max.
+* Primary suspension per axle box (longitudinal k_px at +-b1, lateral k_py); the secondary
+  suspension carries the body share's unbalanced force and a yaw stiffness to the body chord
+  (front bogie: body yaw -kappa L/2 relative to the bogie's tangent).
+
+Solution from straight track with continuation in the load parameter (curvature, unbalanced
+acceleration and torque scaled together from 0), a batched damped Newton method with
+``scipy.optimize.root`` (hybr) as fallback; failure raises :class:`CurvingConvergenceError`.
+Seeds 001 §4 and 003 §5.3 (speed from an unbalanced lateral acceleration / cant deficiency);
+linear-theory check: Boocock (1969), Wickens (2003).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import gaussian_filter1d
+from scipy.optimize import root
+
+from wearcast.physics.contact.creep import creep_forces
+from wearcast.physics.contact.fastsim import fastsim
+from wearcast.physics.contact.hertz import hertz_contact
+from wearcast.physics.profiles.rails import rail_profile
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
+from wearcast.physics.wear_measures import t_gamma as wear_t_gamma
+from wearcast.physics.wear_measures import tau_max as wear_tau_max
+
+#: Track gauge measured 14 mm below the rail top [mm] (standard gauge).
+GAUGE_MM = 1435.0
+#: Lateral distance of the tape circles from the wheelset centre [mm] (flange back 1360 mm).
+TAPE_CIRCLE_HALF_SPACING_MM = 750.0
+#: Lateral distance used for the cant angle (rail-centre spacing) [mm].
+CANT_BASE_MM = 1500.0
+#: Wheel-frame lateral position separating flange (y < split) from tread [mm] (DESIGN.md).
+FLANGE_SPLIT_Y_MM = -30.0
+#: Shear modulus of wheel and rail steel [MPa].
+SHEAR_MODULUS_MPA = 82_000.0
+#: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
+DEFAULT_TOLERANCE = 1e-6
+#: Bounds of the lateral relative curvature B used for Hertz [1/mm] (relative radius 1 m
+#: ... 5 mm).
+MIN_CURVATURE_B_PER_MM = 5e-4
+MAX_CURVATURE_B_PER_MM = 0.1
+#: Rise of the gap between two minima above which they are separate patches [mm].
+SEPARATION_MM = 0.1
+#: Rise over which a newly formed gap minimum matures into a contact candidate [mm].
+PROMINENCE_MM = 0.005
+#: Gap scale of the soft minimum that shares a merged patch between two minima [mm].
+SHARE_GAP_MM = 0.01
+#: Gap assigned to a slot without a contact candidate [mm].
+_NO_CONTACT_GAP_MM = 50.0
+
+SIDES = ("left", "right")
+_SIDE_SIGN = np.array([1.0, -1.0])  # left wheel at +y
+REGIONS = ("tread", "flange")
+
+
+class CurvingConvergenceError(RuntimeError):
+    """The curving equilibrium was not found.
+
+    Attributes: ``radius_m`` (signed by direction, inf for tangent), ``residual_norm``.
+    """
+
+    def __init__(self, message: str, radius_m: float, residual_norm: float):
+        super().__init__(f"{message} (radius {radius_m:g} m, residual norm {residual_norm:.3g})")
+        self.radius_m = radius_m
+        self.residual_norm = residual_norm
+
+
+# --------------------------------------------------------------------------------------------
+# Contact table: wheel-rail geometry of one wheel over lateral shifts
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ContactTable:
+    """Vertical gap between one wheel and its rail, tabulated over the wheelset's shift.
+
+    ``shift_mm`` (n_s,) is the wheelset's lateral displacement towards THIS wheel's field side
+    (the left wheel's +y, the right wheel's -y; both wheels alike by mirror symmetry).
+    ``gap_mm`` (n_s, n_y) is the vertical distance between wheel and rail surfaces at the wheel
+    points ``wheel_y_mm`` (n_y,) (wheel frame of DESIGN.md), the wheelset at its nominal height
+    and without roll, smoothed with a Gaussian of standard deviation ``smoothing_mm`` (n_y,)
+    (the scale of a contact patch, 2 mm by default on tread and flange; S1002 on a rail crown
+    is nearly conformal and the raw gap has shallow double minima);
+    ``gap2_per_mm`` is its second derivative, the relative lateral curvature at the patch
+    scale (Gaussian smoothing keeps the curvature of a parabola and raises its minimum by
+    g'' sigma^2 / 2, which is subtracted again).
+
+    Contact candidates are the local minima of the gap row interpolated linearly in shift
+    (:meth:`candidates`). Keeping the whole gap function instead of contact points keeps the
+    candidates continuous in the shift through the tread-flange transition and two-point
+    contact; minima separated by less than ``SEPARATION_MM`` of rise share one patch.
+
+    ``rigid_rise_mm`` (n_s,): how far the wheel rises at rigid contact relative to the centred
+    wheelset [mm] (minimum of the unsmoothed gap), for the wheelset roll.
+    Wheel columns on ``wheel_y_mm``: height z [mm] and slope dz/dy. ``rail_offset_mm`` maps
+    wheel y to rail y (y_rail = y_wheel + offset + shift). Hertz constants under 1 N for
+    log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
+    ``hertz_b1`` [mm].
+    """
+
+    shift_mm: NDArray[np.float64]
+    wheel_y_mm: NDArray[np.float64]
+    gap_mm: NDArray[np.float64]
+    gap2_per_mm: NDArray[np.float64]
+    wheel_z_mm: NDArray[np.float64]
+    wheel_slope: NDArray[np.float64]
+    rigid_rise_mm: NDArray[np.float64]
+    rail_offset_mm: float
+    nominal_radius_m: float
+    smoothing_mm: NDArray[np.float64]
+    hertz_log_ratio: NDArray[np.float64]
+    hertz_approach1: NDArray[np.float64]
+    hertz_a1: NDArray[np.float64]
+    hertz_b1: NDArray[np.float64]
+
+    def rigid_rise(self, shift_mm: ArrayLike) -> NDArray[np.float64]:
+        """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
+        return np.interp(shift_mm, self.shift_mm, self.rigid_rise_mm)
+
+    def candidates(self, shift_mm: ArrayLike, n_slots: int = 3) -> dict[str, NDArray]:
+        """Up to ``n_slots`` contact candidates per wheel at arbitrary shifts.
+
+        Returns arrays of shape shift.shape + (n_slots,), slot 0 the field-most candidate:
+        ``gap_mm`` above the best candidate (a missing candidate gets a large gap),
+        ``weight`` in [0, 1] (1 for a separate patch, see the code),
+        ``angle_rad`` contact angle (> 0 pushes the wheel towards the track centre),
+        ``wheel_y_mm``, ``rail_y_mm``, ``lateral_mm`` (distance from the track centre line),
+        ``radius_m`` rolling radius, ``curv_a``, ``curv_b`` [1/mm], ``approach1_mm``,
+        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N.
+        """
+        s = np.asarray(shift_mm, dtype=float)
+        grid = self.shift_mm
+        step = grid[1] - grid[0]
+        pos = np.clip((s - grid[0]) / step, 0.0, len(grid) - 1.000001)
+        k = np.floor(pos).astype(int)
+        w = (pos - k)[..., None]
+        g = (1.0 - w) * self.gap_mm[k] + w * self.gap_mm[k + 1]  # (..., n_y)
+        inner = g[..., 1:-1]
+        is_min = (inner < g[..., :-2]) & (inner <= g[..., 2:])
+        score = np.where(is_min, inner, np.inf)
+        picks = []
+        for _ in range(n_slots):  # best minima, by repeated argmin
+            j = np.argmin(score, axis=-1)[..., None]
+            picks.append(j)
+            np.put_along_axis(score, j, np.inf, axis=-1)
+        idx = np.concatenate(picks, axis=-1)
+        score = np.where(is_min, inner, np.inf)
+        found = np.isfinite(np.take_along_axis(score, idx, axis=-1))
+        i = idx + 1
+        gm = np.take_along_axis(g, i - 1, axis=-1)
+        g0 = np.take_along_axis(g, i, axis=-1)
+        gp = np.take_along_axis(g, i + 1, axis=-1)
+        den = gm - 2.0 * g0 + gp
+        frac = np.clip(np.where(den > 0, 0.5 * (gm - gp) / np.where(den > 0, den, 1.0), 0.0),
+                       -0.5, 0.5)
+        dy = self.wheel_y_mm[1] - self.wheel_y_mm[0]
+        yc = self.wheel_y_mm[i] + frac * dy
+        # second derivative at the refined position (linear in y between grid points)
+        j = np.where(frac >= 0.0, i + 1, i - 1)
+        f = np.abs(frac)
+        g2_rows = (1.0 - w) * self.gap2_per_mm[k] + w * self.gap2_per_mm[k + 1]
+        g2 = ((1.0 - f) * np.take_along_axis(g2_rows, i, axis=-1)
+              + f * np.take_along_axis(g2_rows, j, axis=-1))
+        gc = g0 - 0.25 * (gm - gp) * frac - 0.5 * g2 * self.smoothing_mm[i] ** 2
+        gc = np.where(found, gc, np.inf)
+        best = np.min(gc, axis=-1, keepdims=True)
+        gap = np.where(found, gc - best, _NO_CONTACT_GAP_MM)
+        # weights (continuity of the forces when minima are born, die or exchange their order on
+        # a flat gap): each candidate k has a maturity m_k = ramp(prominence_k / PROMINENCE_MM),
+        # its rise above the lower of its two adjacent maxima of the gap (0 at birth and death);
+        # candidates j whose gap between them rises less than SEPARATION_MM above the shallower
+        # one belong to one conformal patch (c_kj -> 1) and share it by a soft minimum of their
+        # gaps (temperature SHARE_GAP_MM):
+        #     w_k = m_k / (eps + m_k + sum_j c_kj m_j exp(-(g_j - g_k) / SHARE_GAP_MM)).
+        # An isolated mature candidate has weight 1.
+        n_y = g.shape[-1]
+        cols = np.arange(n_y)
+        is_max = np.zeros(g.shape, dtype=bool)
+        is_max[..., 1:-1] = (inner >= g[..., :-2]) & (inner > g[..., 2:])
+        is_max[..., 0] = True
+        is_max[..., -1] = True
+        left_max = np.maximum.accumulate(np.where(is_max, cols, 0), axis=-1)
+        right_max = np.flip(np.minimum.accumulate(np.flip(np.where(is_max, cols, n_y - 1),
+                                                          axis=-1), axis=-1), axis=-1)
+        g_left = np.take_along_axis(g, np.take_along_axis(left_max, i, axis=-1), axis=-1)
+        g_right = np.take_along_axis(g, np.take_along_axis(right_max, i, axis=-1), axis=-1)
+        prominence = np.minimum(g_left, g_right) - g0
+        maturity = np.where(found, _smoothstep(prominence / PROMINENCE_MM), 0.0)
+        pairs = [(p, q) for p in range(n_slots) for q in range(p + 1, n_slots)]
+        ip = i[..., [p for p, _ in pairs]]
+        iq = i[..., [q for _, q in pairs]]
+        lo = np.minimum(ip, iq)
+        hi = np.maximum(ip, iq)
+        between = (cols >= lo[..., None]) & (cols <= hi[..., None])  # (..., pairs, n_y)
+        barrier_pairs = np.max(np.where(between, g[..., None, :], -np.inf), axis=-1)
+        g0p = g0[..., [p for p, _ in pairs]]
+        g0q = g0[..., [q for _, q in pairs]]
+        merged_pairs = 1.0 - _smoothstep((barrier_pairs - np.maximum(g0p, g0q)) / SEPARATION_MM)
+        merged = np.zeros(g.shape[:-1] + (n_slots, n_slots))
+        for m, (p, q) in enumerate(pairs):
+            merged[..., p, q] = merged_pairs[..., m]
+            merged[..., q, p] = merged_pairs[..., m]
+        gap_f = np.where(found, gap, _NO_CONTACT_GAP_MM)
+        rel = np.exp(-np.clip(gap_f[..., None, :] - gap_f[..., :, None], -50 * SHARE_GAP_MM,
+                              None) / SHARE_GAP_MM)  # [k, j]: exp(-(g_j - g_k)/tau)
+        others = np.sum(merged * maturity[..., None, :] * rel, axis=-1)
+        weight = np.where(found, maturity / (1e-9 + maturity + others), 0.0)
+        # order slots field side first
+        order = np.argsort(-np.where(found, yc, -np.inf), axis=-1)
+        yc = np.take_along_axis(yc, order, axis=-1)
+        gap = np.take_along_axis(gap, order, axis=-1)
+        g2 = np.take_along_axis(g2, order, axis=-1)
+        weight = np.take_along_axis(weight, order, axis=-1)
+        wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
+        slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
+        rail_y = yc + self.rail_offset_mm + s[..., None]
+        angle = np.arctan(-slope)
+        cos = np.cos(angle)
+        radius = self.nominal_radius_m + wz / 1000.0
+        curv_a = cos / (2.0 * radius * 1000.0)
+        # the smoothed gap's curvature, bounded below (nearly conformal patches cannot grow
+        # beyond the profile features; Hertz would make them arbitrarily stiff) and above by
+        # the sharpest real pair (S1002 flange tip R12 on a gauge corner R13: B = 0.08/mm)
+        curv_b = np.clip(0.5 * g2 * cos**3, MIN_CURVATURE_B_PER_MM, MAX_CURVATURE_B_PER_MM)
+        lr = np.clip(np.log(curv_b / curv_a), self.hertz_log_ratio[0], self.hertz_log_ratio[-1])
+        scale = np.cbrt(curv_a)
+        return {
+            "gap_mm": gap, "weight": weight, "angle_rad": angle, "wheel_y_mm": yc,
+            "rail_y_mm": rail_y,
+            "lateral_mm": TAPE_CIRCLE_HALF_SPACING_MM + s[..., None] + yc, "radius_m": radius,
+            "curv_a": curv_a, "curv_b": curv_b,
+            "approach1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_approach1) * scale,
+            "a1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_a1) / scale,
+            "b1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_b1) / scale,
+        }
+
+
+def _smoothstep(x: NDArray) -> NDArray:
+    """C1 ramp from 0 (x <= 0) to 1 (x >= 1)."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def conical_wheel(conicity: float) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """A conical wheel z(y) = -conicity * y (wheel frame, no flange) for linear-theory tests.
+
+    Parameters
+    ----------
+    conicity : cone slope lambda [-]
+    """
+    def height_mm(y_mm: NDArray[np.float64]) -> NDArray[np.float64]:
+        return -conicity * np.asarray(y_mm, dtype=float)
+    return height_mm
+
+
+def _rail_envelope(rail: str, inclination: float) -> tuple[NDArray, NDArray, float]:
+    """Upper envelope z(y) of the inclined rail (top at 0) and the distance of the rail-frame
+    origin from the track centre [mm] that puts the gauge point (14 mm below the top, innermost)
+    at GAUGE_MM / 2."""
+    y, z = rail_profile(rail, step_mm=0.05, inclination=inclination)
+    keep = np.concatenate([[True], y[1:] > np.maximum.accumulate(y)[:-1]])
+    y, z = y[keep], z[keep]
+    z = z - np.max(z)
+    gauge_side = y < y[np.argmax(z)]
+    yg, zg = y[gauge_side], z[gauge_side]
+    order = np.argsort(zg)
+    y_gauge = float(np.interp(-14.0, zg[order], yg[order]))
+    return y, z, GAUGE_MM / 2.0 - y_gauge
+
+
+@lru_cache(maxsize=1)
+def _hertz_unit_table() -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Hertz approach and semi-axes under 1 N for A = 1/mm over log(B/A) (``contact.hertz``);
+    other A follow by scaling (a ~ A^(-1/3), approach ~ A^(1/3))."""
+    log_ratio = np.linspace(np.log(1e-4), np.log(1e4), 801)
+    patch = hertz_contact(1.0, 1.0, np.exp(log_ratio))
+    return log_ratio, patch.approach_mm, patch.a_mm, patch.b_mm
+
+
+def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray[np.float64]]
+                        | None = None, rail: str = "60E1", inclination: float = 1.0 / 40.0,
+                        wheel_radius_m: float = 0.46, max_shift_mm: float = 15.0,
+                        shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
+                        wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
+                        smoothing_mm: tuple[float, float] = (2.0, 2.0)) -> ContactTable:
+    """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
+
+    Parameters
+    ----------
+    wheel_height_mm : wheel profile z(y) in the wheel frame [mm]; default S1002
+        (``profiles.s1002``)
+    rail : ``60E1`` or ``60E2`` (``profiles.rails``)
+    inclination : rail inclination slope (1/40, 1/20)
+    wheel_radius_m : nominal rolling radius at the tape circle [m]
+    max_shift_mm, shift_step_mm : table range +-max_shift and step of the shift [mm]
+    wheel_step_mm : spacing of the wheel points [mm]
+    wheel_y_range_mm : part of the wheel profile searched for contact [mm]
+    smoothing_mm : standard deviations of the Gaussian smoothing of the gap along y on the
+        tread (y > -15 mm) and on the flange (y < -25 mm), blended linearly between [mm]
+
+    Returns
+    -------
+    ContactTable. Geometry: tape circles 1500 mm apart (flange back 1360 mm), rails inclined and
+    placed with the gauge 1435 mm measured 14 mm below the top; gaps are vertical distances
+    (valid while contact angles stay below ~75 deg; the S1002 flank is at 70 deg).
+    """
+    wheel = s1002_height_mm if wheel_height_mm is None else wheel_height_mm
+    rail_y, rail_z, rail_origin = _rail_envelope(rail, inclination)
+    y_w = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, wheel_step_mm)
+    z_w = wheel(y_w)
+    h = 0.2
+    slope = (wheel(y_w + h) - wheel(y_w - h)) / (2 * h)
+    shifts = np.arange(-max_shift_mm, max_shift_mm + 1e-9, shift_step_mm)
+    offset = TAPE_CIRCLE_HALF_SPACING_MM - rail_origin  # rail y of wheel y = 0 at zero shift
+    rail_at = np.interp(y_w[None, :] + offset + shifts[:, None], rail_y, rail_z,
+                        left=np.nan, right=np.nan)
+    raw = -z_w[None, :] - rail_at
+    raw = np.where(np.isfinite(raw), raw, 100.0)
+    lowest = np.min(raw, axis=1)
+    rigid_rise = -(lowest - np.interp(0.0, shifts, lowest))
+    blend = np.clip((y_w + 25.0) / 10.0, 0.0, 1.0)  # 1 on the tread, 0 on the flange
+    sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
+    gap = np.zeros_like(raw)
+    gap2 = np.zeros_like(raw)
+    for weight, sd in ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])):
+        gap += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, mode="nearest")
+        gap2 += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, order=2,
+                                           mode="nearest") / wheel_step_mm**2
+    log_ratio, app1, a1, b1 = _hertz_unit_table()
+    return ContactTable(shift_mm=shifts, wheel_y_mm=y_w, gap_mm=gap, gap2_per_mm=gap2,
+                         wheel_z_mm=z_w, wheel_slope=slope, rigid_rise_mm=rigid_rise,
+                         rail_offset_mm=offset,
+                         nominal_radius_m=wheel_radius_m, smoothing_mm=sigma,
+                         hertz_log_ratio=log_ratio,
+                         hertz_approach1=app1, hertz_a1=a1, hertz_b1=b1)
+
+
+@lru_cache(maxsize=16)
+def contact_table_for(wheel_profile: str, rail: str, inclination: float,
+                      wheel_radius_m: float) -> ContactTable:
+    """Cached :func:`build_contact_table` for a named wheel profile (``S1002``)."""
+    if wheel_profile.upper() != "S1002":
+        raise ValueError(f"unknown wheel profile {wheel_profile!r}; known: S1002")
+    return build_contact_table(None, rail, inclination, wheel_radius_m)
+
+
+def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
+    """The (cached) contact table of a vehicle's profile pair."""
+    return contact_table_for(vehicle.wheel_profile, vehicle.rail_profile,
+                             float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))
+
+
+# --------------------------------------------------------------------------------------------
+# Loads, operating point
+# --------------------------------------------------------------------------------------------
+
+def speed_from_cant_deficiency(radius_m: ArrayLike, cant_mm: ArrayLike,
+                               unbalanced_acceleration_m_s2: float = 0.58,
+                               max_speed_m_s: float | None = None) -> NDArray[np.float64]:
+    """Curving speed that gives a prescribed unbalanced lateral acceleration.
+
+    V = sqrt(R (a_nc + g cant / 1500 mm)); tangent track (R = inf/NaN) gives ``max_speed_m_s``
+    (or inf). Seed 001 §4 uses a_nc = 0.58 m/s^2, seed 003 §5.3 a_nc = 0.8 m/s^2 capped by the
+    line speed. A cant deficiency limit D [mm] is the same as a_nc = g D / 1500.
+
+    Parameters
+    ----------
+    radius_m : curve radius [m]; cant_mm : cant [mm]
+    unbalanced_acceleration_m_s2 : a_nc [m/s^2]
+    max_speed_m_s : optional cap [m/s]
+
+    Returns
+    -------
+    speed [m/s]
+    """
+    r = np.asarray(radius_m, dtype=float)
+    c = np.asarray(cant_mm, dtype=float)
+    finite = np.isfinite(r) & (r > 0)
+    base = unbalanced_acceleration_m_s2 + GRAVITY_M_S2 * c / CANT_BASE_MM
+    v = np.where(finite, np.sqrt(np.clip(np.where(finite, r, 1.0) * base, 0.0, None)), np.inf)
+    if max_speed_m_s is not None:
+        v = np.minimum(v, max_speed_m_s)
+    return v
+
+
+@dataclass(frozen=True)
+class CurveCase:
+    """One operating point: signed curvature kappa [1/m] (+ left), unbalanced lateral
+    acceleration [m/s^2] (+y), speed [m/s], traction torque per axle [N m]."""
+
+    curvature_per_m: float
+    unbalanced_acceleration_m_s2: float
+    speed_m_s: float
+    torque_nm: float
+
+    def scaled(self, t: float) -> CurveCase:
+        return CurveCase(t * self.curvature_per_m, t * self.unbalanced_acceleration_m_s2,
+                         self.speed_m_s, t * self.torque_nm)
+
+
+def curve_case(radius_m: float | None, cant_mm: float = 0.0, speed_m_s: float | None = None,
+               direction: str = "left", unbalanced_acceleration_m_s2: float = 0.58,
+               torque_nm: float = 0.0, tangent_speed_m_s: float = 30.0) -> CurveCase:
+    """Build a :class:`CurveCase` from radius [m] (None/inf = tangent), cant [mm], speed [m/s]
+    (None: from the unbalanced acceleration, :func:`speed_from_cant_deficiency`), direction."""
+    if direction not in SIDES:
+        raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
+    tangent = radius_m is None or not np.isfinite(radius_m)
+    if not tangent and radius_m <= 0:
+        raise ValueError(f"radius_m must be positive, got {radius_m}")
+    if cant_mm < 0:
+        raise ValueError(f"cant_mm must be >= 0, got {cant_mm}")
+    if tangent:
+        v = tangent_speed_m_s if speed_m_s is None else speed_m_s
+        return CurveCase(0.0, 0.0, float(v), torque_nm)
+    if speed_m_s is None:
+        speed_m_s = float(speed_from_cant_deficiency(radius_m, cant_mm,
+                                                     unbalanced_acceleration_m_s2))
+    if speed_m_s <= 0:
+        raise ValueError(f"speed must be positive, got {speed_m_s}")
+    sign = 1.0 if direction == "left" else -1.0
+    kappa = sign / radius_m
+    a_unb = speed_m_s**2 * kappa - sign * GRAVITY_M_S2 * cant_mm / CANT_BASE_MM
+    return CurveCase(kappa, a_unb, float(speed_m_s), torque_nm)
+
+
+# --------------------------------------------------------------------------------------------
+# Equilibrium
+# --------------------------------------------------------------------------------------------
+
+# state layout: [y1, psi1, e1, dL1, dR1, y2, psi2, e2, dL2, dR2, yb, psib]
+# scaled units: y [mm], psi [mrad], e [1e-3], d [mm]
+_N_STATE = 12
+
+
+@dataclass(frozen=True)
+class _Contacts:
+    """Per-contact quantities, shape (..., 2 wheelsets, 2 sides, 3 patch slots)."""
+
+    normal_n: NDArray
+    angle_rad: NDArray
+    xi: NDArray
+    eta: NDArray
+    phi_per_mm: NDArray
+    fx_n: NDArray
+    fy_n: NDArray
+    mz_nmm: NDArray
+    a_mm: NDArray
+    b_mm: NDArray
+    radius_m: NDArray
+    wheel_y_mm: NDArray
+    rail_y_mm: NDArray
+    lateral_mm: NDArray
+
+
+def _contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu) -> _Contacts:
+    """Contact forces of wheelsets; y, psi, e: (..., W); d: (..., W, 2).
+
+    Returns per-contact arrays of shape (..., W, 2, slots)."""
+    s = _SIDE_SIGN  # (2,)
+    shift = s * y_mm[..., None]  # (..., W, 2)
+    # the geometry depends on the shift only: evaluate it once per distinct shift (finite
+    # difference Jacobians perturb the other unknowns with the shifts unchanged)
+    unique, inverse = np.unique(shift.reshape(-1), return_inverse=True)
+    col = {k: v[inverse].reshape(shift.shape + v.shape[-1:])
+           for k, v in table.candidates(unique).items()}  # (..., W, 2, slots)
+    ang = col["angle_rad"]
+    cos, sin = np.cos(ang), np.sin(ang)
+    approach = (d_mm[..., None] - col["gap_mm"]) * cos
+    normal = col["weight"] * np.clip(approach, 0.0, None) ** 1.5 / col["approach1_mm"] ** 1.5
+    n13 = np.cbrt(normal)
+    a = col["a1_mm"] * n13
+    b = col["b1_mm"] * n13
+    k = kappa[..., None, None, None]
+    ratio = (1.0 + e)[..., None, None]
+    ss = s[:, None]
+    xi = 1.0 - k * ss * col["lateral_mm"] / 1000.0 - ratio * col["radius_m"] / r0
+    eta = -ss * psi[..., None, None] * cos
+    phi = (-ratio * sin / r0 + ss * k * cos) / 1000.0
+    loaded = normal > 0
+    cf = creep_forces(xi, eta, phi, np.where(loaded, a, 1.0), np.where(loaded, b, 1.0), normal,
+                      mu, SHEAR_MODULUS_MPA)
+    fx, fy, mz = cf.fx_n, cf.fy_n, cf.mz_nmm
+    return _Contacts(normal, ang, xi, eta, phi, fx, fy, mz, a, b, col["radius_m"],
+                     col["wheel_y_mm"], col["rail_y_mm"], col["lateral_mm"])
+
+
+def _wheelset_loads(c: _Contacts):
+    """Track-frame loads of the contacts on each wheelset: lateral [N], vertical per wheel [N],
+    yaw moment [N m], axle moment sum r Fx [N m]. Inputs (..., W, 2, slots)."""
+    s = _SIDE_SIGN[:, None]
+    cos, sin = np.cos(c.angle_rad), np.sin(c.angle_rad)
+    lateral = np.sum(s * (-c.normal_n * sin + c.fy_n * cos), axis=(-2, -1))
+    vertical = np.sum(c.normal_n * cos + c.fy_n * sin, axis=-1)  # (..., W, 2)
+    yaw = np.sum(-(s * c.lateral_mm / 1000.0) * c.fx_n + s * c.mz_nmm * cos / 1000.0,
+                 axis=(-2, -1))
+    pitch = np.sum(c.radius_m * c.fx_n, axis=(-2, -1))
+    return lateral, vertical, yaw, pitch
+
+
+def _roll(table: ContactTable, y_mm, d_mm):
+    """Wheelset roll [rad] (+ = left wheel up) from the wheels' rigid rise at the contact shift
+    y (+ left) less their elastic approaches d (..., 2)."""
+    rise_left = table.rigid_rise(y_mm) - d_mm[..., 0]
+    rise_right = table.rigid_rise(-y_mm) - d_mm[..., 1]
+    return (rise_left - rise_right) / (2.0 * TAPE_CIRCLE_HALF_SPACING_MM)
+
+
+def _centre_shift(table: ContactTable, y_mm, d_mm):
+    """Lateral shift of the wheelset centre [mm] for a contact (rail-level) shift y: the roll
+    theta turns the contact points, a wheel radius below the axle, by r0 theta towards +y."""
+    return y_mm - 1000.0 * table.nominal_radius_m * _roll(table, y_mm, d_mm)
+
+
+def _wheel_loads(vehicle: BogieVehicle, a_unb) -> NDArray:
+    """Vertical wheel loads (..., 2 sides) [N] with the load transfer of the cant deficiency."""
+    q = vehicle.wheel_load_n
+    dq = q * (np.asarray(a_unb) / GRAVITY_M_S2) * vehicle.cog_height_m / (
+        TAPE_CIRCLE_HALF_SPACING_MM / 1000.0)
+    return q - _SIDE_SIGN * np.asarray(dq)[..., None]
+
+
+def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
+                    return_contacts: bool = False):
+    """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...)."""
+    kappa = np.asarray(kappa, dtype=float)
+    a_unb = np.asarray(a_unb, dtype=float)
+    ws = q[..., :10].reshape(q.shape[:-1] + (2, 5))
+    y = ws[..., 0]
+    psi = ws[..., 1] * 1e-3
+    e = ws[..., 2] * 1e-3
+    d = ws[..., 3:5]
+    yb = q[..., 10]
+    psib = q[..., 11] * 1e-3
+    r0 = table.nominal_radius_m
+    c = _contacts(table, y, psi, e, d, kappa, r0, vehicle.friction)
+    lat, vert, yaw, pitch = _wheelset_loads(c)
+    am = vehicle.semi_wheelbase_m
+    x = np.array([am, -am])
+    k = kappa[..., None]
+    y_centre = _centre_shift(table, y, d)
+    dy = (y_centre + 1000.0 * k * x**2 / 2.0 - yb[..., None] - 1000.0 * psib[..., None] * x
+          ) / 1000.0
+    dpsi = psi + k * x - psib[..., None]
+    kpy = 2.0 * vehicle.primary_lateral_stiffness_n_per_m
+    kpsi = 2.0 * vehicle.primary_longitudinal_stiffness_n_per_m * vehicle.primary_semi_spacing_m**2
+    f_prim = -kpy * dy
+    m_prim = -kpsi * dpsi
+    q_wheel = vehicle.wheel_load_n
+    res_lat = (lat + f_prim - vehicle.wheelset_mass_kg * a_unb[..., None]) / q_wheel
+    res_yaw = (yaw + m_prim) / q_wheel
+    res_pitch = (np.asarray(torque)[..., None] - pitch) / q_wheel
+    loads = _wheel_loads(vehicle, a_unb)[..., None, :]
+    res_vert = (vert - loads) / q_wheel
+    body_yaw = -kappa * vehicle.bogie_centre_distance_m / 2.0
+    bogie_lat = (np.sum(-f_prim, axis=-1)
+                 - (vehicle.bogie_mass_kg + vehicle.body_mass_kg) * a_unb) / q_wheel
+    bogie_yaw = (np.sum(-m_prim - x * f_prim, axis=-1)
+                 - vehicle.secondary_yaw_stiffness_nm_per_rad * (psib - body_yaw)) / q_wheel
+    res = np.concatenate([
+        np.stack([res_lat, res_yaw, res_pitch, res_vert[..., 0], res_vert[..., 1]],
+                 axis=-1).reshape(q.shape[:-1] + (10,)),
+        bogie_lat[..., None], bogie_yaw[..., None]], axis=-1)
+    if return_contacts:
+        return res, c
+    return res
+
+
+def _initial_state(vehicle: BogieVehicle, table: ContactTable) -> NDArray:
+    """Centred wheelsets on tangent track, wheels loaded on the tread."""
+    centre = table.candidates(0.0)
+    tread = int(np.argmin(centre["gap_mm"]))
+    d0 = (centre["approach1_mm"][tread] * vehicle.wheel_load_n ** (2.0 / 3.0)
+          / np.cos(centre["angle_rad"][tread]))
+    q = np.zeros(_N_STATE)
+    q[[3, 4, 8, 9]] = d0
+    return q
+
+
+def _jacobian(fun, q, h=1e-6):
+    """Forward-difference Jacobian of a batched residual, one vectorised call."""
+    steps = h * np.maximum(1.0, np.abs(q))
+    batch = q[None, :] + np.diag(steps)
+    r_all = fun(np.vstack([q[None, :], batch]))
+    return ((r_all[1:] - r_all[0]) / steps[:, None]).T
+
+
+_LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.1, 0.03])
+
+
+def _newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
+    """Damped Newton for many independent equilibria at once.
+
+    fun(q (N, n), params (N, p)) -> residual (N, n). Each iteration evaluates the
+    forward-difference Jacobians of all rows in one call and a backtracking line search in a
+    second call. Returns (q, residual norms, converged mask).
+    """
+    q = np.array(q0, dtype=float)
+    nb, n = q.shape
+    norm = np.linalg.norm(fun(q, params), axis=-1)
+    active = ~(norm < tol)
+    eye = np.eye(n)
+    for _ in range(max_iter):
+        if not np.any(active):
+            break
+        idx = np.nonzero(active)[0]
+        qa, pa = q[idx], params[idx]
+        steps = h * np.maximum(1.0, np.abs(qa))  # (na, n)
+        states = np.concatenate([qa[:, None, :], qa[:, None, :] + steps[:, :, None] * eye],
+                                axis=1)  # (na, n+1, n)
+        res = fun(states.reshape(-1, n), np.repeat(pa, n + 1, axis=0)).reshape(len(idx), n + 1,
+                                                                              n)
+        r0 = res[:, 0]
+        jac = np.swapaxes((res[:, 1:] - r0[:, None, :]) / steps[:, :, None], 1, 2)
+        try:
+            dx = np.linalg.solve(jac, -r0[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            dx = np.stack([np.linalg.lstsq(j, -r, rcond=None)[0] for j, r in zip(jac, r0,
+                                                                                  strict=True)])
+        n0 = np.linalg.norm(r0, axis=-1)
+        trial = qa[:, None, :] + _LINE_SEARCH[None, :, None] * dx[:, None, :]
+        nt = np.linalg.norm(fun(trial.reshape(-1, n), np.repeat(pa, len(_LINE_SEARCH), axis=0)),
+                            axis=-1).reshape(len(idx), len(_LINE_SEARCH))
+        good = nt < (1.0 - 1e-4 * _LINE_SEARCH[None, :]) * n0[:, None]
+        pick = np.where(np.any(good, axis=1), np.argmax(good, axis=1), np.argmin(nt, axis=1))
+        improved = np.take_along_axis(nt, pick[:, None], axis=1)[:, 0] < n0
+        new_q = trial[np.arange(len(idx)), pick]
+        q[idx] = np.where(improved[:, None], new_q, qa)
+        norm[idx] = np.where(improved, np.take_along_axis(nt, pick[:, None], axis=1)[:, 0], n0)
+        stalled = ~improved
+        active[idx] = ~(norm[idx] < tol) & ~stalled
+    return q, norm, norm < tol
+
+
+def _scipy_polish(fun, q0, param, tol):
+    """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton."""
+    def f(z):
+        return fun(z[None, :], param[None, :])[0]
+
+    def jac(z):
+        return _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+
+    sol = root(f, q0, jac=jac, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
+    norm = float(np.linalg.norm(f(sol.x)))
+    return sol.x, norm, norm < tol
+
+
+def _continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
+    """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
+    p_end, each row with its own step (doubled on success, halved on failure). Returns
+    (q, norms, converged)."""
+    nb = len(q_start)
+    q = np.array(q_start, dtype=float)
+    t = np.zeros(nb)
+    step = np.ones(nb)
+    halvings = np.zeros(nb, dtype=int)
+    norm = np.zeros(nb)
+    failed = np.zeros(nb, dtype=bool)
+    while True:
+        todo = (t < 1.0 - 1e-12) & ~failed
+        if not np.any(todo):
+            break
+        idx = np.nonzero(todo)[0]
+        t_try = np.minimum(t[idx] + step[idx], 1.0)
+        params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
+        q_new, n_new, ok = _newton_batch(fun, q[idx], params, tol)
+        for k in np.nonzero(~ok)[0]:
+            if halvings[idx[k]] >= max_halvings // 2:  # small steps: let scipy try as well
+                q_s, n_s, ok_s = _scipy_polish(fun, q[idx[k]], params[k], tol)
+                if ok_s:
+                    q_new[k], n_new[k], ok[k] = q_s, n_s, True
+        q[idx[ok]] = q_new[ok]
+        t[idx[ok]] = t_try[ok]
+        step[idx[ok]] = np.minimum(step[idx[ok]] * 2.0, 1.0)
+        step[idx[~ok]] /= 2.0
+        halvings[idx[~ok]] += 1
+        norm[idx] = n_new
+        failed[idx[~ok]] = halvings[idx[~ok]] > max_halvings
+    return q, norm, ~failed
+
+
+# --------------------------------------------------------------------------------------------
+# Results
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CurvingResult:
+    """Quasi-static curving solution of one bogie.
+
+    State: ``wheelset_shift_mm`` (2,) of the wheelset centres (+ = left), ``contact_shift_mm``
+    (2,) the same at rail level (the contact frame; differs by r0 times the roll),
+    ``wheelset_roll_rad`` (2,) (+ = left wheel up), ``wheelset_yaw_rad`` (2,) (relative to the
+    local track tangent, + = nose left), ``rolling_ratio`` (2,) Omega r0/V, ``bogie_shift_mm``,
+    ``bogie_yaw_rad``. Per contact, arrays of shape (2 axles, 2 sides (left, right), 3 patch
+    slots, field side first; the region follows from ``wheel_y_mm``): normal force [N],
+    contact angle [rad], position on the wheel (wheel frame)
+    and rail (rail frame) [mm], lateral distance from the track centre [mm], rolling radius
+    [m], creepages xi, eta [-], phi [1/mm] and creep forces Fx, Fy [N], spin moment Mz [N mm]
+    (each wheel in its own frame, lateral towards its field side), Hertz semi-axes a, b [mm] and
+    p0 [MPa], and from FASTSIM on this state tau_max [MPa] and T_gamma [N]; ``in_contact`` marks
+    loaded patches. Also: the operating point, ``high_rail_side`` (None on tangent track) and the
+    residual norm of the scaled equilibrium and the solver ``state`` (scaled unknowns, used to
+    continue from this solution).
+    """
+
+    radius_m: float
+    direction: str
+    cant_mm: float
+    speed_m_s: float
+    unbalanced_acceleration_m_s2: float
+    wheelset_shift_mm: NDArray
+    contact_shift_mm: NDArray
+    wheelset_roll_rad: NDArray
+    wheelset_yaw_rad: NDArray
+    rolling_ratio: NDArray
+    bogie_shift_mm: float
+    bogie_yaw_rad: float
+    normal_force_n: NDArray
+    contact_angle_rad: NDArray
+    wheel_y_mm: NDArray
+    rail_y_mm: NDArray
+    lateral_position_mm: NDArray
+    rolling_radius_m: NDArray
+    xi: NDArray
+    eta: NDArray
+    phi_per_mm: NDArray
+    fx_n: NDArray
+    fy_n: NDArray
+    mz_nmm: NDArray
+    a_mm: NDArray
+    b_mm: NDArray
+    p0_mpa: NDArray
+    tau_max_mpa: NDArray
+    t_gamma_n: NDArray
+    in_contact: NDArray
+    residual_norm: float
+    state: NDArray
+
+    @property
+    def high_rail_side(self) -> str | None:
+        """Side of the wheels on the high rail: right in a left curve (DESIGN.md)."""
+        if not np.isfinite(self.radius_m):
+            return None
+        return "right" if self.direction == "left" else "left"
+
+    def rail_of(self, side: str) -> str:
+        """``high``, ``low`` or ``tangent`` for the wheels on ``side``."""
+        high = self.high_rail_side
+        if high is None:
+            return "tangent"
+        return "high" if side == high else "low"
+
+    @property
+    def flange_contact(self) -> NDArray:
+        """(2 axles, 2 sides): the wheel has a loaded patch on its flange (y < -30 mm)."""
+        return np.any(self.in_contact & (self.wheel_y_mm < FLANGE_SPLIT_Y_MM), axis=-1)
+
+
+def contact_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n, fy_n, mz_nmm,
+                          mu, fastsim_grid: int = 20) -> dict[str, NDArray]:
+    """Tγ, τmax and p0 per contact; FASTSIM batched over the loaded contacts.
+
+    Parameters
+    ----------
+    xi, eta [-], phi_per_mm [1/mm], a_mm, b_mm [mm], normal_force_n [N], creep forces
+    fx_n, fy_n [N] and spin moment mz_nmm [N mm] of the equilibrium: any common shape
+    mu : friction coefficient; fastsim_grid : n for the n x n FASTSIM grid
+
+    Returns
+    -------
+    dict with ``t_gamma_n`` = |Fx xi| + |Fy eta| + |Mz phi| [N] (seed 004 eq. 1),
+    ``tau_max_mpa`` the largest surface shear traction of the FASTSIM solution [MPa]
+    (parabolic bound, CONTACT's flexibilities; seed 001 §2.2, Al-Maliki), ``p0_mpa`` the Hertz
+    peak pressure 3N/(2 pi a b), ``in_contact`` (loaded with at least 1 N). Unloaded contacts
+    get zeros.
+    """
+    shape = np.shape(normal_force_n)
+    fn = np.asarray(normal_force_n, dtype=float).reshape(-1)
+    loaded = fn >= 1.0
+    flat = [np.broadcast_to(np.asarray(v, dtype=float), shape).reshape(-1)
+            for v in (xi, eta, phi_per_mm, a_mm, b_mm, fx_n, fy_n, mz_nmm)]
+    t_gamma = np.where(loaded, wear_t_gamma(flat[5], flat[6], flat[7], flat[0], flat[1],
+                                            flat[2]), 0.0)
+    tau = np.zeros(fn.size)
+    p0 = np.zeros(fn.size)
+    if np.any(loaded):
+        sel = [v[loaded] for v in flat[:5]]
+        fs = fastsim(sel[0], sel[1], sel[2], sel[3], sel[4], fn[loaded], mu,
+                     SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
+        tau[loaded] = wear_tau_max(fs)
+        p0[loaded] = 1.5 * fn[loaded] / (np.pi * sel[3] * sel[4])
+    return {"t_gamma_n": t_gamma.reshape(shape), "tau_max_mpa": tau.reshape(shape),
+            "p0_mpa": p0.reshape(shape), "in_contact": loaded.reshape(shape)}
+
+
+# --------------------------------------------------------------------------------------------
+# Public solvers
+# --------------------------------------------------------------------------------------------
+
+def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float = 0.0,
+                  speed_m_s: float | None = None, direction: str = "left",
+                  unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_m_s: float = 30.0,
+                  table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
+                  fastsim_grid: int = 20) -> CurvingResult:
+    """Quasi-static curving of a two-axle bogie (module docstring).
+
+    Parameters
+    ----------
+    vehicle : BogieVehicle (``vehicles.vehicle_preset``)
+    radius_m : curve radius [m]; None or inf for tangent track
+    cant_mm : cant (superelevation) [mm]
+    speed_m_s : speed [m/s]; None: from the unbalanced lateral acceleration
+        (:func:`speed_from_cant_deficiency`; seed 001 uses 0.58 m/s^2)
+    direction : ``left`` or ``right`` (side towards which the track bends)
+    unbalanced_acceleration_m_s2 : a_nc used when the speed is not given [m/s^2]
+    tangent_speed_m_s : speed on tangent track when not given [m/s]
+    table : contact table (default: the vehicle's profile pair, cached)
+    tol : tolerance on the norm of the scaled residual (forces [N] and moments [N m] divided by
+        the static wheel load [N]); the default 1e-6 is 0.05 N on a 50 kN wheel
+    fastsim_grid : FASTSIM grid n (n x n) for tau_max on the final state
+
+    Returns
+    -------
+    CurvingResult
+
+    Raises
+    ------
+    CurvingConvergenceError if the continuation from tangent track fails.
+    """
+    case = curve_case(radius_m, cant_mm, speed_m_s, direction, unbalanced_acceleration_m_s2,
+                      vehicle.traction_torque_nm, tangent_speed_m_s)
+    return solve_curving_cases(vehicle, [case], [(radius_m, direction, cant_mm)], table, tol,
+                               fastsim_grid)[0]
+
+
+def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
+                        labels: list[tuple[float | None, str, float]] | None = None,
+                        table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
+                        fastsim_grid: int = 20) -> list[CurvingResult]:
+    """Solve many operating points of one vehicle at once (batched continuation).
+
+    Every case is continued from centred wheelsets on tangent track (curvature, unbalanced
+    acceleration and torque scaled from 0 to their values; the step of each case is doubled on
+    success and halved on failure) by a batched damped Newton method with forward-difference
+    Jacobians; a case whose steps become small is also tried with ``scipy.optimize.root``
+    (Powell hybrid). FASTSIM runs once, batched, on all final contacts.
+
+    Parameters
+    ----------
+    vehicle : BogieVehicle
+    cases : operating points (:func:`curve_case`)
+    labels : per case (radius_m or None, direction, cant_mm) for the results (default from
+        the curvature)
+    table, tol, fastsim_grid : as :func:`solve_curving`
+
+    Returns
+    -------
+    list of CurvingResult, in the order of ``cases``
+
+    Raises
+    ------
+    CurvingConvergenceError naming the first case that did not converge.
+    """
+    table = vehicle_contact_table(vehicle) if table is None else table
+    n = len(cases)
+    if labels is None:
+        labels = [(None if c.curvature_per_m == 0 else 1.0 / abs(c.curvature_per_m),
+                   "left" if c.curvature_per_m >= 0 else "right", 0.0) for c in cases]
+    p_end = np.array([[c.curvature_per_m, c.unbalanced_acceleration_m_s2, c.torque_nm]
+                      for c in cases], dtype=float).reshape(n, 3)
+    p_start = np.zeros_like(p_end)
+    q0 = np.repeat(_initial_state(vehicle, table)[None, :], n, axis=0)
+
+    def fun(q, params):
+        return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])
+
+    q, norm, ok = _continuation_batch(fun, q0, p_start, p_end, tol)
+    if not np.all(ok):
+        k = int(np.nonzero(~ok)[0][0])
+        kappa = cases[k].curvature_per_m
+        raise CurvingConvergenceError("quasi-static curving did not converge",
+                                      np.inf if kappa == 0 else 1.0 / kappa, float(norm[k]))
+    res, c = _bogie_residual(q, vehicle, table, p_end[:, 0], p_end[:, 1], p_end[:, 2],
+                             return_contacts=True)
+    norm = np.linalg.norm(res, axis=-1)
+    wear = contact_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
+                                 c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
+    results = []
+    for k, (case, (radius_m, direction, cant_mm)) in enumerate(zip(cases, labels, strict=True)):
+        ws = q[k, :10].reshape(2, 5)
+        shown_r = np.inf if radius_m is None else float(radius_m)
+        results.append(CurvingResult(
+            radius_m=shown_r, direction=direction, cant_mm=float(cant_mm),
+            speed_m_s=case.speed_m_s,
+            unbalanced_acceleration_m_s2=case.unbalanced_acceleration_m_s2,
+            wheelset_shift_mm=_centre_shift(table, ws[:, 0], ws[:, 3:5]),
+            contact_shift_mm=ws[:, 0].copy(), wheelset_roll_rad=_roll(table, ws[:, 0], ws[:, 3:5]),
+            wheelset_yaw_rad=ws[:, 1] * 1e-3,
+            rolling_ratio=1.0 + ws[:, 2] * 1e-3, bogie_shift_mm=float(q[k, 10]),
+            bogie_yaw_rad=float(q[k, 11]) * 1e-3, normal_force_n=c.normal_n[k],
+            contact_angle_rad=c.angle_rad[k], wheel_y_mm=c.wheel_y_mm[k],
+            rail_y_mm=c.rail_y_mm[k], lateral_position_mm=c.lateral_mm[k],
+            rolling_radius_m=c.radius_m[k], xi=c.xi[k], eta=c.eta[k],
+            phi_per_mm=c.phi_per_mm[k], fx_n=c.fx_n[k], fy_n=c.fy_n[k], mz_nmm=c.mz_nmm[k],
+            a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
+            tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
+            in_contact=wear["in_contact"][k], residual_norm=float(norm[k]),
+            state=q[k].copy()))
+    return results
+
+
+def solve_free_wheelset(table: ContactTable, radius_m: float, wheel_load_n: float = 50_000.0,
+                        friction: float = 0.35, direction: str = "left",
+                        tol: float = DEFAULT_TOLERANCE) -> tuple[float, float, NDArray]:
+    """Steady curving of a single wheelset without suspension at balanced speed.
+
+    No unbalanced lateral force and no torque: the wheelset finds the lateral shift and yaw at
+    which the creep forces balance (in linear theory, pure rolling at y = r0 b0 / (lambda R),
+    Boocock 1969, Wickens 2003 §4). Unknowns: shift, yaw, rolling ratio and the two wheels'
+    approaches; the same contact and creep model as :func:`solve_curving`.
+
+    Parameters
+    ----------
+    table : contact table of the wheel-rail pair (e.g. ``build_contact_table(conical_wheel(l))``)
+    radius_m : curve radius [m]; direction : ``left`` or ``right``
+    wheel_load_n : vertical load of each wheel [N]; friction : mu
+    tol : tolerance on the scaled residual
+
+    Returns
+    -------
+    (shift [mm] (+ = left), yaw [rad], longitudinal creepages of the loaded patches (2 sides))
+    """
+    sign = 1.0 if direction == "left" else -1.0
+    kappa = sign / radius_m
+    r0 = table.nominal_radius_m
+    centre = table.candidates(0.0)
+    slot = int(np.argmin(centre["gap_mm"]))
+    d0 = centre["approach1_mm"][slot] * wheel_load_n ** (2.0 / 3.0) / np.cos(
+        centre["angle_rad"][slot])
+
+    def fun(q, params):
+        k = params[:, 0]
+        c = _contacts(table, q[:, 0:1], q[:, 1:2] * 1e-3, q[:, 2:3] * 1e-3,
+                      q[:, None, 3:5], k, r0, friction)
+        lat, vert, yaw, pitch = _wheelset_loads(c)
+        return np.concatenate([lat, yaw, -pitch, vert[:, 0] - wheel_load_n], axis=-1
+                              ) / wheel_load_n
+
+    q0 = np.array([[0.0, 0.0, 0.0, d0, d0]])
+    q, norm, ok = _continuation_batch(fun, q0, np.zeros((1, 1)), np.array([[kappa]]), tol)
+    if not ok[0]:
+        raise CurvingConvergenceError("free wheelset did not converge", sign * radius_m,
+                                      float(norm[0]))
+    c = _contacts(table, q[:, 0:1], q[:, 1:2] * 1e-3, q[:, 2:3] * 1e-3, q[:, None, 3:5],
+                  np.array([kappa]), r0, friction)
+    loaded = c.normal_n[0, 0] > 0
+    xi = np.array([np.sum(np.where(loaded[s], c.xi[0, 0, s], 0.0) * c.normal_n[0, 0, s])
+                   / np.sum(c.normal_n[0, 0, s]) for s in range(2)])
+    return float(q[0, 0]), float(q[0, 1]) * 1e-3, xi
+
+
+def flange_contact_radius_m(vehicle: BogieVehicle, cant_mm: float = 0.0,
+                            speed_m_s: float | None = None,
+                            unbalanced_acceleration_m_s2: float = 0.58,
+                            radius_range_m: tuple[float, float] = (100.0, 5000.0),
+                            threshold_n: float | None = None, rtol: float = 0.005) -> float:
+    """Largest curve radius at which the leading wheelset's high-rail wheel touches with its
+    flange (a loaded patch at wheel y < -30 mm).
+
+    Parameters
+    ----------
+    vehicle : BogieVehicle
+    cant_mm : cant [mm]
+    speed_m_s : fixed speed [m/s]; None: from ``unbalanced_acceleration_m_s2`` at each radius
+        (default 0.58 m/s^2 as seed 001 §4)
+    radius_range_m : search interval (R_min, R_max) [m]
+    threshold_n : flange normal force that counts as contact [N] (default 1 % of the static
+        wheel load)
+    rtol : relative accuracy of the radius
+
+    Returns
+    -------
+    radius [m]; ``inf`` if the flange already touches at R_max, NaN if it never touches down
+    to R_min. Found on a geometric grid of radii solved together, refined by nested grids.
+    """
+    threshold = 0.01 * vehicle.wheel_load_n if threshold_n is None else threshold_n
+    table = vehicle_contact_table(vehicle)
+
+    def touches(radii: NDArray) -> NDArray:
+        cases = [curve_case(float(r), cant_mm, speed_m_s, "left", unbalanced_acceleration_m_s2)
+                 for r in radii]
+        results = solve_curving_cases(vehicle, cases, table=table, fastsim_grid=4)
+        out = []
+        for res in results:
+            high = SIDES.index(res.high_rail_side)
+            flange = res.wheel_y_mm[0, high] < FLANGE_SPLIT_Y_MM
+            out.append(bool(np.any(flange & (res.normal_force_n[0, high] > threshold))))
+        return np.array(out)
+
+    lo, hi = float(radius_range_m[0]), float(radius_range_m[1])
+    ends = touches(np.array([lo, hi]))
+    if ends[1]:
+        return float("inf")
+    if not ends[0]:
+        return float("nan")
+    while hi / lo - 1.0 > rtol:
+        radii = np.geomspace(lo, hi, 10)[1:-1]
+        t = touches(radii)
+        # largest touching radius and the next larger non-touching one
+        touching = np.nonzero(t)[0]
+        k = touching[-1] if touching.size else -1
+        new_lo = radii[k] if k >= 0 else lo
+        new_hi = radii[k + 1] if k + 1 < len(radii) else hi
+        lo, hi = new_lo, new_hi
+    return float(np.sqrt(lo * hi))
