@@ -2,19 +2,28 @@
 
     .venv/bin/python benchmarks/bench_api_latency.py            # 2,000 requests per endpoint
     .venv/bin/python benchmarks/bench_api_latency.py --quick    # 200 requests per endpoint
+    .venv/bin/python benchmarks/bench_api_latency.py --workers 1
 
-Starts ``uvicorn`` serving ``wearcast.service.app:create_app`` on 127.0.0.1 (a free port, a
-fresh SQLite database in a temporary directory) in a subprocess, loads the bundled example
-fleet over HTTP, calibrates a model on unit A's motor bogies, then fires the requests from
-``--clients`` concurrent ``httpx.AsyncClient`` workers (default 32) and prints p50/p99
-latency and throughput per endpoint. Stops the server at the end.
+Migrates a fresh SQLite database in a temporary directory, starts ``uvicorn`` on 127.0.0.1
+(a free port) in a subprocess with ``--workers`` processes (default 2, one per core of the
+2-core reference machine) running ``wearcast.service.cli:serve_app`` — what
+``wearcast serve --workers N`` runs —, loads the bundled example fleet over HTTP, calibrates
+a model on unit A's motor bogies, then per endpoint: sends ``--warmup`` untimed requests
+(default 4 per client: the first request of each worker process reads and caches the model
+and the table), and fires the timed requests from ``--clients`` concurrent
+``httpx.AsyncClient`` workers (default 32) in a closed loop. Prints the latency of the first
+(cold) request, p50/p99 latency and throughput per endpoint. The client runs on the same
+machine and takes its share of the CPU. Every request computes its answer: only immutable
+inputs (the model, the compiled table, the route) are cached by the service.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import os
+import resource
 import socket
 import subprocess
 import sys
@@ -35,20 +44,27 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def start_server(data_dir: Path, port: int) -> subprocess.Popen[bytes]:
+def start_server(data_dir: Path, port: int, workers: int, log: Path
+                 ) -> subprocess.Popen[bytes]:
+    """Migrate the database, then serve it with ``workers`` uvicorn processes."""
     env = dict(os.environ, WEARCAST_DATA_DIR=str(data_dir))
     env.pop("WEARCAST_DATABASE_URL", None)
-    return subprocess.Popen(
-        [sys.executable, "-m", "uvicorn", "wearcast.service.app:create_app", "--factory",
-         "--host", "127.0.0.1", "--port", str(port), "--log-level", "warning"],
-        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    subprocess.run([sys.executable, "-m", "wearcast.service.cli", "migrate"], env=env,
+                   check=True, stdout=subprocess.DEVNULL)
+    with log.open("wb") as err:
+        return subprocess.Popen(
+            [sys.executable, "-m", "uvicorn", "wearcast.service.cli:serve_app", "--factory",
+             "--host", "127.0.0.1", "--port", str(port), "--workers", str(workers),
+             "--log-level", "warning"],
+            env=env, stdout=subprocess.DEVNULL, stderr=err)
 
 
-def wait_healthy(base: str, server: subprocess.Popen[bytes], timeout_s: float = 60.0) -> None:
+def wait_healthy(base: str, server: subprocess.Popen[bytes], log: Path,
+                 timeout_s: float = 60.0) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if server.poll() is not None:
-            raise RuntimeError(f"server exited: {server.stderr.read().decode()[-2000:]}")
+            raise RuntimeError(f"server exited: {log.read_text()[-2000:]}")
         try:
             if httpx.get(f"{base}/v1/health", timeout=2.0).status_code == 200:
                 return
@@ -86,9 +102,47 @@ def bodies(endpoint: str, n: int) -> list[dict[str, object]]:
     return out
 
 
+class RawConnection:
+    """A minimal HTTP/1.1 keep-alive client on one asyncio connection (``--client raw``).
+
+    It only sends JSON POSTs and reads answers with a Content-Length; it spends a small
+    fraction of httpx's CPU per request, so that on a small machine the figures measure the
+    server rather than the client.
+    """
+
+    def __init__(self, host: str, port: int) -> None:
+        self.host, self.port = host, port
+        self.reader: asyncio.StreamReader | None = None
+        self.writer: asyncio.StreamWriter | None = None
+
+    async def post(self, path: str, payload: dict[str, object]) -> int:
+        if self.writer is None:
+            self.reader, self.writer = await asyncio.open_connection(self.host, self.port)
+        assert self.reader is not None
+        body = json.dumps(payload).encode()
+        self.writer.write(
+            f"POST {path} HTTP/1.1\r\nHost: {self.host}:{self.port}\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n"
+            .encode() + body)
+        head = await self.reader.readuntil(b"\r\n\r\n")
+        lines = head.decode("latin-1").split("\r\n")
+        status = int(lines[0].split()[1])
+        headers = dict(line.split(":", 1) for line in lines[1:] if ":" in line)
+        length = {k.strip().lower(): v.strip() for k, v in headers.items()}["content-length"]
+        await self.reader.readexactly(int(length))
+        return status
+
+    async def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+            await self.writer.wait_closed()
+
+
 async def fire(base: str, path: str, payloads: list[dict[str, object]],
-               clients: int) -> tuple[np.ndarray, float, int]:
+               clients: int, client_kind: str = "httpx") -> tuple[np.ndarray, float, int]:
     """Latencies [s] of all requests, wall time [s] and the number of non-200 answers."""
+    if client_kind == "raw":
+        return await fire_raw(base, path, payloads, clients)
     queue: asyncio.Queue[dict[str, object]] = asyncio.Queue()
     for p in payloads:
         queue.put_nowait(p)
@@ -115,32 +169,99 @@ async def fire(base: str, path: str, payloads: list[dict[str, object]],
     return np.asarray(latencies), wall, failures
 
 
+async def fire_raw(base: str, path: str, payloads: list[dict[str, object]],
+                   clients: int) -> tuple[np.ndarray, float, int]:
+    """:func:`fire` with one :class:`RawConnection` per client."""
+    url = httpx.URL(base)
+    pending = list(reversed(payloads))
+    latencies: list[float] = []
+    failures = 0
+
+    async def worker() -> None:
+        nonlocal failures
+        connection = RawConnection(url.host, int(url.port or 80))
+        try:
+            while pending:
+                payload = pending.pop()
+                t0 = time.perf_counter()
+                status = await connection.post(path, payload)
+                latencies.append(time.perf_counter() - t0)
+                failures += status != 200
+        finally:
+            await connection.close()
+
+    start = time.perf_counter()
+    await asyncio.gather(*(worker() for _ in range(clients)))
+    return np.asarray(latencies), time.perf_counter() - start, failures
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time [s] of a process and its children (Linux /proc; NaN elsewhere)."""
+    try:
+        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+        total = 0.0
+        for p in [pid, *map(int, children)]:
+            fields = Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        return total
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
+def own_cpu_seconds() -> float:
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="predict/reprofiling latency under load")
     parser.add_argument("--quick", action="store_true", help="200 requests per endpoint")
     parser.add_argument("--requests", type=int, default=None, help="requests per endpoint")
     parser.add_argument("--clients", type=int, default=32, help="concurrent clients")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="uvicorn worker processes (default 2: one per core)")
+    parser.add_argument("--warmup", type=int, default=None,
+                        help="untimed requests per endpoint first (default 4 per client)")
+    parser.add_argument("--client", choices=("httpx", "raw"), default="httpx",
+                        help="httpx.AsyncClient (default) or a minimal asyncio HTTP/1.1 client")
     args = parser.parse_args(argv)
     n = args.requests or (200 if args.quick else 2_000)
+    warmup = args.warmup if args.warmup is not None else 4 * args.clients
     with tempfile.TemporaryDirectory(prefix="wearcast-bench-api-") as tmp:
         port = free_port()
         base = f"http://127.0.0.1:{port}"
-        server = start_server(Path(tmp), port)
+        log = Path(tmp) / "server.log"
+        server = start_server(Path(tmp), port, args.workers, log)
         try:
-            wait_healthy(base, server)
+            wait_healthy(base, server, log)
             t0 = time.perf_counter()
             model_id = prepare(base)
             print(f"example loaded and model {model_id} calibrated in "
-                  f"{time.perf_counter() - t0:.1f} s; {n} requests per endpoint, "
+                  f"{time.perf_counter() - t0:.1f} s; server: {args.workers} uvicorn "
+                  f"worker(s) on a {os.cpu_count()}-CPU machine shared with the client; "
+                  f"{n} timed requests per endpoint after {warmup} untimed, "
                   f"{args.clients} concurrent clients")
-            print(f"{'endpoint':<12} {'p50 ms':>8} {'p99 ms':>8} {'req/s':>8} {'errors':>7}")
+            print(f"client: {args.client}; CPU columns: milliseconds of CPU per request "
+                  f"spent by the server processes and by the client")
+            print(f"{'endpoint':<12} {'cold ms':>8} {'p50 ms':>8} {'p99 ms':>8} {'req/s':>8} "
+                  f"{'errors':>7} {'srv CPU':>8} {'cli CPU':>8}")
             for endpoint in ("predict", "reprofiling"):
                 path = f"/v1/models/{model_id}/{endpoint}"
+                first = bodies(endpoint, 1)[0]
+                t_cold = time.perf_counter()
+                httpx.post(base + path, json=first, timeout=120.0).raise_for_status()
+                cold = (time.perf_counter() - t_cold) * 1e3
+                if warmup:
+                    asyncio.run(fire(base, path, bodies(endpoint, warmup), args.clients,
+                                     args.client))
+                server_cpu, client_cpu = cpu_seconds(server.pid), own_cpu_seconds()
                 latencies, wall, failures = asyncio.run(
-                    fire(base, path, bodies(endpoint, n), args.clients))
+                    fire(base, path, bodies(endpoint, n), args.clients, args.client))
+                server_cpu = (cpu_seconds(server.pid) - server_cpu) / n * 1e3
+                client_cpu = (own_cpu_seconds() - client_cpu) / n * 1e3
                 p50, p99 = np.percentile(latencies, [50, 99]) * 1e3
-                print(f"{endpoint:<12} {p50:>8.1f} {p99:>8.1f} {n / wall:>8.1f} "
-                      f"{failures:>7}", flush=True)
+                print(f"{endpoint:<12} {cold:>8.1f} {p50:>8.1f} {p99:>8.1f} {n / wall:>8.1f} "
+                      f"{failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f}", flush=True)
         finally:
             server.terminate()
             try:

@@ -81,8 +81,14 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
           port: Annotated[int, typer.Option(help="TCP port")] = 8000,
           load_example: Annotated[bool, typer.Option(
               help="load the bundled example fleet when the database is empty")] = False,
+          workers: Annotated[int, typer.Option(
+              min=1, help="uvicorn worker processes (e.g. one per CPU core)")] = 1,
           ) -> None:
-    """Migrate the database, optionally load the example fleet, and serve the /v1 API."""
+    """Migrate the database, optionally load the example fleet, and serve the /v1 API.
+
+    With ``--workers N`` > 1 uvicorn runs N processes, each building the app with
+    :func:`serve_app` (the database is migrated once, here, before they start).
+    """
     import uvicorn
 
     from wearcast.service import models_db as db
@@ -105,8 +111,21 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
         else:
             console.print("database not empty: example fleet not loaded")
     database.dispose()
-    console.print(f"serving {settings.resolved_database_url} on http://{host}:{port}/v1")
-    uvicorn.run(create_app(settings, migrate=False), host=host, port=port)
+    console.print(f"serving {settings.resolved_database_url} on http://{host}:{port}/v1"
+                  + (f" with {workers} workers" if workers > 1 else ""))
+    if workers > 1:
+        # worker processes import the app: same settings (from the environment), no migration
+        uvicorn.run("wearcast.service.cli:serve_app", factory=True, host=host, port=port,
+                    workers=workers)
+    else:
+        uvicorn.run(create_app(settings, migrate=False), host=host, port=port)
+
+
+def serve_app() -> Any:
+    """The app of one ``serve --workers N`` worker process (database already migrated)."""
+    from wearcast.service.app import create_app
+
+    return create_app(Settings(), migrate=False)
 
 
 @app.command()

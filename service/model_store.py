@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sqlalchemy import func, insert, select
-from sqlalchemy.orm import Session
+from sqlalchemy import bindparam, func, insert, select
+from sqlalchemy.orm import Session, defer
 
 from wearcast.service import measurement_store, route_store, wear_table_store
 from wearcast.service import models_db as db
@@ -35,6 +35,10 @@ from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
 
 REGIONS = ("flange", "tread")
+#: Deserialised models kept in process (a model's state is ~100 kB of JSON).
+MODEL_CACHE_SIZE = 32
+_models: wear_table_store.LruCache[hybrid.HybridModel] = wear_table_store.LruCache(
+    MODEL_CACHE_SIZE)
 
 
 def _statistics_error(exc: ValueError, route_field: str = "route") -> ApiError:
@@ -50,17 +54,88 @@ def get_model_row(session: Session, model_id: int) -> db.Model:
     return row
 
 
+#: Weighted wear measures P_s kept in process (a few floats each).
+MEASURE_CACHE_SIZE = 1024
+_measures: wear_table_store.LruCache[dict[str, float]] = wear_table_store.LruCache(
+    MEASURE_CACHE_SIZE)
+
+
+@dataclass(frozen=True)
+class ModelInputs:
+    """A model, its compiled wear table and the table's content key (sha256, rows)."""
+
+    model: hybrid.HybridModel
+    table: WearTable
+    table_key: tuple[str, int]
+
+
 @dataclass(frozen=True)
 class LoadedModel:
     row: db.Model
     model: hybrid.HybridModel
     table: WearTable
+    table_key: tuple[str, int] | None = None
 
 
 def load_model(session: Session, model_id: int) -> LoadedModel:
-    row = get_model_row(session, model_id)
-    return LoadedModel(row, hybrid.HybridModel.from_dict(row.state),
-                       wear_table_store.compiled_table(session, row.wear_table_id))
+    """The model row, its deserialised hybrid model and its compiled wear table.
+
+    Models are never updated, so the deserialised model is cached in process under
+    (database URL, model id, created_at) and its JSON state is only read on a miss; the
+    table is cached by its content hash (:func:`wear_table_store.compiled_table`).
+    """
+    row = session.get(db.Model, model_id, options=[defer(db.Model.state),
+                                                   defer(db.Model.spec)])
+    if row is None:
+        raise NotFound("model_id", f"no model with id {model_id}")
+    inputs = model_inputs(session, model_id)
+    return LoadedModel(row, inputs.model, inputs.table, inputs.table_key)
+
+
+# built once: constructing a statement costs more than running it on a cache hit
+_MODEL_INPUTS = (
+    select(db.Model.created_at, db.Model.wear_table_id, db.WearTable.sha256,
+           db.WearTable.n_rows)
+    .join(db.WearTable, db.WearTable.id == db.Model.wear_table_id)
+    .where(db.Model.id == bindparam("model_id")))
+
+
+def model_inputs(session: Session, model_id: int) -> ModelInputs:
+    """The deserialised model and its compiled table, from one small query when cached.
+
+    The query reads the model's id, creation time and table reference and the table's
+    content hash; the model's JSON state and the table's rows are read only on a cache miss.
+    """
+    found = session.execute(_MODEL_INPUTS, {"model_id": model_id}).first()
+    if found is None:
+        raise NotFound("model_id", f"no model with id {model_id}")
+    created_at, table_id, sha256, n_rows = found
+
+    def deserialise() -> hybrid.HybridModel:
+        state = session.scalar(select(db.Model.state).where(db.Model.id == model_id))
+        return hybrid.HybridModel.from_dict(state)
+
+    model = _models.get_or_create((str(session.get_bind().url), model_id, created_at),
+                                  deserialise)
+    table = wear_table_store.cached_compiled_table(session, table_id, sha256, n_rows)
+    return ModelInputs(model, table, (sha256, n_rows))
+
+
+def weighted_measures(inputs: ModelInputs | LoadedModel, route: Route, *, bogie_type: str,
+                      axle: int, side: str) -> dict[str, float] | None:
+    """P_s per region (seed 001 eq. 2) for a model, route and wheel position, cached in
+    process under (table content, measure, running mode, route, position).
+
+    None when the model does not cover the bogie type (the statistics core then raises its
+    error) or the table's content key is unknown. Raises the statistics core's errors
+    (e.g. a radius outside the table) uncached.
+    """
+    model = inputs.model
+    if inputs.table_key is None or bogie_type not in model.bogie_types:
+        return None
+    key = (inputs.table_key, model.measure, model.running_mode, route, bogie_type, axle, side)
+    return dict(_measures.get_or_create(key, lambda: hybrid.model_weighted_measures(
+        model, route, inputs.table, bogie_type=bogie_type, axle=axle, side=side)))
 
 
 def _jsonable(value: Any) -> Any:
@@ -142,31 +217,51 @@ def _none_if_nan(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def run_prediction(loaded: LoadedModel, route: Route, *, bogie_type: str, axle: int,
-                   side: str, mileage_km: list[float],
+def _list_none_if_nan(values: np.ndarray) -> list[float | None]:
+    """``values`` as a list of floats, None where not finite (one pass when all are)."""
+    if np.isfinite(values).all():
+        return values.tolist()
+    return [_none_if_nan(v) for v in values.tolist()]
+
+
+def run_prediction(loaded: LoadedModel | ModelInputs, route: Route, *, bogie_type: str,
+                   axle: int, side: str, mileage_km: list[float],
                    start_areas_mm2: dict[str, float] | None = None) -> hybrid.Prediction:
     try:
+        measures = weighted_measures(loaded, route, bogie_type=bogie_type, axle=axle,
+                                     side=side)
         return hybrid.predict(loaded.model, route, loaded.table, bogie_type=bogie_type,
                               axle=axle, side=side, mileage_km=mileage_km,
-                              start_areas_mm2=start_areas_mm2)
+                              start_areas_mm2=start_areas_mm2, weighted_measures=measures)
     except ValueError as exc:
         raise _statistics_error(exc) from exc
 
 
 def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
     """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
-    loaded = load_model(session, model_id)
-    route, route_row = route_store.resolve(session, body.route_id, body.route)
-    result = run_prediction(loaded, route, bogie_type=body.bogie_type, axle=body.axle,
+    inputs = model_inputs(session, model_id)
+    route, route_name = route_store.resolve_cached(session, body.route_id, body.route)
+    result = run_prediction(inputs, route, bogie_type=body.bogie_type, axle=body.axle,
                             side=body.side, mileage_km=body.mileage_km)
-    return prediction_out(model_id, route_row.name if route_row else "inline", body, result)
+    return prediction_out(model_id, route_name, body, result)
+
+
+_reference_cache: wear_table_store.LruCache[list[float]] = wear_table_store.LruCache(8)
+
+
+def _reference_heights(grid_y_mm: np.ndarray) -> list[float]:
+    """S1002 heights [mm] on a lateral grid, cached by the grid's bytes (a new list each
+    call, so callers cannot change the cached one)."""
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+
+    grid = np.ascontiguousarray(grid_y_mm, dtype=float)
+    return list(_reference_cache.get_or_create(
+        grid.tobytes(), lambda: s1002_height_mm(grid).tolist()))
 
 
 def prediction_out(model_id: int, route_name: str, body: PredictIn,
                    result: hybrid.Prediction) -> PredictionOut:
     q = result.quantiles
-    from wearcast.physics.profiles.s1002 import s1002_height_mm
-
     points = []
     for i, s in enumerate(result.mileage_km):
         points.append(PredictionAt(
@@ -174,8 +269,8 @@ def prediction_out(model_id: int, route_name: str, body: PredictIn,
             tread_area_mm2=_q(result.tread_area_mm2[:, i], q),
             sd_mm=_none_if_nan(result.sd_mm[i]), sh_mm=_none_if_nan(result.sh_mm[i]),
             qr_mm=_none_if_nan(result.qr_mm[i]), extrapolated=bool(result.extrapolated[i]),
-            wear_mm=[_none_if_nan(v) for v in result.wear_mm[i]],
-            z_mm=[_none_if_nan(v) for v in result.z_mm[i]]))
+            wear_mm=_list_none_if_nan(result.wear_mm[i]),
+            z_mm=_list_none_if_nan(result.z_mm[i])))
     return PredictionOut(
         model_id=model_id, route=route_name, bogie_type=body.bogie_type, axle=body.axle,
         side=body.side, weighted_measure={k: float(v) for k, v in
@@ -184,7 +279,7 @@ def prediction_out(model_id: int, route_name: str, body: PredictIn,
                           "tread": _q(result.tread_rate_mm2_per_km, q)},
         start_areas_mm2={k: float(v) for k, v in result.start_areas_mm2.items()},
         y_mm=result.grid_y_mm.tolist(),
-        reference_z_mm=s1002_height_mm(result.grid_y_mm).tolist(), points=points)
+        reference_z_mm=_reference_heights(result.grid_y_mm), points=points)
 
 
 def _latest_profile(session: Session, wheel_id: str) -> tuple[db.Wheel, db.Measurement]:
@@ -212,8 +307,8 @@ def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> Reprofi
     """
     from wearcast.statistics import reprofiling as stat_reprofiling
 
-    loaded = load_model(session, model_id)
-    route, route_row = route_store.resolve(session, body.route_id, body.route)
+    inputs = model_inputs(session, model_id)
+    route, route_name = route_store.resolve_cached(session, body.route_id, body.route)
     start_mileage, start_id, start_areas = 0.0, None, None
     bogie_type, axle, side = body.bogie_type, body.axle, body.side
     if body.wheel_id is not None:
@@ -228,10 +323,12 @@ def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> Reprofi
                        "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}
     limits = body.limits.model_dump(exclude_none=True) if body.limits else None
     try:
+        measures = weighted_measures(inputs, route, bogie_type=str(bogie_type),
+                                     axle=int(axle or 1), side=str(side))
         result = stat_reprofiling.reprofiling_mileage(
-            loaded.model, route, loaded.table, bogie_type=str(bogie_type), axle=int(axle or 1),
+            inputs.model, route, inputs.table, bogie_type=str(bogie_type), axle=int(axle or 1),
             side=str(side), limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
-            start_areas=start_areas)
+            start_areas=start_areas, weighted_measures=measures)
     except ValueError as exc:
         raise _statistics_error(exc) from exc
     remaining = [result.mileage_p10_km, result.mileage_p50_km, result.mileage_p90_km]
@@ -241,9 +338,9 @@ def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> Reprofi
         return OptionalQuantiles(p10=p10, p50=p50, p90=p90)
 
     return ReprofilingOut(
-        model_id=model_id, route=route_row.name if route_row else "inline",
-        wheel_id=body.wheel_id, bogie_type=str(bogie_type), axle=int(axle or 1),
-        side=str(side), start_mileage_km=start_mileage, start_measurement_id=start_id,
+        model_id=model_id, route=route_name, wheel_id=body.wheel_id,
+        bogie_type=str(bogie_type), axle=int(axle or 1), side=str(side),
+        start_mileage_km=start_mileage, start_measurement_id=start_id,
         start_areas_mm2=start_areas or {"flange": 0.0, "tread": 0.0},
         remaining_km=opt(remaining, 0.0), mileage_km=opt(remaining, start_mileage),
         governing_limit=result.governing_limit, sd_mm=_none_if_nan(result.sd_mm),

@@ -9,6 +9,10 @@ from __future__ import annotations
 import hashlib
 import io
 import math
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
+from typing import Generic, TypeVar
 
 import pandas as pd
 from sqlalchemy import insert, select
@@ -20,6 +24,55 @@ from wearcast.service.schemas import WearTableOut, WearTableRowOut
 from wearcast.statistics import wear_tables
 
 MAX_TABLE_BYTES = 20 * 1024 * 1024
+#: Compiled tables kept in process (each is a few hundred rows: well under 1 MB).
+COMPILED_TABLE_CACHE_SIZE = 16
+
+V = TypeVar("V")
+
+
+class LruCache(Generic[V]):
+    """A small thread-safe least-recently-used cache for immutable values.
+
+    Only for values that can never change under their key (content hashes, or ids of rows
+    that are never updated together with their creation time). ``get_or_create`` builds a
+    missing value outside the lock, so two threads may build the same value once each; the
+    first one stored wins and both get an equal value.
+    """
+
+    def __init__(self, maxsize: int) -> None:
+        if maxsize < 1:
+            raise ValueError("maxsize: must be >= 1")
+        self.maxsize = maxsize
+        self._data: OrderedDict[Hashable, V] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get_or_create(self, key: Hashable, create: Callable[[], V]) -> V:
+        with self._lock:
+            if key in self._data:
+                self._data.move_to_end(key)
+                self.hits += 1
+                return self._data[key]
+            self.misses += 1
+        value = create()
+        with self._lock:
+            stored = self._data.setdefault(key, value)
+            self._data.move_to_end(key)
+            while len(self._data) > self.maxsize:
+                self._data.popitem(last=False)
+        return stored
+
+    def clear(self) -> None:
+        with self._lock:
+            self._data.clear()
+            self.hits = self.misses = 0
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+
+_compiled_tables: LruCache[wear_tables.WearTable] = LruCache(COMPILED_TABLE_CACHE_SIZE)
 
 
 def parse_table_csv(data: bytes, file_name: str) -> pd.DataFrame:
@@ -89,8 +142,26 @@ def table_frame(session: Session, table_id: int) -> pd.DataFrame:
 
 
 def compiled_table(session: Session, table_id: int) -> wear_tables.WearTable:
-    get_wear_table(session, table_id)
-    return wear_tables.compile_wear_table(table_frame(session, table_id))
+    """The stored table, validated and compiled; cached in process by its content's SHA-256.
+
+    Tables are immutable and ``sha256`` is the hash of the uploaded content, so a cached
+    table can never be stale; the cache is shared by every table id with the same content.
+    """
+    row = get_wear_table(session, table_id)
+    return compiled_table_for(session, row)
+
+
+def compiled_table_for(session: Session, row: db.WearTable) -> wear_tables.WearTable:
+    """:func:`compiled_table` for a table row already loaded."""
+    return cached_compiled_table(session, row.id, row.sha256, row.n_rows)
+
+
+def cached_compiled_table(session: Session, table_id: int, sha256: str, n_rows: int
+                          ) -> wear_tables.WearTable:
+    """The compiled table with this content hash; its rows are read only on a cache miss."""
+    return _compiled_tables.get_or_create(
+        (sha256, n_rows),
+        lambda: wear_tables.compile_wear_table(table_frame(session, table_id)))
 
 
 def wear_table_out(session: Session, row: db.WearTable, with_rows: bool = True) -> WearTableOut:

@@ -19,24 +19,28 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.statistics.profile_parameters import flange_parameters
+from wearcast.statistics.profile_parameters import BACK_FACE_Y_MM, flange_parameters_batch
 from wearcast.statistics.routes import DIRECTIONS, Route, rail_for
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, DEFAULT_SPLIT_Y_MM
 from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, normal_quantile
 from wearcast.statistics.wear_states import (
     WearStates,
     build_wear_states,
+    interpolation_weights,
     join_regions,
-    wear_curves_at_areas,
 )
 from wearcast.statistics.wear_tables import (
+    _RADIUS_RTOL,
     MEASURES,
+    RAILS,
     REGIONS,
     WearTable,
     compile_wear_table,
@@ -44,6 +48,9 @@ from wearcast.statistics.wear_tables import (
 )
 
 RUNNING_MODES = ("lead", "mixed")
+#: Profiles for Sd/Sh/qR alone are built up to this y [mm] (flange tip, face and the Sd and
+#: qR points of any plausibly worn flange) plus the tape circle; see ``parameters_at_areas``.
+PARAMETER_MAX_Y_MM = -10.0
 QUANTILES = (0.1, 0.5, 0.9)
 MEASUREMENT_COLUMNS = (
     "wheel_id", "bogie_type", "axle", "side", "mileage_km", "route",
@@ -113,6 +120,10 @@ def weighted_wear_measure(
             f"bogie_type: {bogie_type!r} is not in the wear table (has {wt.bogie_types})"
         )
     weights = wheelset_weights(axle, running_mode)
+    fast = _weighted_measure_vectorised(route, wt, bogie_type, weights, side, region, measure)
+    if fast is not None:
+        return fast
+    # one class at a time: raises the error of the first class the table does not cover
     total = 0.0
     for c in route.classes:
         if c.share == 0.0:
@@ -124,6 +135,46 @@ def weighted_wear_measure(
         )
         total += c.share * p_i
     return total
+
+
+def _weighted_measure_vectorised(route: Route, wt: WearTable, bogie_type: str,
+                                 weights: Mapping[str, float], side: str, region: str,
+                                 measure: str) -> float | None:
+    """P = sum_i c_i P_i with one interpolation per (wheelset, rail) instead of per class.
+
+    The same arithmetic as the class-by-class loop of :func:`weighted_wear_measure` (same
+    interpolation in curvature, same order of the sum), hence the same float; None when a
+    class is not covered by the table, so that the loop raises its error.
+    """
+    classes = [c for c in route.classes if c.share != 0.0]
+    if not classes:
+        return 0.0
+    rails = np.array([rail_for(c, side) for c in classes])
+    curvature = np.array([0.0 if c.radius_m is None else 1.0 / c.radius_m for c in classes])
+    p = np.zeros(len(classes))
+    for ws, w in weights.items():
+        values = np.empty(len(classes))
+        for rail in RAILS:
+            sel = rails == rail
+            if not sel.any():
+                continue
+            if rail == "tangent":
+                tangent = wt.tangent.get((bogie_type, ws, region, measure))
+                if tangent is None:
+                    return None
+                values[sel] = tangent
+                continue
+            table_k = wt.curves.get((bogie_type, ws, rail, region, measure))
+            if table_k is None:
+                return None
+            k_table, v_table = table_k
+            k = curvature[sel]
+            if np.any(k > k_table[-1] * (1.0 + _RADIUS_RTOL)):
+                return None
+            values[sel] = np.interp(np.minimum(k, k_table[-1]), k_table, v_table)
+        p = p + w * values
+    shares = np.array([c.share for c in classes])
+    return float(sum((shares * p).tolist()))
 
 
 @dataclass(frozen=True)
@@ -194,6 +245,50 @@ class HybridModel:
     @property
     def split_y_mm(self) -> float:
         return self.states.split_y_mm
+
+    @cached_property
+    def reference_z_mm(self) -> np.ndarray:
+        """The reference (new) profile z_ref on the model's grid [mm], computed once."""
+        z = s1002_height_mm(self.grid_y_mm)
+        z.setflags(write=False)
+        return z
+
+    @cached_property
+    def joined_state_curves_mm(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each region's state curves after joining (seed 001 §2.4), computed once [mm].
+
+        Joining (region masks, then the moving average across the split) is linear in the
+        flange and tread curves, so the joined wear curve for any areas is
+        ``W_flange @ J_flange + W_tread @ J_tread`` with the states' interpolation weights
+        W (:func:`wear_states.interpolation_weights`) and these (m, g) arrays J.
+        """
+        g = self.grid_y_mm.size
+        out = []
+        for region in REGIONS:
+            curves = self.states.region(region).curves_mm.reshape(-1, g)
+            zero = np.zeros_like(curves)
+            pair = (curves, zero) if region == "flange" else (zero, curves)
+            joined = join_regions(self.grid_y_mm, *pair, self.split_y_mm, self.join_window_mm)
+            joined.setflags(write=False)
+            out.append(joined)
+        return out[0], out[1]
+
+    @cached_property
+    def parameter_columns(self) -> np.ndarray:
+        """Grid indices that Sd/Sh/qR of the model's profiles normally depend on.
+
+        The contiguous part y <= PARAMETER_MAX_Y_MM (flange tip, flange face, Sd and qR
+        points) and the two points around the tape circle y = 0;
+        :func:`parameters_at_areas` checks every result and recomputes a profile on the
+        whole grid when its flank points are not inside that part.
+        """
+        y = self.grid_y_mm
+        prefix = np.flatnonzero(y <= PARAMETER_MAX_Y_MM)
+        j = int(np.searchsorted(y, 0.0, side="right")) - 1
+        tape = [c for c in (j, j + 1) if prefix.size and prefix[-1] < c < y.size]
+        cols = np.concatenate([prefix, np.asarray(tape, dtype=int)]).astype(int)
+        cols.setflags(write=False)
+        return cols
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -408,28 +503,43 @@ class Prediction:
 
 def region_rates(model: HybridModel, route: Route, table: pd.DataFrame | WearTable, *,
                  bogie_type: str, axle: int, side: str,
-                 quantiles: Sequence[float] = QUANTILES) -> tuple[dict[str, float],
-                                                                  dict[str, NDArray]]:
+                 quantiles: Sequence[float] = QUANTILES,
+                 weighted_measures: Mapping[str, float] | None = None,
+                 ) -> tuple[dict[str, float], dict[str, NDArray]]:
     """Weighted measures P_s and rate quantiles k_s,q = c_s P_s (1 + z_q u) per region.
 
     u is the relative predictive uncertainty of c_s (standard error and spread of the
-    calibration); rates are clipped at 0. Seed 001 eq. 4.
+    calibration); rates are clipped at 0. Seed 001 eq. 4. ``weighted_measures`` gives P_s
+    per region when the caller has it already (:func:`model_weighted_measures` of the same
+    model, route, table and wheel position); otherwise it is computed.
     """
     if bogie_type not in model.bogie_types:
         raise UnknownBogieTypeError(
             f"bogie_type: the model covers {model.bogie_types}, not {bogie_type!r}"
         )
+    if weighted_measures is None:
+        weighted_measures = model_weighted_measures(model, route, table, bogie_type=bogie_type,
+                                                    axle=axle, side=side)
     z = normal_quantile(np.asarray(quantiles, dtype=float))
     p_s, rates = {}, {}
     for r in REGIONS:
         cal = model.region(r)
-        p_s[r] = weighted_wear_measure(
-            route, table, bogie_type=bogie_type, axle=axle, side=side,
-            running_mode=model.running_mode, region=r, measure=model.measure,
-        )
+        p_s[r] = float(weighted_measures[r])
         k = cal.c_s * p_s[r]
         rates[r] = np.maximum(0.0, k * (1.0 + z * cal.c_s_rel_predictive))
     return p_s, rates
+
+
+def model_weighted_measures(model: HybridModel, route: Route,
+                            table: pd.DataFrame | WearTable, *, bogie_type: str, axle: int,
+                            side: str) -> dict[str, float]:
+    """P_s per region (seed 001 eq. 2) with the model's running mode and wear measure."""
+    return {
+        r: weighted_wear_measure(route, table, bogie_type=bogie_type, axle=axle, side=side,
+                                 running_mode=model.running_mode, region=r,
+                                 measure=model.measure)
+        for r in REGIONS
+    }
 
 
 def profile_at_areas(model: HybridModel, flange_area_mm2: ArrayLike, tread_area_mm2: ArrayLike
@@ -439,17 +549,53 @@ def profile_at_areas(model: HybridModel, flange_area_mm2: ArrayLike, tread_area_
     Returns (wear (M, g) [mm], z (M, g) [mm], params (M, 3) [mm] as Sd, Sh, qR,
     extrapolated (M,) bool).
     """
+    wear, extrapolated = _joined_wear(model, flange_area_mm2, tread_area_mm2, None)
+    z = model.reference_z_mm[None, :] - wear
+    params = flange_parameters_batch(model.grid_y_mm, z).stacked()
+    return wear, z, params, extrapolated
+
+
+def _joined_wear(model: HybridModel, flange_area_mm2: ArrayLike, tread_area_mm2: ArrayLike,
+                 columns: NDArray | None) -> tuple[NDArray, NDArray]:
+    """Joined wear curves (M, g) [mm] (or only ``columns`` of them) and extrapolation flags
+    for region areas (M,) [mm²]: state interpolation weights times the joined states."""
     fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float))
     ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float))
-    wf, ef = wear_curves_at_areas(model.states, "flange", fa)
-    wt_, et = wear_curves_at_areas(model.states, "tread", ta)
-    wear = join_regions(model.grid_y_mm, wf, wt_, model.split_y_mm, model.join_window_mm)
-    z = s1002_height_mm(model.grid_y_mm)[None, :] - wear
-    params = np.empty((wear.shape[0], 3))
-    for i in range(wear.shape[0]):
-        fp = flange_parameters(model.grid_y_mm, z[i])
-        params[i] = (fp.sd_mm, fp.sh_mm, fp.qr_mm)
-    return wear, z, params, ef | et
+    wf, ef = interpolation_weights(model.states, "flange", fa)
+    wt_, et = interpolation_weights(model.states, "tread", ta)
+    jf, jt = model.joined_state_curves_mm
+    if columns is not None:
+        jf, jt = jf[:, columns], jt[:, columns]
+    return wf @ jf + wt_ @ jt, ef | et
+
+
+def parameters_at_areas(model: HybridModel, flange_area_mm2: ArrayLike,
+                        tread_area_mm2: ArrayLike) -> tuple[NDArray, NDArray]:
+    """Sd, Sh, qR (M, 3) [mm] and extrapolation flags (M,) of the worn profiles for region
+    areas (M,) [mm²], without building the whole profiles.
+
+    The same values as :func:`profile_at_areas`: the profiles are built on
+    :attr:`HybridModel.parameter_columns` only; a profile whose Sd or qR point is not well
+    inside them (or whose parameters are undefined there) is recomputed on the whole grid.
+    """
+    cols = model.parameter_columns
+    y = model.grid_y_mm
+    wear, extrapolated = _joined_wear(model, flange_area_mm2, tread_area_mm2, cols)
+    z = model.reference_z_mm[cols][None, :] - wear
+    params = flange_parameters_batch(y[cols], z).stacked()
+    # the flank crossings use the grid point after the crossing: both points must lie
+    # before the last two prefix points for the prefix to give the whole-grid result
+    n_prefix = int(np.count_nonzero(y[cols] <= PARAMETER_MAX_Y_MM))
+    y_safe = y[cols[n_prefix - 2]] if n_prefix >= 2 else -np.inf
+    y_sd = params[:, 0] + BACK_FACE_Y_MM
+    y_qr = y_sd - params[:, 2]
+    ok = np.isfinite(params).all(axis=1) & (y_sd < y_safe) & (y_qr < y_safe)
+    redo = np.flatnonzero(~ok)
+    if redo.size:
+        fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float))[redo]
+        ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float))[redo]
+        params[redo] = profile_at_areas(model, fa, ta)[2]
+    return params, extrapolated
 
 
 def predict(
@@ -463,6 +609,7 @@ def predict(
     mileage_km: ArrayLike,
     start_areas_mm2: Mapping[str, float] | None = None,
     quantiles: Sequence[float] = QUANTILES,
+    weighted_measures: Mapping[str, float] | None = None,
 ) -> Prediction:
     """Predict wear areas, wear curve, worn profile and Sd/Sh/qR of a wheel on a route.
 
@@ -476,6 +623,7 @@ def predict(
     start_areas_mm2 : measured areas {'flange': ..., 'tread': ...} [mm²] of the start state
         (default: new profile, 0)
     quantiles : area quantiles to report (the curves use the median)
+    weighted_measures : P_s per region if known already (see :func:`region_rates`)
 
     Returns
     -------
@@ -495,7 +643,7 @@ def predict(
                 raise ValueError(f"start_areas_mm2.{r}: must be finite and >= 0")
             start[r] = float(v)
     p_s, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
-                              quantiles=q)
+                              quantiles=q, weighted_measures=weighted_measures)
     areas = {r: start[r] + rates[r][:, None] * s[None, :] for r in REGIONS}
     median = q.index(0.5)
     wear, z, params, extrapolated = profile_at_areas(

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import ReferenceHeight
 from wearcast.statistics.wear_curves import reference_on_grid
@@ -149,6 +150,115 @@ def flange_parameters(
     return FlangeParameters(
         sd_mm=y_sd - BACK_FACE_Y_MM, sh_mm=z_tip - z_tape, qr_mm=y_sd - y_qr
     )
+
+
+@dataclass(frozen=True)
+class FlangeParameterArrays:
+    """Sd, Sh and qR of many profiles [mm], each of shape (N,); NaN where undefined."""
+
+    sd_mm: NDArray[np.float64]
+    sh_mm: NDArray[np.float64]
+    qr_mm: NDArray[np.float64]
+
+    def stacked(self) -> NDArray[np.float64]:
+        """(N, 3) array with columns Sd, Sh, qR [mm]."""
+        return np.column_stack([self.sd_mm, self.sh_mm, self.qr_mm])
+
+
+def _flank_crossings(y: NDArray, z: NDArray, rows: NDArray, start: NDArray, level: NDArray
+                     ) -> NDArray:
+    """Vectorised :func:`_flank_crossing` for rows ``rows`` (M,) of ``z`` (N, g) [mm].
+
+    Same rule as the scalar version, row by row: the first grid point at or after ``start``
+    below ``level``, then the quadratic through the bracketing points and the next one, with
+    the same fall-backs to the chord.
+    """
+    g = z.shape[1]
+    below = (z[rows] < level[:, None]) & (np.arange(g)[None, :] >= start[:, None])
+    found = below.any(axis=1)
+    k = np.argmax(below, axis=1)
+    at_start = k == start
+    k1 = np.maximum(k, 1)
+    y0, y1 = y[k1 - 1], y[k1]
+    z0, z1 = z[rows, k1 - 1], z[rows, k1]
+    h = y1 - y0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_lin = (level - z0) * h / (z1 - z0)
+        k2 = np.minimum(k1 + 1, g - 1)
+        y2, z2 = y[k2], z[rows, k2]
+        d01 = (z1 - z0) / h
+        a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
+        b = d01 - a * h
+        c = z0 - level
+        disc = b * b - 4.0 * a * c
+        root = np.sqrt(np.where(disc >= 0.0, disc, 0.0))
+        t1 = (-b - root) / (2.0 * a)
+        t2 = (-b + root) / (2.0 * a)
+    quadratic = (k1 + 1 < g) & ~(np.abs(a) * h < 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
+    ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
+    ok2 = quadratic & ~ok1 & (t2 >= 0.0) & (t2 <= h)
+    t = np.where(ok1, t1, np.where(ok2, t2, t_lin))
+    out = np.where(at_start, y[k], y0 + t)
+    return np.where(found, out, np.nan)
+
+
+def flange_parameters_batch(
+    y_mm: ArrayLike,
+    z_mm: ArrayLike,
+    *,
+    tip_region_y_mm: tuple[float, float] = (-65.0, -40.0),
+) -> FlangeParameterArrays:
+    """Sd, Sh and qR of many profiles sampled on one common lateral grid (vectorised).
+
+    Parameters
+    ----------
+    y_mm : (g,) ascending lateral grid [mm] from the tape circle (back face at -70)
+    z_mm : (N, g) or (g,) heights [mm], positive towards the flange tip
+    tip_region_y_mm : where the flange tip is looked for [mm]
+
+    Returns
+    -------
+    FlangeParameterArrays of shape (N,). The result of every row is that of
+    :func:`flange_parameters` on the row (same definitions and the same interpolation, so
+    they agree to rounding); rows with non-finite heights are passed to it one by one.
+    """
+    y = np.asarray(y_mm, dtype=float)
+    z = np.atleast_2d(np.asarray(z_mm, dtype=float))
+    if y.ndim != 1 or z.ndim != 2 or z.shape[1] != y.size:
+        raise ValueError(f"z_mm: must have shape (N, {y.size}), got {np.shape(z_mm)}")
+    n = z.shape[0]
+    sd, sh, qr = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    lo, hi = np.searchsorted(y, tip_region_y_mm)
+    if (not np.all(np.isfinite(y)) or y.size < 3 or y[0] > 0.0 or y[-1] < 0.0 or hi <= lo
+            or n == 0):
+        for i in range(n):
+            fp = flange_parameters(y, z[i], tip_region_y_mm=tip_region_y_mm)
+            sd[i], sh[i], qr[i] = fp.sd_mm, fp.sh_mm, fp.qr_mm
+        return FlangeParameterArrays(sd, sh, qr)
+    finite = np.isfinite(z).all(axis=1)
+    for i in np.flatnonzero(~finite):
+        fp = flange_parameters(y, z[i], tip_region_y_mm=tip_region_y_mm)
+        sd[i], sh[i], qr[i] = fp.sd_mm, fp.sh_mm, fp.qr_mm
+    zf = z[finite]
+    if zf.shape[0]:
+        # z at the tape circle, as np.interp(0, y, z) row by row
+        j = min(int(np.searchsorted(y, 0.0, side="right")) - 1, y.size - 2)
+        if y[j] == 0.0:
+            z_tape = zf[:, j]
+        else:
+            slope = (zf[:, j + 1] - zf[:, j]) / (y[j + 1] - y[j])
+            z_tape = slope * (0.0 - y[j]) + zf[:, j]
+        nf = zf.shape[0]
+        k = lo + np.argmax(zf[:, lo:hi], axis=1)
+        z_tip = zf[np.arange(nf), k]
+        # the Sd and the qR points of every row in one pass
+        both = _flank_crossings(y, zf, np.tile(np.arange(nf), 2), np.tile(k, 2),
+                                np.concatenate([z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM]))
+        y_sd, y_qr = both[:nf], both[nf:]
+        sd[finite] = y_sd - BACK_FACE_Y_MM
+        sh[finite] = z_tip - z_tape
+        qr[finite] = y_sd - y_qr
+    return FlangeParameterArrays(sd, sh, qr)
 
 
 def parameters_from_wear_curve(

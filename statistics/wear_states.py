@@ -246,6 +246,46 @@ def build_wear_states(
     return WearStates(grid_y_mm=y, split_y_mm=float(split_y_mm), **states)
 
 
+def interpolation_weights(states: WearStates, region: str, areas_mm2: ArrayLike
+                          ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Weights of a region's states in the wear curves for many areas.
+
+    The curve for area A is ``weights @ states.region(region).curves_mm``: linear in area
+    between the neighbouring states (the zero curve below the first state), and beyond the
+    largest state that state scaled to A (flagged as extrapolated). Seed 001 §2.1.
+
+    Parameters
+    ----------
+    states : the fitted wear states
+    region : 'flange' or 'tread'
+    areas_mm2 : (n,) wanted wear areas [mm²], finite and >= 0
+
+    Returns
+    -------
+    (weights (n, m) over the region's m states [-], extrapolated (n,) bool)
+    """
+    rs = states.region(region)
+    flat = np.asarray(areas_mm2, dtype=float).ravel()
+    if np.any(~np.isfinite(flat)) or np.any(flat < 0):
+        raise ValueError("area_mm2: must be finite and >= 0")
+    m = rs.areas_mm2.size
+    if m == 0:
+        return np.zeros((flat.size, 0)), flat > 0
+    knots = np.concatenate([[0.0], rs.areas_mm2])
+    i = np.clip(np.searchsorted(knots, flat, side="right") - 1, 0, m - 1)
+    t = (flat - knots[i]) / (knots[i + 1] - knots[i])
+    extrapolated = flat > rs.areas_mm2[-1] * (1 + 1e-12)
+    t = np.where(extrapolated, 0.0, t)
+    # columns over [zero curve, state 1 ... state m]: two non-zeros per row
+    rows = np.arange(flat.size)
+    weights = np.zeros((flat.size, m + 1))
+    weights[rows, i] = 1.0 - t
+    weights[rows, i + 1] = t
+    weights[extrapolated] = 0.0
+    weights[extrapolated, m] = flat[extrapolated] / rs.areas_mm2[-1]
+    return weights[:, 1:], extrapolated
+
+
 def wear_curves_at_areas(states: WearStates, region: str, areas_mm2: ArrayLike
                          ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Wear curves of one region for many areas (vectorised :func:`wear_curve_at_area`).
@@ -254,24 +294,9 @@ def wear_curves_at_areas(states: WearStates, region: str, areas_mm2: ArrayLike
     """
     rs = states.region(region)
     a = np.asarray(areas_mm2, dtype=float)
-    if np.any(~np.isfinite(a)) or np.any(a < 0):
-        raise ValueError("area_mm2: must be finite and >= 0")
-    flat = a.ravel()
+    weights, extrapolated = interpolation_weights(states, region, a)
     g = states.grid_y_mm.size
-    m = rs.areas_mm2.size
-    if m == 0:
-        out = np.zeros((flat.size, g))
-        return out.reshape(*a.shape, g), (flat > 0).reshape(a.shape)
-    knots = np.concatenate([[0.0], rs.areas_mm2])
-    curves = np.vstack([np.zeros((1, g)), rs.curves_mm])
-    i = np.clip(np.searchsorted(knots, flat, side="right") - 1, 0, m - 1)
-    t = (flat - knots[i]) / (knots[i + 1] - knots[i])
-    extrapolated = flat > rs.areas_mm2[-1] * (1 + 1e-12)
-    # inside: linear in area between neighbouring states; beyond: scale the last state
-    t = np.where(extrapolated, 0.0, t)
-    out = (1.0 - t)[:, None] * curves[i] + t[:, None] * curves[i + 1]
-    scale = np.where(extrapolated, flat / rs.areas_mm2[-1], 0.0)
-    out = np.where(extrapolated[:, None], scale[:, None] * rs.curves_mm[-1], out)
+    out = weights @ rs.curves_mm if weights.shape[1] else np.zeros((weights.shape[0], g))
     return out.reshape(*a.shape, g), extrapolated.reshape(a.shape)
 
 
@@ -327,6 +352,12 @@ def join_regions(grid_y_mm: ArrayLike, flange_curves_mm: ArrayLike, tread_curves
         n += 1
     if n < 3:
         return joined
-    smoothed = uniform_filter1d(joined, size=n, axis=-1, mode="nearest")
-    near = np.abs(y - split_y_mm) <= 0.5 * window_mm
-    return np.where(near, smoothed, joined)
+    near = np.flatnonzero(np.abs(y - split_y_mm) <= 0.5 * window_mm)
+    if near.size == 0:
+        return joined
+    # the moving average is only needed at the points near the split: filter the columns
+    # their windows cover (at the grid's ends 'nearest' padding applies as on the whole grid)
+    lo, hi = max(0, int(near[0]) - n // 2), min(y.size, int(near[-1]) + n // 2 + 1)
+    smoothed = uniform_filter1d(joined[..., lo:hi], size=n, axis=-1, mode="nearest")
+    joined[..., near] = smoothed[..., near - lo]
+    return joined
