@@ -102,18 +102,30 @@ def profile_figure(prediction: Prediction, measured_wear_mm: list[np.ndarray],
 
 
 def _position_measurements(session: Session, model_id: int, bogie_type: str, axle: int,
-                           side: str, wheel_id: str | None) -> pd.DataFrame:
-    """The model's calibration measurements at that wheel position (or that wheel's)."""
+                           side: str, wheel_id: str | None,
+                           route_keys: tuple[str, ...] = ()) -> pd.DataFrame:
+    """Measured profiles to show beside a prediction.
+
+    That wheel's measurements when ``wheel_id`` is given; otherwise every profile measured at
+    that wheel position (bogie type, axle, side) on the predicted route (``route_keys``: the
+    route's name and id as stored in the measurements), whether or not the model was calibrated
+    on it, and when none was taken on that route, the model's calibration measurements at that
+    position.
+    """
     m, w = db.Measurement, db.Wheel
-    link = db.ModelCalibrationMeasurement
-    query = (select(m.id).join(w, w.wheel_id == m.wheel_id).where(m.kind == "profile"))
+    base = (select(m.id).join(w, w.wheel_id == m.wheel_id).where(m.kind == "profile"))
     if wheel_id is not None:
-        query = query.where(m.wheel_id == wheel_id)
+        queries = [base.where(m.wheel_id == wheel_id)]
     else:
-        query = query.join(link, link.measurement_id == m.id).where(
-            link.model_id == model_id, w.bogie_type == bogie_type, w.axle == axle,
-            w.side == side)
-    ids = list(session.scalars(query.order_by(m.mileage_km)))
+        position = base.where(w.bogie_type == bogie_type, w.axle == axle, w.side == side)
+        link = db.ModelCalibrationMeasurement
+        queries = [position.where(m.route_id.in_(route_keys)),
+                   position.join(link, link.measurement_id == m.id).where(
+                       link.model_id == model_id)]
+    for query in queries:
+        ids = list(session.scalars(query.order_by(m.mileage_km)))
+        if ids:
+            break
     frame, _ = measurement_store.calibration_frame(session, ids)
     return frame
 
@@ -123,7 +135,8 @@ def wear_area_picture(session: Session, model_id: int, *, route_id: int | str,
                       max_mileage_km: float | None = None, fmt: ImageFormat = "svg") -> bytes:
     loaded = model_store.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
-    measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id)
+    keys = (row.name, str(row.id)) if row else ()
+    measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id, keys)
     top = max_mileage_km or max(200_000.0, 1.15 * float(measured["mileage_km"].max())
                                 if not measured.empty else 0.0)
     prediction = model_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
@@ -142,7 +155,8 @@ def profile_picture(session: Session, model_id: int, *, route_id: int | str,
     route, row = route_store.resolve(session, route_id, None)
     prediction = model_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
                                             side=side, mileage_km=[mileage_km])
-    measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id)
+    keys = (row.name, str(row.id)) if row else ()
+    measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id, keys)
     curves, labels = [], []
     if not measured.empty:
         near = measured[(measured["mileage_km"] - mileage_km).abs()
