@@ -1,0 +1,255 @@
+"""From worn volume to worn profile: global and local application, normal mapping, smoothing.
+
+* Global application (seed 004 eqs. 3-5): the worn volume of a patch, Delta V [mm^3], removed
+  around the wheel's circumference is the cross-section area A = Delta V / (2 pi R_cp)
+  [mm^2], spread across the patch with a semi-elliptic normal depth
+  Delta z_n(s) = Delta z_0 sqrt(1 - s^2/b^2), s the arc coordinate across the patch, b its
+  lateral semi-axis; Delta z_0 = Delta V / (pi^2 R_cp b) (eq. 5). Seed 004 eq. (4) weighs the
+  arc element with cos(delta); we use the geometric relation ds = dy / cos(delta) instead, so
+  the volume of seed 002 eq. (8) of the worn profile equals the law's Delta V on any part of
+  the profile (the two agree on the tread, delta ~ 0). The semi-ellipse is integrated exactly
+  over each grid cell, so a patch narrower than the grid spacing still removes exactly its
+  volume (no aliasing peaks).
+* Local application (seed 002 eqs. 4-5): Archard per element of the FASTSIM grid,
+  Delta z_n(x, y) = k(v_el, p_el) p_el s_el / H with the element's sliding distance
+  s_el = |slip| dx and zone from the element's own sliding speed and pressure; summed along each
+  longitudinal strip and spread over the circumference (divided by 2 pi R_cp).
+* The normal depth moves each profile point along the inward normal (seed 004 eq. 9):
+  Y_w = Y + d sin(delta), Z_w = Z - d cos(delta), tan(delta) = dZ/dY; the worn profile is
+  re-sampled on the original Y. Seed 002 eqs. (6)-(7) print Delta Y = d / sqrt(1 + g^2) and
+  Delta Z = d g / sqrt(1 + g^2), which swaps the components for a gradient g = dZ/dY; we use
+  the geometric (eq. 9) form, :func:`normal_to_lateral_vertical`.
+* Worn volume (seed 002 eq. 8): Delta W = int (Z_or - Z_worn) 2 pi R_w(Y) dY, R_w = R0 + Z.
+* Smoothing of the worn depth: moving average (window in mm) or a smoothing spline
+  (scipy's ``make_smoothing_spline``; penalty ``lam``); both are linear in the depth.
+
+Wheel frame of DESIGN.md: y [mm] lateral (negative towards the flange), z [mm] radius increase
+over the tape circle; depths in mm, positive = material removed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import make_smoothing_spline
+from scipy.ndimage import uniform_filter1d
+
+from wearcast.physics.contact.fastsim import FastsimResult
+from wearcast.physics.wear_laws import ArchardKTH, kth_zone
+
+
+def _grid_step(y_grid_mm: NDArray[np.float64]) -> float:
+    step = np.diff(y_grid_mm)
+    if y_grid_mm.ndim != 1 or step.size < 1 or np.any(step <= 0):
+        raise ValueError("y_grid_mm must be 1-D, ascending, with at least two points")
+    if not np.allclose(step, step[0], rtol=1e-6, atol=1e-9):
+        raise ValueError("y_grid_mm must be uniformly spaced")
+    return float(step[0])
+
+
+def _semicircle_cdf(u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Share of the area of the unit semi-ellipse sqrt(1 - u^2) left of u."""
+    u = np.clip(u, -1.0, 1.0)
+    return (u * np.sqrt(1.0 - u * u) + np.arcsin(u)) / np.pi + 0.5
+
+
+def semi_elliptic_depth(y_grid_mm: ArrayLike, centre_y_mm: ArrayLike, b_mm: ArrayLike,
+                        volume_mm3: ArrayLike, rolling_radius_mm: ArrayLike,
+                        contact_angle_rad: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """Global application: normal wear depth of patches on a uniform y grid (seed 004 eqs. 3-5).
+
+    Parameters
+    ----------
+    y_grid_mm : (n,) uniform lateral grid of the wheel profile [mm]
+    centre_y_mm : patch centres on the wheel profile [mm], batch shape S
+    b_mm : lateral semi-axes (along the profile arc) [mm]
+    volume_mm3 : worn volume removed from the wheel [mm^3]
+    rolling_radius_mm : wheel radius at the contact R_cp [mm]
+    contact_angle_rad : profile angle delta at the patch [rad] (the patch spans b cos(delta)
+        in y)
+
+    Returns
+    -------
+    normal depth [mm], shape S + (n,). Its vertical equivalent (depth / cos(delta)) integrates
+    over y to Delta V / (2 pi R_cp) exactly; its peak is Delta z_0 = Delta V / (pi^2 R_cp b).
+    """
+    y = np.asarray(y_grid_mm, dtype=float)
+    h = _grid_step(y)
+    yc, b, vol, r, d = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        centre_y_mm, b_mm, volume_mm3, rolling_radius_mm, contact_angle_rad)))
+    if np.any(b <= 0) or np.any(r <= 0):
+        raise ValueError("b_mm and rolling_radius_mm must be positive")
+    cos_d = np.cos(d)[..., None]
+    half = b[..., None] * cos_d
+    lo = (y - 0.5 * h - yc[..., None]) / half
+    hi = (y + 0.5 * h - yc[..., None]) / half
+    weight = _semicircle_cdf(hi) - _semicircle_cdf(lo)
+    area = (vol / (2.0 * np.pi * r))[..., None]
+    return area * weight / h * cos_d
+
+
+def local_archard_depth(result: FastsimResult, rolling_speed_m_s: ArrayLike,
+                        centre_y_mm: ArrayLike, rolling_radius_mm: ArrayLike,
+                        contact_angle_rad: ArrayLike, y_grid_mm: ArrayLike,
+                        law: ArchardKTH = ArchardKTH()) -> NDArray[np.float64]:
+    """Local application of Archard/KTH on the FASTSIM grid (seed 002 eqs. 4-5), as a basis.
+
+    Parameters
+    ----------
+    result : FASTSIM solution of P patches (batch shape (P,)); its local y axis must point
+        towards the wheel's field side (+y of the wheel frame), as in ``physics.curving``
+    rolling_speed_m_s : vehicle speed V [m/s], shape (P,) or scalar
+    centre_y_mm, rolling_radius_mm, contact_angle_rad : patch centre on the wheel profile [mm],
+        R_cp [mm], profile angle [rad], shape (P,)
+    y_grid_mm : (n,) uniform grid of the wheel profile [mm]
+    law : zone bounds and hardness (the coefficients are NOT applied)
+
+    Returns
+    -------
+    normal depth per metre rolled PER UNIT zone coefficient [mm/m], shape (P, 4, n); multiply
+    by the zone coefficients (``basis @``-style over axis 1) for the depth per metre rolled.
+    Element depth k p s_el / H with s_el = |slip| dx [mm] and the element's zone from its
+    sliding speed |slip| V and pressure p; strips at y_prof = y_c + y_el cos(delta) are
+    deposited on the grid linearly (area-conserving).
+    """
+    y = np.asarray(y_grid_mm, dtype=float)
+    h = _grid_step(y)
+    shape = np.shape(result.fx_n)
+    if len(shape) != 1:
+        raise ValueError("local_archard_depth expects a 1-D batch of patches")
+    p_count = shape[0]
+    v = np.broadcast_to(np.asarray(rolling_speed_m_s, dtype=float), shape)
+    yc, r, d = (np.broadcast_to(np.asarray(a, dtype=float), shape)
+                for a in (centre_y_mm, rolling_radius_mm, contact_angle_rad))
+    slip = np.hypot(result.sx, result.sy)                       # (P, ny, nx) [-]
+    pn = result.pn_mpa                                          # (P, ny, nx) [MPa]
+    zone = kth_zone(slip * v[:, None, None], pn, law)           # (P, ny, nx)
+    dx = np.asarray(result.dx_mm, dtype=float)[:, None, None]
+    per_pass = pn * slip * dx / law.hardness_mpa                # [mm] per unit k
+    onehot = zone[:, None, :, :] == np.arange(1, 5)[None, :, None, None]
+    strips = np.sum(np.where(onehot, per_pass[:, None], 0.0), axis=-1)  # (P, 4, ny)
+    strips = strips * (1000.0 / (2.0 * np.pi * r))[:, None, None]  # per metre rolled
+    dy_el = np.asarray(result.dy_mm, dtype=float)               # arc spacing of the strips
+    cos_d = np.cos(d)
+    y_strip = yc[:, None] + np.asarray(result.y_mm, dtype=float) * cos_d[:, None]  # (P, ny)
+    area = strips * dy_el[:, None, None]                        # arc-measure area [mm^2/m]
+    pos = (y_strip - y[0]) / h
+    i0 = np.clip(np.floor(pos).astype(int), 0, y.size - 2)
+    frac = np.clip(pos - i0, 0.0, 1.0)
+    out = np.zeros((p_count, 4, y.size))
+    rows = np.arange(p_count)[:, None, None]
+    zones = np.arange(4)[None, :, None]
+    np.add.at(out, (rows, zones, i0[:, None, :]), area * (1.0 - frac)[:, None, :])
+    np.add.at(out, (rows, zones, i0[:, None, :] + 1), area * frac[:, None, :])
+    return out * (cos_d / h)[:, None, None]
+
+
+def normal_to_lateral_vertical(normal_depth_mm: ArrayLike, slope: ArrayLike
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Lateral and vertical components of a normal wear depth (seed 004 eq. 9; seed 002 eqs.
+    6-7 with the components in their geometric order).
+
+    slope : profile gradient dZ/dY [-]. Returns (Delta Y, Delta Z) [mm]: the worn point moves by
+    +Delta Y laterally and -Delta Z vertically (into the material).
+    """
+    d = np.asarray(normal_depth_mm, dtype=float)
+    g = np.asarray(slope, dtype=float)
+    norm = np.sqrt(1.0 + g * g)
+    return d * g / norm, d / norm
+
+
+def apply_normal_wear(y_mm: ArrayLike, z_mm: ArrayLike, normal_depth_mm: ArrayLike
+                      ) -> NDArray[np.float64]:
+    """Worn profile z on the same y grid after removing a normal depth (seed 004 eq. 9).
+
+    Each point moves along the inward normal; the moved curve is re-sampled at the original y
+    (linear interpolation). Where the moved points fold back (depth larger than the local
+    radius of curvature) the vertical equivalent depth / cos(delta) is used instead.
+    """
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    d = np.asarray(normal_depth_mm, dtype=float)
+    slope = np.gradient(z, y)
+    dy, dz = normal_to_lateral_vertical(d, slope)
+    yw, zw = y + dy, z - dz
+    vertical = z - d * np.sqrt(1.0 + slope * slope)
+    if np.all(np.diff(yw) > 0):
+        out = np.interp(y, yw, zw)
+        # Ends: the moved curve does not cover the grid ends; use the vertical equivalent.
+        outside = (y < yw[0]) | (y > yw[-1])
+        return np.where(outside, vertical, out)
+    return vertical
+
+
+def worn_volume_mm3(y_mm: ArrayLike, z_reference_mm: ArrayLike, z_worn_mm: ArrayLike,
+                    wheel_radius_mm: float) -> float:
+    """Worn volume between two profiles (seed 002 eq. 8) [mm^3].
+
+    Delta W = int (Z_or - Z_worn) 2 pi R_w(Y) dY with R_w = wheel_radius_mm + Z_or(Y) (the
+    rolling radius at Y; z is the radius increase over the tape circle).
+    """
+    y = np.asarray(y_mm, dtype=float)
+    z0 = np.asarray(z_reference_mm, dtype=float)
+    z1 = np.asarray(z_worn_mm, dtype=float)
+    return float(np.trapezoid((z0 - z1) * 2.0 * np.pi * (wheel_radius_mm + z0), y))
+
+
+def moving_average(values: ArrayLike, y_grid_mm: ArrayLike, window_mm: float) -> NDArray:
+    """Centred moving average over ``window_mm`` along the last axis (edges: nearest).
+
+    Conserves the integral away from the ends; linear in ``values``.
+    """
+    y = np.asarray(y_grid_mm, dtype=float)
+    h = _grid_step(y)
+    n = max(1, int(round(window_mm / h)) | 1)  # odd number of samples
+    if n == 1:
+        return np.asarray(values, dtype=float).copy()
+    return uniform_filter1d(np.asarray(values, dtype=float), n, axis=-1, mode="nearest")
+
+
+def smoothing_spline(values: ArrayLike, y_grid_mm: ArrayLike, lam: float = 1.0) -> NDArray:
+    """Cubic smoothing spline of the depth along y (penalty ``lam`` [mm^3]; larger = smoother).
+
+    Linear in ``values`` (the spline is a linear smoother); any leading batch dimensions.
+    """
+    y = np.asarray(y_grid_mm, dtype=float)
+    vals = np.asarray(values, dtype=float)
+    flat = vals.reshape(-1, vals.shape[-1])
+    out = np.empty_like(flat)
+    for i, row in enumerate(flat):
+        out[i] = make_smoothing_spline(y, row, lam=lam)(y)
+    return out.reshape(vals.shape)
+
+
+@dataclass(frozen=True)
+class Smoothing:
+    """Smoothing of the worn depth per step.
+
+    method : ``moving_average`` | ``spline`` | ``none``
+    window_mm : moving-average window [mm]
+    lam : smoothing-spline penalty [mm^3]
+    clip_negative : set negative smoothed depths (spline undershoot) to zero
+    """
+
+    method: str = "moving_average"
+    window_mm: float = 3.0
+    lam: float = 2.0
+    clip_negative: bool = True
+
+    def __post_init__(self) -> None:
+        if self.method not in ("moving_average", "spline", "none"):
+            raise ValueError("smoothing method must be 'moving_average', 'spline' or 'none'")
+        if self.window_mm <= 0 or self.lam <= 0:
+            raise ValueError("window_mm and lam must be positive")
+
+    def apply(self, values: ArrayLike, y_grid_mm: ArrayLike) -> NDArray[np.float64]:
+        """Smoothed depth (linear in values unless ``clip_negative`` acts)."""
+        if self.method == "none":
+            out = np.asarray(values, dtype=float).copy()
+        elif self.method == "moving_average":
+            out = moving_average(values, y_grid_mm, self.window_mm)
+        else:
+            out = smoothing_spline(values, y_grid_mm, self.lam)
+        return np.maximum(out, 0.0) if self.clip_negative else out

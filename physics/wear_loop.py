@@ -1,0 +1,670 @@
+"""The wear loop: route classes -> quasi-static contact -> wear law -> profile update, repeated.
+
+One step (seeds 000, 002, 003, 004):
+
+1. Contact per curve class with the CURRENT wheel profile: the quasi-static bogie curving of
+   :mod:`wearcast.physics.curving` (contact table rebuilt from the worn profile each time the
+   contact is updated; classes of the same radius, cant and speed share one solution; a
+   right-hand class is the mirror image of a left-hand one, so the tracked wheel of a right
+   curve is the opposite wheel of the left-curve solution). If the batched solve does not
+   converge for some class, that class is solved alone; if it still fails, the class keeps the
+   contact of its previous contact update, or, on the first update, the contact of the
+   converged operating point nearest in curvature (then cant) -- the stated simpler contact;
+   both are counted in ``WearSimulation.contact_fallbacks``. If no class converges,
+   :class:`~wearcast.physics.curving.CurvingConvergenceError` is raised.
+2. Wear of the tracked wheel (``axle``, ``side``) per class: the law's worn volume per metre
+   rolled (:mod:`wearcast.physics.wear_laws`) spread with the semi-elliptic distribution
+   (global) or Archard on the FASTSIM grid (local; Archard/KTH only)
+   (:mod:`wearcast.physics.wear_distribution`).
+3. Route average: depth per km = sum_k p_k depth_k (seed 003 §4.3, shares normalised to 1).
+4. Smoothing of the depth (moving average or smoothing spline).
+5. Step length: adaptive (the maximum depth of the step equals D_step, seed 003 eq. 2) or a
+   fixed mileage (seed 000: 5,000 km).
+6. Profile update along the normal (seed 004 eq. 9), flange parameters Sh (FH), Sd (FT), qR.
+
+Rail wear (seed 003 §4.3, item 2): rail wear does not grow with the vehicle's mileage but with
+the number of vehicles N (tonnage N M_v). The rail of the tracked wheel's side in each class
+is worn by both axles of the bogie and by two bogies per vehicle; per vehicle passage, the
+cross-section area removed is the volume per metre rolled / 1000 mm, spread semi-elliptically on
+the rail's own lateral coordinate, averaged over classes with p_k. Rail steps: N_step =
+D_step^r / max(depth per vehicle) (seed 003 eq. 4). The worn rail is an OUTPUT: the curving
+model takes named rail profiles, so the rail's wear is not fed back into the contact.
+
+All depths in mm, mileage km, tonnage t (Mt = 1e6 t), speeds m/s inside.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from wearcast.physics.contact.fastsim import fastsim
+from wearcast.physics.curving import (
+    SHEAR_MODULUS_MPA,
+    CurvingConvergenceError,
+    CurvingResult,
+    build_contact_table,
+    curve_case,
+    solve_curving_cases,
+)
+from wearcast.physics.profile_measures import flange_parameters
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle, vehicle_preset
+from wearcast.physics.wear_distribution import (
+    Smoothing,
+    apply_normal_wear,
+    local_archard_depth,
+    semi_elliptic_depth,
+    worn_volume_mm3,
+)
+from wearcast.physics.wear_laws import (
+    WearLaw,
+    archard_basis,
+    krause_poll_rate,
+    tau_max_rate,
+    usfd_rate,
+)
+from wearcast.physics.wear_measures import rigid_sliding_velocity_m_s
+
+#: Default lateral grid of the wheel profile [mm] (what the contact table searches, +-1 mm).
+WHEEL_GRID_MM = (-70.0, 60.0, 0.2)
+#: Default rail grid, rail frame [mm].
+RAIL_GRID_MM = (-40.0, 40.0, 0.2)
+#: Seed 003 §6: wheel threshold D_step^w = 0.2 mm; seed 000: fixed steps of 5,000 km.
+SEED_003_D_STEP_MM = 0.2
+SEED_000_STEP_KM = 5000.0
+#: Seed 003 §6: rail threshold D_step^r = 0.8 mm.
+SEED_003_RAIL_D_STEP_MM = 0.8
+
+Progress = Callable[[int, int, float], None]
+
+
+@dataclass(frozen=True)
+class LoopClass:
+    """A curve class of a route: radius [m] (None = tangent), cant [mm], speed [km/h] (None:
+    from the unbalanced lateral acceleration), direction (``left``/``right``), share [-]."""
+
+    radius_m: float | None
+    cant_mm: float = 0.0
+    speed_kmh: float | None = None
+    direction: str = "left"
+    share: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.radius_m is not None and not self.radius_m > 0:
+            raise ValueError(f"radius_m must be positive or None, got {self.radius_m}")
+        if self.cant_mm < 0:
+            raise ValueError(f"cant_mm must be >= 0, got {self.cant_mm}")
+        if self.speed_kmh is not None and not self.speed_kmh > 0:
+            raise ValueError(f"speed_kmh must be positive, got {self.speed_kmh}")
+        if self.direction not in ("left", "right"):
+            raise ValueError(f"direction must be 'left' or 'right', got {self.direction!r}")
+        if not self.share >= 0:
+            raise ValueError(f"share must be >= 0, got {self.share}")
+
+    @property
+    def is_tangent(self) -> bool:
+        return self.radius_m is None or not np.isfinite(self.radius_m)
+
+
+def as_loop_classes(route_classes: Any) -> list[LoopClass]:
+    """Curve classes from LoopClass objects, mappings, objects with the same attributes
+    (``wear_tables.CurveClass``, ``statistics.routes.RouteClass``) or a route with ``classes``."""
+    items = getattr(route_classes, "classes", route_classes)
+    out = []
+    for item in items:
+        if isinstance(item, LoopClass):
+            out.append(item)
+            continue
+        get = item.get if isinstance(item, Mapping) else (lambda k, d=None, i=item:
+                                                          getattr(i, k, d))
+        radius = get("radius_m")
+        if radius is not None and not np.isfinite(float(radius)):
+            radius = None
+        speed = get("speed_kmh")
+        out.append(LoopClass(radius_m=None if radius is None else float(radius),
+                             cant_mm=float(get("cant_mm", 0.0) or 0.0),
+                             speed_kmh=None if speed is None else float(speed),
+                             direction=str(get("direction", "left") or "left"),
+                             share=float(get("share", 1.0))))
+    if not out:
+        raise ValueError("route_classes is empty")
+    total = sum(c.share for c in out)
+    if not total > 0:
+        raise ValueError("the class shares must sum to a positive number")
+    return out
+
+
+@dataclass(frozen=True)
+class WearSteps:
+    """Step control.
+
+    mode : ``adaptive`` (max depth per step = ``depth_per_step_mm``, seed 003) or ``fixed``
+    n_steps : number of wheel steps
+    depth_per_step_mm : D_step^w [mm] (adaptive)
+    step_km : mileage per step [km] (fixed; seed 000: 5,000 km)
+    max_step_km : cap on an adaptive step [km]
+    contact_update_depth_mm : re-solve the contact only once the profile has lost this much
+        (max depth) since the last update; 0 = every step (seeds 000, 003)
+    max_depth_per_step_mm : fixed mode only: a step that would remove more is cut into
+        sub-steps of at most this depth, each with its own contact (the step-depth limit that
+        keeps sharp peaks from growing in one jump, seed 004 §4), but never more than
+        ``max_substeps`` sub-steps per step (beyond that the depth limit is exceeded)
+    """
+
+    mode: str = "adaptive"
+    n_steps: int = 20
+    depth_per_step_mm: float = SEED_003_D_STEP_MM
+    step_km: float = SEED_000_STEP_KM
+    max_step_km: float = 1e6
+    contact_update_depth_mm: float = 0.0
+    max_depth_per_step_mm: float = 0.5
+    max_substeps: int = 20
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("adaptive", "fixed"):
+            raise ValueError(f"steps mode must be 'adaptive' or 'fixed', got {self.mode!r}")
+        if self.n_steps < 1:
+            raise ValueError("n_steps must be >= 1")
+        if not (self.depth_per_step_mm > 0 and self.step_km > 0 and self.max_step_km > 0
+                and self.max_depth_per_step_mm > 0):
+            raise ValueError("depth_per_step_mm, step_km, max_step_km and "
+                             "max_depth_per_step_mm must be positive")
+        if self.max_substeps < 1:
+            raise ValueError("max_substeps must be >= 1")
+        if self.contact_update_depth_mm < 0:
+            raise ValueError("contact_update_depth_mm must be >= 0")
+
+
+@dataclass(frozen=True)
+class ClassContacts:
+    """Contacts of the tracked wheel per class, shape (n_class, n_slot) (patch slots of the
+    curving model, field side first).
+
+    normal_n [N], wheel_y_mm, rail_y_mm [mm], angle_rad, rolling_radius_mm, a_mm, b_mm, xi,
+    eta [-], phi_per_mm, fx_n, fy_n, mz_nmm, tau_max_mpa, t_gamma_n, loaded (bool); speed_m_s
+    (n_class,). Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape
+    (n_class, 2 axles, n_slot).
+    """
+
+    normal_n: NDArray
+    wheel_y_mm: NDArray
+    rail_y_mm: NDArray
+    angle_rad: NDArray
+    rolling_radius_mm: NDArray
+    a_mm: NDArray
+    b_mm: NDArray
+    xi: NDArray
+    eta: NDArray
+    phi_per_mm: NDArray
+    fx_n: NDArray
+    fy_n: NDArray
+    mz_nmm: NDArray
+    tau_max_mpa: NDArray
+    t_gamma_n: NDArray
+    loaded: NDArray
+    speed_m_s: NDArray
+    rail_axles: dict = field(default_factory=dict)
+
+
+_CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
+                   "rolling_radius_m", "a_mm", "b_mm", "xi", "eta", "phi_per_mm", "fx_n", "fy_n",
+                   "mz_nmm", "tau_max_mpa", "t_gamma_n", "in_contact")
+
+
+_RAIL_FIELDS = ("normal_force_n", "rail_y_mm", "contact_angle_rad", "b_mm", "rolling_radius_m",
+                "in_contact")
+_FIELD_NAMES = {"normal_force_n": "normal_n", "wheel_y_mm": "wheel_y_mm", "rail_y_mm": "rail_y_mm",
+                "contact_angle_rad": "angle_rad", "a_mm": "a_mm", "b_mm": "b_mm", "xi": "xi",
+                "eta": "eta", "phi_per_mm": "phi_per_mm", "fx_n": "fx_n", "fy_n": "fy_n",
+                "mz_nmm": "mz_nmm", "tau_max_mpa": "tau_max_mpa", "t_gamma_n": "t_gamma_n",
+                "in_contact": "loaded"}
+
+
+def _operating_point(c: LoopClass, unbalanced_acceleration_m_s2: float,
+                     tangent_speed_kmh: float) -> tuple:
+    if c.is_tangent:
+        v = (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / 3.6
+        return (None, 0.0, round(v, 9))
+    v = None if c.speed_kmh is None else c.speed_kmh / 3.6
+    case = curve_case(c.radius_m, c.cant_mm, v, "left", unbalanced_acceleration_m_s2)
+    return (float(c.radius_m), float(c.cant_mm), round(case.speed_m_s, 9))
+
+
+def _curvature(point: tuple) -> float:
+    return 0.0 if point[0] is None else 1.0 / point[0]
+
+
+def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int
+                  ) -> list[CurvingResult | None]:
+    """Batched curving of the operating points; a point named by a convergence error is dropped
+    (None) and the rest re-solved as a batch."""
+    out: list[CurvingResult | None] = [None] * len(points)
+    todo = list(range(len(points)))
+    while todo:
+        sub = [points[i] for i in todo]
+        cases = [curve_case(r, cant, v, "left") for r, cant, v in sub]
+        labels = [(r, "left", cant) for r, cant, _ in sub]
+        try:
+            results = solve_curving_cases(vehicle, cases, labels, table,
+                                          fastsim_grid=fastsim_grid)
+        except CurvingConvergenceError as err:
+            bad = [i for i, (r, _, _) in zip(todo, sub, strict=True)
+                   if (r is None and not np.isfinite(err.radius_m))
+                   or (r is not None and np.isclose(abs(err.radius_m), r))]
+            if not bad:  # cannot tell which: give up on the whole batch
+                return out
+            todo = [i for i in todo if i not in bad]
+            continue
+        for i, res in zip(todo, results, strict=True):
+            out[i] = res
+        break
+    return out
+
+
+def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: NDArray,
+                   z_mm: NDArray, *, axle: int = 1, side: str = "right",
+                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
+                   fastsim_grid: int = 20, previous: ClassContacts | None = None
+                   ) -> tuple[ClassContacts, int]:
+    """Quasi-static contacts of the tracked wheel per class for the wheel profile z(y).
+
+    Returns (contacts, number of classes that kept the previous contact). Raises
+    CurvingConvergenceError when a class fails and there is no previous contact.
+    """
+    if axle not in (1, 2) or side not in ("left", "right"):
+        raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    table = build_contact_table(lambda q: np.interp(q, y, z), vehicle.rail_profile,
+                                vehicle.rail_inclination, vehicle.wheel_radius_m)
+    points = [_operating_point(c, unbalanced_acceleration_m_s2, tangent_speed_kmh)
+              for c in classes]
+    unique = sorted(set(points), key=lambda p: (p[0] is None, p[0] or 0.0, p[1], p[2]))
+    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid), strict=True))
+    ai = axle - 1
+    n = len(classes)
+    slots = [np.shape(r.normal_force_n)[-1] for r in solved.values() if r is not None]
+    if previous is not None:
+        slots.append(previous.normal_n.shape[-1])
+    n_slot = max(slots) if slots else 2
+    data = {f: np.zeros((n, n_slot)) for f in _CONTACT_FIELDS}
+    rail = {f: np.zeros((n, 2, n_slot)) for f in _RAIL_FIELDS}
+    speed = np.zeros(n)
+    fallbacks = 0
+    good = [p for p, r in solved.items() if r is not None]
+    if not good and previous is None:
+        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
+                                      np.inf, float("nan"))
+    for k, (c, p) in enumerate(zip(classes, points, strict=True)):
+        res = solved[p]
+        if res is None and previous is None:
+            # Nearest converged operating point in curvature (then cant) of the same profile.
+            fallbacks += 1
+            res = solved[min(good, key=lambda q: (abs(_curvature(q) - _curvature(p)),
+                                                  abs(q[1] - p[1])))]
+        # Mirror: the tracked wheel of a right curve is the opposite wheel of the left curve.
+        own = 0 if side == "left" else 1
+        si = own if (c.direction == "left" or c.is_tangent) else 1 - own
+        if res is None:
+            assert previous is not None
+            fallbacks += 1
+            m = previous.normal_n.shape[-1]
+            for f, name in _FIELD_NAMES.items():
+                data[f][k, :m] = getattr(previous, name)[k]
+            data["rolling_radius_m"][k, :m] = previous.rolling_radius_mm[k] / 1000.0
+            for f in rail:
+                rail[f][k, :, :m] = previous.rail_axles[f][k]
+            speed[k] = previous.speed_m_s[k]
+            continue
+        m = np.shape(res.normal_force_n)[-1]
+        for f in _CONTACT_FIELDS:
+            data[f][k, :m] = np.asarray(getattr(res, f))[ai, si]
+        for f in rail:
+            rail[f][k, :, :m] = np.asarray(getattr(res, f))[:, si]
+        speed[k] = res.speed_m_s
+    loaded = data["in_contact"].astype(bool) & (data["normal_force_n"] > 1.0)
+    rail["in_contact"] = rail["in_contact"].astype(bool) & (rail["normal_force_n"] > 1.0)
+    return ClassContacts(
+        normal_n=data["normal_force_n"], wheel_y_mm=data["wheel_y_mm"],
+        rail_y_mm=data["rail_y_mm"], angle_rad=data["contact_angle_rad"],
+        rolling_radius_mm=data["rolling_radius_m"] * 1000.0, a_mm=data["a_mm"],
+        b_mm=data["b_mm"], xi=data["xi"], eta=data["eta"], phi_per_mm=data["phi_per_mm"],
+        fx_n=data["fx_n"], fy_n=data["fy_n"], mz_nmm=data["mz_nmm"],
+        tau_max_mpa=data["tau_max_mpa"], t_gamma_n=data["t_gamma_n"], loaded=loaded,
+        speed_m_s=speed, rail_axles=rail), fallbacks
+
+
+def contact_volume_basis(contacts: ClassContacts, law: WearLaw) -> NDArray[np.float64]:
+    """Worn volume per metre rolled of each patch, as a basis: shape (n_class, n_slot, n_basis)
+    [mm^3/m]; n_basis = 4 (zones) for Archard/KTH, else 1 (coefficient 1)."""
+    c = contacts
+    v = np.broadcast_to(c.speed_m_s[:, None], c.normal_n.shape)
+    area = np.pi * np.where(c.loaded, c.a_mm * c.b_mm, 1.0)
+    if law.name == "archard_kth":
+        vs = rigid_sliding_velocity_m_s(v, c.xi, c.eta)
+        basis = archard_basis(c.normal_n, vs, v, c.normal_n / area, law.archard)
+    elif law.name == "krause_poll":
+        basis = krause_poll_rate(c.t_gamma_n, v, area)[..., None]
+    elif law.name == "usfd":
+        basis = usfd_rate(c.t_gamma_n, area, law.usfd_jump)[..., None]
+    else:
+        basis = tau_max_rate(c.tau_max_mpa, area, law.tau_coefficient_mm_per_m_mpa,
+                             law.tau_threshold_mpa)[..., None]
+    return np.where(c.loaded[..., None], basis, 0.0)
+
+
+def law_coefficients(law: WearLaw) -> NDArray[np.float64]:
+    """Coefficients that multiply the basis (the effective KTH zone coefficients, or [1])."""
+    return law.archard.effective_coefficients if law.name == "archard_kth" else np.ones(1)
+
+
+def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
+                      application: str = "global", fastsim_grid: int = 20,
+                      friction: float = 0.35) -> NDArray[np.float64]:
+    """Normal depth per metre rolled per class and basis function: (n_class, n_basis, n)
+    [mm/m]. ``application``: ``global`` (semi-elliptic) or ``local`` (FASTSIM grid, Archard)."""
+    c = contacts
+    n_class = c.normal_n.shape[0]
+    safe_b = np.where(c.loaded, c.b_mm, 1.0)
+    if application == "global":
+        vol = contact_volume_basis(c, law)                     # (n_class, 2, nb) per m
+        safe_r = np.where(c.loaded, c.rolling_radius_mm, 1.0)
+        shape = semi_elliptic_depth(y_grid_mm, c.wheel_y_mm, safe_b, 1.0,
+                                    safe_r, c.angle_rad)  # (n_class, n_slot, n)
+        return np.einsum("csb,csn->cbn", vol, shape)
+    if application != "local":
+        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    if law.name != "archard_kth":
+        raise ValueError("the local application is defined for Archard/KTH only (seed 002)")
+    out = np.zeros((n_class, 4, np.size(y_grid_mm)))
+    idx = np.nonzero(c.loaded)
+    if idx[0].size == 0:
+        return out
+    sel = tuple(np.asarray(getattr(c, f))[idx] for f in ("xi", "eta", "phi_per_mm", "a_mm",
+                                                           "b_mm", "normal_n"))
+    fs = fastsim(*sel, friction, SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
+    basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
+                                c.rolling_radius_mm[idx], c.angle_rad[idx], y_grid_mm,
+                                law.archard)
+    np.add.at(out, idx[0], basis)
+    return out
+
+
+def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArray,
+                           rail_grid_mm: NDArray, bogies_per_vehicle: int = 2
+                           ) -> NDArray[np.float64]:
+    """Rail normal depth per vehicle passage, class-averaged with p_k (seed 003 eq. 4) [mm].
+
+    Both axles of the bogie on the tracked wheel's rail; the per-wheel volume rate is taken
+    from the tracked wheel's law basis scaled by the axle's normal force share (a first-order
+    approximation: the trailing axle's creepages are not recomputed for the rail).
+    """
+    vol = contact_volume_basis(contacts, law) @ law_coefficients(law)   # (n_class, slot) mm^3/m
+    r = contacts.rail_axles
+    lead_n = np.where(contacts.normal_n > 0, contacts.normal_n, 1.0)
+    scale = r["normal_force_n"] / lead_n[:, None, :]                # (n_class, axle, slot)
+    area_per_pass = (vol[:, None, :] * np.where(contacts.loaded[:, None, :], scale, 0.0)
+                     / 1000.0)                                          # mm^2 per passage
+    b = np.where(r["in_contact"], r["b_mm"], 1.0)
+    # Unit radius 1/(2 pi) makes semi_elliptic_depth spread "volume" = area as a depth on y.
+    depth = semi_elliptic_depth(rail_grid_mm, r["rail_y_mm"], b,
+                                np.where(r["in_contact"], area_per_pass, 0.0),
+                                1.0 / (2.0 * np.pi), r["contact_angle_rad"])
+    per_class = bogies_per_vehicle * depth.sum(axis=(1, 2))
+    return np.einsum("c,cn->n", shares, per_class)
+
+
+@dataclass(frozen=True)
+class WearSimulation:
+    """Result of :func:`simulate_wear`.
+
+    y_mm (n,), profiles_mm (n_steps+1, n) wheel profile z after each step (row 0: initial),
+    mileage_km (n_steps+1,), sh_mm / sd_mm / qr_mm (n_steps+1,) flange parameters (FH, FT, qR),
+    step_km (n_steps,), step_max_depth_mm (n_steps,), worn_volume_mm3 (n_steps+1,) (seed 002
+    eq. 8 against the initial profile), contact_fallbacks, contact_updates, elapsed_s, law,
+    application, rail_y_mm, rail_depth_per_vehicle_mm (n_rail,), rail_steps (rail step ->
+    vehicles, tonnage [t], max depth), step_basis_mm (n_steps, n_basis, n): vertical-equivalent
+    depth of each step per unit basis coefficient (the zone coefficients for Archard/KTH), used
+    by the exact calibration; coefficients (n_basis,).
+    """
+
+    y_mm: NDArray
+    profiles_mm: NDArray
+    mileage_km: NDArray
+    sh_mm: NDArray
+    sd_mm: NDArray
+    qr_mm: NDArray
+    step_km: NDArray
+    step_max_depth_mm: NDArray
+    worn_volume_mm3: NDArray
+    contact_fallbacks: int
+    contact_updates: int
+    elapsed_s: float
+    law: str
+    application: str
+    n_classes: int
+    rail_y_mm: NDArray
+    rail_depth_per_vehicle_mm: NDArray
+    rail_steps: tuple
+    step_basis_mm: NDArray
+    coefficients: NDArray
+
+    @property
+    def wear_mm(self) -> NDArray:
+        """Vertical wear w(y) = z_initial - z after each step [mm], (n_steps+1, n)."""
+        return self.profiles_mm[0] - self.profiles_mm
+
+    def wear_at(self, mileage_km: float) -> NDArray:
+        """Vertical wear at a mileage, linear between steps [mm], (n,)."""
+        m = self.mileage_km
+        if not m[0] <= mileage_km <= m[-1] + 1e-9:
+            raise ValueError(f"mileage {mileage_km} km outside the simulated 0..{m[-1]:.0f} km")
+        i = int(np.clip(np.searchsorted(m, mileage_km, side="right") - 1, 0, m.size - 2))
+        t = (mileage_km - m[i]) / (m[i + 1] - m[i])
+        w = self.wear_mm
+        return (1 - t) * w[i] + t * w[i + 1]
+
+    def mileage_to_depth(self, depth_mm: float) -> float:
+        """First mileage at which the maximum wear depth reaches depth_mm [km] (linear between
+        steps; NaN if never)."""
+        dmax = self.wear_mm.max(axis=1)
+        hit = np.nonzero(dmax >= depth_mm)[0]
+        if hit.size == 0:
+            return float("nan")
+        i = hit[0]
+        if i == 0:
+            return 0.0
+        t = (depth_mm - dmax[i - 1]) / (dmax[i] - dmax[i - 1])
+        return float(self.mileage_km[i - 1] + t * (self.mileage_km[i] - self.mileage_km[i - 1]))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (lists of floats)."""
+        return {
+            "law": self.law, "application": self.application, "n_classes": self.n_classes,
+            "y_mm": self.y_mm.tolist(), "profiles_mm": self.profiles_mm.tolist(),
+            "mileage_km": self.mileage_km.tolist(), "sh_mm": self.sh_mm.tolist(),
+            "sd_mm": self.sd_mm.tolist(), "qr_mm": self.qr_mm.tolist(),
+            "step_km": self.step_km.tolist(), "step_max_depth_mm": self.step_max_depth_mm.tolist(),
+            "worn_volume_mm3": self.worn_volume_mm3.tolist(),
+            "contact_fallbacks": self.contact_fallbacks, "contact_updates": self.contact_updates,
+            "elapsed_s": self.elapsed_s, "rail_y_mm": self.rail_y_mm.tolist(),
+            "rail_depth_per_vehicle_mm": self.rail_depth_per_vehicle_mm.tolist(),
+            "rail_steps": [dict(s) for s in self.rail_steps],
+        }
+
+
+def _grid(spec: tuple[float, float, float]) -> NDArray[np.float64]:
+    lo, hi, step = spec
+    return np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
+
+
+def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
+                  law: WearLaw | str = "archard_kth", application: str = "global",
+                  steps: WearSteps | None = None, axle: int = 1, side: str = "right",
+                  smoothing: Smoothing | None = None,
+                  initial_profile: tuple[NDArray, NDArray] | None = None,
+                  unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
+                  fastsim_grid: int = 20, rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
+                  n_rail_steps: int = 5, progress: Progress | None = None) -> WearSimulation:
+    """Simulate the wear of one wheel over a route described by curve classes.
+
+    Parameters
+    ----------
+    vehicle : BogieVehicle or preset name (``vehicles.vehicle_preset``, trailer bogie)
+    route_classes : curve classes (:func:`as_loop_classes` accepts LoopClass, mappings,
+        CurveClass / RouteClass objects or a Route)
+    law : WearLaw or its name (``archard_kth``, ``krause_poll``, ``usfd``, ``tau_max``)
+    application : ``global`` (semi-elliptic, seed 004) or ``local`` (FASTSIM grid, seed 002)
+    steps : WearSteps (default: adaptive, 20 steps of D_step = 0.2 mm, seed 003)
+    axle, side : the tracked wheel (axle 1 leads)
+    smoothing : Smoothing of the step depth (default moving average over 3 mm)
+    initial_profile : (y_mm, z_mm) of the starting wheel; default S1002 on the default grid
+    unbalanced_acceleration_m_s2 : a_nc for classes without speed [m/s^2] (seed 001: 0.58,
+        seed 003: 0.8)
+    tangent_speed_kmh : speed of tangent classes without speed [km/h]
+    fastsim_grid : FASTSIM grid n for the local application
+    rail_step_depth_mm, n_rail_steps : rail thresholds D_step^r and number of rail steps
+    progress : callback(done_steps, n_steps, mileage_km)
+
+    Returns
+    -------
+    WearSimulation
+    """
+    start = time.perf_counter()
+    veh = vehicle_preset(vehicle) if isinstance(vehicle, str) else vehicle
+    wl = WearLaw(name=law) if isinstance(law, str) else law
+    st = steps or WearSteps()
+    sm = smoothing or Smoothing()
+    classes = as_loop_classes(route_classes)
+    shares = np.array([c.share for c in classes], dtype=float)
+    shares = shares / shares.sum()
+    if initial_profile is None:
+        y = _grid(WHEEL_GRID_MM)
+        z = s1002_height_mm(y)
+    else:
+        y = np.asarray(initial_profile[0], dtype=float)
+        z = np.asarray(initial_profile[1], dtype=float)
+    if application not in ("global", "local"):
+        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    coeffs = law_coefficients(wl)
+    rail_y = _grid(RAIL_GRID_MM)
+    profiles = [z.copy()]
+    mileage = [0.0]
+    step_km, step_depth, basis_steps = [], [], []
+    contacts: ClassContacts | None = None
+    basis_km = None
+    fallbacks = updates = 0
+    since_update = np.inf
+    rail_rates = []
+    linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)
+    eps = 1e-3
+    for i in range(st.n_steps):
+        remaining = st.step_km if st.mode == "fixed" else None
+        z_start = z.copy()
+        step_basis = None
+        taken = 0.0
+        while True:
+            if contacts is None or since_update >= st.contact_update_depth_mm:
+                contacts, fb = class_contacts(
+                    veh, classes, y, z, axle=axle, side=side,
+                    unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+                    tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+                    previous=contacts)
+                fallbacks += fb
+                updates += 1
+                since_update = 0.0
+                per_class = wheel_depth_basis(contacts, wl, y, application, fastsim_grid,
+                                              veh.friction)                # mm per m rolled
+                # Smooth each basis row linearly; clipping acts on the sum below.
+                basis_km = linear.apply(np.einsum("c,cbn->bn", shares, per_class) * 1000.0, y)
+                rail_rates.append(rail_depth_per_vehicle(contacts, wl, shares, rail_y))
+            assert basis_km is not None
+            rate = basis_km.T @ coeffs                                     # mm/km, normal
+            if sm.clip_negative:
+                rate = np.maximum(rate, 0.0)
+            slope = np.gradient(z, y)
+            peak = float(np.max(rate * np.sqrt(1.0 + slope * slope)))
+            if remaining is not None:
+                # Fixed step, cut into sub-steps of at most max_depth_per_step_mm.
+                ds = remaining if peak <= 0 else min(remaining, max(
+                    st.max_depth_per_step_mm / peak, st.step_km / st.max_substeps))
+            else:
+                ds = st.max_step_km if peak <= 0 else min(st.depth_per_step_mm / peak,
+                                                           st.max_step_km)
+            z_new = apply_normal_wear(y, z, rate * ds)
+            if remaining is None and ds < st.max_step_km:
+                for _ in range(2):  # nearly linear in ds: rescale to D_step exactly
+                    actual = float(np.max(z - z_new))
+                    if actual <= 0:
+                        break
+                    ds = min(ds * st.depth_per_step_mm / actual, st.max_step_km)
+                    z_new = apply_normal_wear(y, z, rate * ds)
+            # Vertical wear per unit coefficient, linearised (Jacobian of eq. 9).
+            sub = np.stack([(z - apply_normal_wear(y, z, row * ds * eps)) / eps
+                            for row in basis_km])
+            step_basis = sub if step_basis is None else step_basis + sub
+            since_update += float(np.max(z - z_new))
+            z = z_new
+            taken += ds
+            if remaining is None:
+                break
+            remaining -= ds
+            if remaining <= 1e-9 * st.step_km:
+                break
+        basis_steps.append(step_basis)
+        step_depth.append(float(np.max(z_start - z)))
+        step_km.append(taken)
+        profiles.append(z.copy())
+        mileage.append(mileage[-1] + taken)
+        if progress is not None:
+            progress(i + 1, st.n_steps, mileage[-1])
+    prof = np.array(profiles)
+    params = [flange_parameters(y, p) for p in prof]
+    r0_mm = veh.wheel_radius_m * 1000.0
+    volumes = np.array([worn_volume_mm3(y, prof[0], p, r0_mm) for p in prof])
+    rail_rate = np.mean(rail_rates, axis=0)
+    rail_steps = _rail_steps(rail_rate, rail_step_depth_mm, n_rail_steps, veh)
+    return WearSimulation(
+        y_mm=y, profiles_mm=prof, mileage_km=np.array(mileage),
+        sh_mm=np.array([p.sh_mm for p in params]), sd_mm=np.array([p.sd_mm for p in params]),
+        qr_mm=np.array([p.qr_mm for p in params]), step_km=np.array(step_km),
+        step_max_depth_mm=np.array(step_depth), worn_volume_mm3=volumes,
+        contact_fallbacks=fallbacks, contact_updates=updates,
+        elapsed_s=time.perf_counter() - start, law=wl.name, application=application,
+        n_classes=len(classes), rail_y_mm=rail_y, rail_depth_per_vehicle_mm=rail_rate,
+        rail_steps=rail_steps, step_basis_mm=np.array(basis_steps), coefficients=coeffs)
+
+
+def _rail_steps(rate: NDArray, depth_mm: float, n_steps: int, vehicle: BogieVehicle) -> tuple:
+    """Rail steps of seed 003 eq. (4): N_step = D^r / max(depth per vehicle)."""
+    peak = float(np.max(rate))
+    vehicle_mass_t = 4.0 * vehicle.wheel_load_n / GRAVITY_M_S2 / 1000.0 * 2.0  # two bogies
+    out = []
+    for k in range(1, n_steps + 1):
+        n_veh = k * depth_mm / peak if peak > 0 else float("inf")
+        out.append((("rail_step", k), ("vehicles", n_veh),
+                    ("tonnage_mt", n_veh * vehicle_mass_t / 1e6),
+                    ("max_depth_mm", k * depth_mm if peak > 0 else 0.0)))
+    return tuple(tuple(s) for s in out)
+
+
+def class_wear_rates(vehicle: BogieVehicle | str, route_classes: Any,
+                     law: WearLaw | str = "archard_kth", *, axle: int = 1, side: str = "right",
+                     unbalanced_acceleration_m_s2: float = 0.58,
+                     tangent_speed_kmh: float = 100.0) -> tuple[ClassContacts, NDArray]:
+    """Worn volume per metre rolled of the tracked wheel per class and patch [mm^3/m] with the
+    new S1002 profile (seed 004 Fig. 6: wear rate per curve), and the contacts behind it."""
+    veh = vehicle_preset(vehicle) if isinstance(vehicle, str) else vehicle
+    wl = WearLaw(name=law) if isinstance(law, str) else law
+    y = _grid(WHEEL_GRID_MM)
+    contacts, _ = class_contacts(veh, as_loop_classes(route_classes), y, s1002_height_mm(y),
+                                 axle=axle, side=side,
+                                 unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+                                 tangent_speed_kmh=tangent_speed_kmh)
+    return contacts, contact_volume_basis(contacts, wl) @ law_coefficients(wl)
