@@ -1,4 +1,5 @@
-"""The ``wearcast`` command line: serve the API, import, calibrate, predict, reprofile, demo.
+"""The ``wearcast`` command line: serve the API, import, compute or upload tables, calibrate,
+predict, reprofile, diagnose, simulate, demo.
 
 Every command works on the database named by ``WEARCAST_DATABASE_URL`` (default a SQLite file
 in ``WEARCAST_DATA_DIR``, default ``./data``), migrates it first, and calls the same service
@@ -191,6 +192,184 @@ def wear_table(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
     with _session() as (_, session):
         row = wear_table_store.upload_wear_table(session, file.read_bytes(), file.name, name)
         _show(wear_table_store.wear_table_out(session, row, with_rows=False))
+
+
+@app.command("wear-table-compute")
+def wear_table_compute(
+        name: Annotated[str, typer.Option(help="table name")],
+        vehicle: Annotated[str, typer.Option(help=(
+            "vehicle preset (manchester, metro_b, minuetto) or MOTOR,TRAILER presets"))],
+        route_id: Annotated[str | None, typer.Option("--route", help=(
+            "stored route id or name whose curve classes give the radii"))] = None,
+        radius: Annotated[list[str] | None, typer.Option(help=(
+            "RADIUS_M[:CANT_MM[:SPEED_KMH]] (repeatable; 'tangent' for straight track)"))]
+        = None,
+        unbalanced_acceleration: Annotated[float, typer.Option(
+            help="a_nc for radii without a speed [m/s²]")] = 0.58,
+        friction: Annotated[float | None, typer.Option(help="wheel-rail friction")] = None,
+        csv: Annotated[Path | None, typer.Option(help="also write the table here (CSV)")]
+        = None) -> None:
+    """Compute a curve-radius wear table with the physics core (quasi-static curving)."""
+    from wearcast.service import wear_table_store
+    from wearcast.service.schemas import WearTableComputeIn
+
+    motor, _, trailer = vehicle.partition(",")
+    body = _validated(WearTableComputeIn, {
+        "name": name, "vehicle": {"motor": motor, "trailer": trailer} if trailer else vehicle,
+        "route_id": None if route_id is None else _route_ref(route_id),
+        "radii": None if not radius else [_radius(r) for r in radius],
+        "unbalanced_acceleration_m_s2": unbalanced_acceleration, "friction": friction})
+    with _session() as (_, session), console.status("solving the curving equilibria"):
+        row = wear_table_store.compute_wear_table(session, body)
+        if csv is not None:
+            frame = wear_table_store.table_frame(session, row.id)
+            csv.write_bytes(wear_table_store.canonical_csv(frame))
+        _show(wear_table_store.wear_table_out(session, row, with_rows=False))
+
+
+def _radius(text: str) -> dict[str, Any]:
+    parts = text.split(":")
+    if len(parts) > 3:
+        err.print(f"[red]error[/red] radius: {text!r} is not RADIUS_M[:CANT_MM[:SPEED_KMH]]")
+        raise typer.Exit(2)
+    head = parts[0].strip().lower()
+    out: dict[str, Any] = {"radius_m": None if head in ("tangent", "inf", "") else head}
+    if len(parts) > 1:
+        out["cant_mm"] = parts[1]
+    if len(parts) > 2:
+        out["speed_kmh"] = parts[2]
+    return out
+
+
+@app.command()
+def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
+             filter: Annotated[str | None, typer.Option(
+                 help='JSON filter of the measurements to diagnose, e.g. \'{"route_id": '
+                      '"metro"}\' (default: all)')] = None,
+             report: Annotated[Path | None, typer.Option(
+                 help="write the HTML report (with the figures) here")] = None,
+             save_as: Annotated[str | None, typer.Option(
+                 help="store the model extended by the verdict's cause under this name")]
+             = None,
+             cause: Annotated[list[str] | None, typer.Option(
+                 help="cause code to try (repeatable; default: the whole catalogue)")] = None
+             ) -> None:
+    """What the model gets wrong, the named cause, the extended model and its gain."""
+    from wearcast.service import diagnosis_store
+    from wearcast.service.schemas import DiagnoseIn
+    from wearcast.statistics import discrepancy
+
+    body = _validated(DiagnoseIn, {"filter": _json_option(filter, "filter"),
+                                   "save_as": save_as, "causes": cause or None})
+    with _session() as (_, session), console.status("diagnosing"):
+        run = diagnosis_store.run_diagnosis(session, model_id, body)
+        saved, reason = (None, None)
+        if save_as is not None:
+            saved, reason = diagnosis_store.save_extension(session, run, save_as)
+        out = diagnosis_store.diagnosis_out(session, model_id, run, saved, reason)
+        if report is not None:
+            figures = discrepancy.diagnosis_figures(run.diagnosis)
+            report.write_text(discrepancy.report_html(run.diagnosis, figures), encoding="utf-8")
+    table = Table(title=f"model {model_id}: verdict [bold]{out.verdict}[/bold] "
+                  f"({out.n_measurements} measurements, {out.n_groups} groups)")
+    for column in ("cause", "relative gain [95 % CI]", "p (Holm)", "reported", "summary"):
+        table.add_column(column)
+    for f in out.findings:
+        g = f.gain
+        gain = "—" if g.relative is None else (
+            f"{100 * g.relative:.1f} % [{100 * (g.ci95_low or 0):.1f}, "
+            f"{100 * (g.ci95_high or 0):.1f}]")
+        p = f.evidence.get("p_value")
+        table.add_row(f.cause, gain, "—" if p is None else f"{p:.2g}",
+                      "yes" if f.significant and f.material else "no", f.summary)
+    console.print(table)
+    for code, why in out.skipped.items():
+        console.print(f"skipped {code}: {why}")
+    if out.saved_model is not None:
+        console.print(f"saved the extended model as id {out.saved_model.id} "
+                      f"({out.saved_model.name!r})")
+    elif reason:
+        console.print(f"nothing saved: {reason}")
+    if report is not None:
+        console.print(f"wrote {report}")
+
+
+@app.command()
+def simulate(
+        vehicle: Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
+                                             "minuetto)")],
+        route_id: Annotated[str | None, typer.Option("--route", help=(
+            "stored route id or name (its curve classes)"))] = None,
+        curve: Annotated[list[str] | None, typer.Option("--class", help=(
+            "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:left|right] (repeatable; RADIUS 'tangent')"))]
+        = None,
+        law: Annotated[str, typer.Option(help="archard_kth, krause_poll, usfd or tau_max")]
+        = "archard_kth",
+        application: Annotated[str, typer.Option(help="global or local")] = "global",
+        steps: Annotated[int, typer.Option(help="number of wheel steps")] = 20,
+        step_km: Annotated[float | None, typer.Option(help=(
+            "fixed mileage per step [km] (default: adaptive steps by depth)"))] = None,
+        depth_per_step_mm: Annotated[float | None, typer.Option(help=(
+            "adaptive: maximum worn depth per step [mm] (seed 003: 0.2)"))] = None,
+        bogie_type: Annotated[str, typer.Option(help="motor or trailer")] = "trailer",
+        axle: Annotated[int, typer.Option(help="tracked wheel's axle (1 leads)")] = 1,
+        side: Annotated[str, typer.Option(help="tracked wheel's side")] = "right",
+        out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None
+        ) -> None:
+    """Run the wear loop in process with a progress bar; the job is stored like an API one."""
+    from wearcast.service import simulation_store
+    from wearcast.service.schemas import SimulationIn
+
+    body = _validated(SimulationIn, {
+        "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
+        "classes": None if not curve else [_loop_class(c) for c in curve], "law": law,
+        "application": application, "bogie_type": bogie_type, "axle": axle, "side": side,
+        "steps": {"mode": "fixed" if step_km is not None else "adaptive", "count": steps,
+                  "step_km": step_km, "depth_per_step_mm": depth_per_step_mm}})
+    with _session() as (database, session):
+        row = simulation_store.create_simulation(session, body)
+        columns = (TextColumn("[bold]simulation {task.fields[sim]}"), BarColumn(),
+                   TextColumn("{task.completed}/{task.total} steps, {task.fields[km]} km"),
+                   TimeElapsedColumn())
+        with Progress(*columns, console=err) as bar:
+            task = bar.add_task("wear loop", total=body.steps.count, sim=row.id, km="0")
+
+            def advance(done: int, total: int, mileage_km: float) -> None:
+                bar.update(task, completed=done, total=total, km=f"{mileage_km:,.0f}")
+
+            simulation_store.run_simulation(database.session_factory, row.id, advance)
+        session.expire_all()  # the job wrote its row through sessions of its own
+        result = simulation_store.get_simulation(session, row.id)
+    if result.status != "done":
+        err.print(f"[red]simulation {row.id} failed[/red]: {result.error}")
+        raise typer.Exit(1)
+    data = result.result or {}
+    table = Table(title=f"simulation {row.id}: {law}, {application}")
+    for column in ("mileage [km]", "Sh (FH) [mm]", "Sd (FT) [mm]", "qR [mm]",
+                   "worn volume [mm³]"):
+        table.add_column(column, justify="right")
+    for i, km in enumerate(data.get("mileage_km", [])):
+        table.add_row(f"{km:,.0f}", _num(data["sh_mm"][i]), _num(data["sd_mm"][i]),
+                      _num(data["qr_mm"][i]), _num(data["worn_volume_mm3"][i]))
+    console.print(table)
+    if out is not None:
+        out.write_text(json.dumps(result.model_dump(mode="json")), encoding="utf-8")
+        console.print(f"wrote {out}")
+
+
+def _loop_class(text: str) -> dict[str, Any]:
+    parts = text.split(":")
+    if not 4 <= len(parts) <= 5:
+        err.print(f"[red]error[/red] class: {text!r} is not "
+                  "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:DIRECTION]")
+        raise typer.Exit(2)
+    radius = parts[0].strip().lower()
+    out: dict[str, Any] = {"radius_m": None if radius in ("tangent", "inf", "") else radius,
+                           "cant_mm": parts[1], "speed_kmh": parts[2] or None,
+                           "share": parts[3]}
+    if len(parts) == 5:
+        out["direction"] = parts[4]
+    return out
 
 
 @app.command()

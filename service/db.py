@@ -64,11 +64,15 @@ def transaction(factory: SessionFactory) -> Iterator[Session]:
 
 def alembic_config(engine: Engine) -> Any:
     """Programmatic Alembic configuration bound to ``engine`` (no ``alembic.ini``)."""
+    import sys
+
     from alembic.config import Config
 
     import wearcast.migrations
 
-    config = Config()
+    # the current stdout, not the one alembic bound as its default when first imported (it
+    # may be a closed stream, e.g. when that import ran under a CLI test runner)
+    config = Config(stdout=sys.stdout)
     config.set_main_option("script_location", str(Path(wearcast.migrations.__file__).parent))
     config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
     config.attributes["engine"] = engine

@@ -4,6 +4,13 @@ The modelling is :mod:`wearcast.statistics.hybrid` (seed 001 eqs. 2–4) and
 :mod:`wearcast.statistics.reprofiling`; this module loads the inputs from storage, calls them
 and turns their ``"field: reason"`` errors into 422s (unknown bogie type, radius outside the
 table, ...).
+
+A stored model's state carries its kind: a plain hybrid model (``HybridModel.to_dict()``, no
+``kind`` key) or a model extended by the discrepancy finder (``{"kind": "extended", ...}``,
+:class:`wearcast.statistics.discrepancy.ExtendedModel`). Predict and reprofiling dispatch on
+it: an extended model is turned into the plain hybrid model of the wheel asked about
+(``ExtendedModel.for_wheel``, from the route's attributes and the request's ``covariates``),
+and ``nonlinear_progression`` predicts with its mileage exponent.
 """
 
 from __future__ import annotations
@@ -31,14 +38,31 @@ from wearcast.service.schemas import (
     ReprofilingOut,
 )
 from wearcast.statistics import hybrid
+from wearcast.statistics.discrepancy import ExtendedModel
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
 
 REGIONS = ("flange", "tread")
 #: Deserialised models kept in process (a model's state is ~100 kB of JSON).
 MODEL_CACHE_SIZE = 32
-_models: wear_table_store.LruCache[hybrid.HybridModel] = wear_table_store.LruCache(
-    MODEL_CACHE_SIZE)
+AnyModel = hybrid.HybridModel | ExtendedModel
+_models: wear_table_store.LruCache[AnyModel] = wear_table_store.LruCache(MODEL_CACHE_SIZE)
+
+
+def model_from_state(state: dict[str, Any]) -> AnyModel:
+    """The model a stored state describes, by its ``kind`` (default: a plain hybrid model)."""
+    if state.get("kind") == "extended":
+        return ExtendedModel.from_dict(state)
+    return hybrid.HybridModel.from_dict(state)
+
+
+def base_model(model: AnyModel) -> hybrid.HybridModel:
+    """The calibrated hybrid model under an extension (the model itself when plain)."""
+    return model.base if isinstance(model, ExtendedModel) else model
+
+
+def model_kind(model: AnyModel) -> str:
+    return "extended" if isinstance(model, ExtendedModel) else "hybrid"
 
 
 def _statistics_error(exc: ValueError, route_field: str = "route") -> ApiError:
@@ -64,7 +88,7 @@ _measures: wear_table_store.LruCache[dict[str, float]] = wear_table_store.LruCac
 class ModelInputs:
     """A model, its compiled wear table and the table's content key (sha256, rows)."""
 
-    model: hybrid.HybridModel
+    model: AnyModel
     table: WearTable
     table_key: tuple[str, int]
 
@@ -72,7 +96,7 @@ class ModelInputs:
 @dataclass(frozen=True)
 class LoadedModel:
     row: db.Model
-    model: hybrid.HybridModel
+    model: AnyModel
     table: WearTable
     table_key: tuple[str, int] | None = None
 
@@ -111,9 +135,9 @@ def model_inputs(session: Session, model_id: int) -> ModelInputs:
         raise NotFound("model_id", f"no model with id {model_id}")
     created_at, table_id, sha256, n_rows = found
 
-    def deserialise() -> hybrid.HybridModel:
+    def deserialise() -> AnyModel:
         state = session.scalar(select(db.Model.state).where(db.Model.id == model_id))
-        return hybrid.HybridModel.from_dict(state)
+        return model_from_state(state)
 
     model = _models.get_or_create((str(session.get_bind().url), model_id, created_at),
                                   deserialise)
@@ -130,7 +154,7 @@ def weighted_measures(inputs: ModelInputs | LoadedModel, route: Route, *, bogie_
     error) or the table's content key is unknown. Raises the statistics core's errors
     (e.g. a radius outside the table) uncached.
     """
-    model = inputs.model
+    model = base_model(inputs.model)  # P_s does not depend on c_s or the extension
     if inputs.table_key is None or bogie_type not in model.bogie_types:
         return None
     key = (inputs.table_key, model.measure, model.running_mode, route, bogie_type, axle, side)
@@ -196,6 +220,12 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
     n = session.scalar(select(func.count()).select_from(db.ModelCalibrationMeasurement)
                        .where(db.ModelCalibrationMeasurement.model_id == row.id)) or 0
     state = row.state
+    kind = "extended" if state.get("kind") == "extended" else "hybrid"
+    extension = None
+    if kind == "extended":
+        extension = {"cause": state.get("cause"), "parameters": state.get("parameters"),
+                     "log_scale": state.get("log_scale")}
+        state = state["base"]
     summary: dict[str, Any] = {"bogie_types": state.get("bogie_types")}
     for region in REGIONS:
         cal = state[region]
@@ -205,7 +235,8 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
     return ModelOut(id=row.id, name=row.name, measure=row.measure,
                     running_mode=row.running_mode, wear_table_id=row.wear_table_id,
                     route_id=row.route_id, calibration=row.spec.get("calibration", {}),
-                    n_calibration_measurements=int(n), summary=summary)
+                    n_calibration_measurements=int(n), summary=summary, kind=kind,
+                    derived_from=row.spec.get("derived_from"), extension=extension)
 
 
 def _q(values: np.ndarray, quantiles: tuple[float, ...]) -> QuantileValues:
@@ -224,13 +255,45 @@ def _list_none_if_nan(values: np.ndarray) -> list[float | None]:
     return [_none_if_nan(v) for v in values.tolist()]
 
 
+def wheel_model(model: AnyModel, route: Route, table: WearTable, *, bogie_type: str,
+                axle: int, side: str, covariates: dict[str, Any] | None = None
+                ) -> hybrid.HybridModel:
+    """The plain hybrid model for one wheel: the model itself, or an extended model's
+    ``for_wheel`` (its rate factors from the wheel's position and covariates)."""
+    if not isinstance(model, ExtendedModel):
+        return model
+    return model.for_wheel(route, table, bogie_type=bogie_type, axle=axle, side=side,
+                           covariates=covariates)
+
+
+def route_covariates(session: Session, route_name: str,
+                     given: dict[str, Any] | None) -> dict[str, Any]:
+    """A stored route's attributes overlaid with the request's covariates (extended models
+    read e.g. ``flange_lubrication`` from the route and ``load_t`` from the request)."""
+    out: dict[str, Any] = {}
+    if route_name != "inline":
+        row = route_store.find_route(session, route_name)
+        if row is not None:
+            out.update(row.attributes or {})
+    out.update(given or {})
+    return out
+
+
 def run_prediction(loaded: LoadedModel | ModelInputs, route: Route, *, bogie_type: str,
                    axle: int, side: str, mileage_km: list[float],
-                   start_areas_mm2: dict[str, float] | None = None) -> hybrid.Prediction:
+                   start_areas_mm2: dict[str, float] | None = None,
+                   covariates: dict[str, Any] | None = None) -> hybrid.Prediction:
     try:
         measures = weighted_measures(loaded, route, bogie_type=bogie_type, axle=axle,
                                      side=side)
-        return hybrid.predict(loaded.model, route, loaded.table, bogie_type=bogie_type,
+        model = loaded.model
+        if isinstance(model, ExtendedModel) and model.cause == "nonlinear_progression" \
+                and not start_areas_mm2:
+            return model.predict(route, loaded.table, bogie_type=bogie_type, axle=axle,
+                                 side=side, mileage_km=mileage_km, covariates=covariates)
+        plain = wheel_model(model, route, loaded.table, bogie_type=bogie_type, axle=axle,
+                            side=side, covariates=covariates)
+        return hybrid.predict(plain, route, loaded.table, bogie_type=bogie_type,
                               axle=axle, side=side, mileage_km=mileage_km,
                               start_areas_mm2=start_areas_mm2, weighted_measures=measures)
     except ValueError as exc:
@@ -241,8 +304,11 @@ def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
     """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
     inputs = model_inputs(session, model_id)
     route, route_name = route_store.resolve_cached(session, body.route_id, body.route)
+    covariates = None
+    if isinstance(inputs.model, ExtendedModel):
+        covariates = route_covariates(session, route_name, body.covariates)
     result = run_prediction(inputs, route, bogie_type=body.bogie_type, axle=body.axle,
-                            side=body.side, mileage_km=body.mileage_km)
+                            side=body.side, mileage_km=body.mileage_km, covariates=covariates)
     return prediction_out(model_id, route_name, body, result)
 
 
@@ -325,8 +391,18 @@ def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> Reprofi
     try:
         measures = weighted_measures(inputs, route, bogie_type=str(bogie_type),
                                      axle=int(axle or 1), side=str(side))
+        model = inputs.model
+        if isinstance(model, ExtendedModel):
+            covariates = route_covariates(session, route_name, body.covariates)
+            if body.wheel_id is not None:
+                for key in ("load_t", "running_mode", "instrument_id"):
+                    value = getattr(latest, key, None)
+                    if value is not None:
+                        covariates.setdefault(key, value)
+            model = wheel_model(model, route, inputs.table, bogie_type=str(bogie_type),
+                                axle=int(axle or 1), side=str(side), covariates=covariates)
         result = stat_reprofiling.reprofiling_mileage(
-            inputs.model, route, inputs.table, bogie_type=str(bogie_type), axle=int(axle or 1),
+            model, route, inputs.table, bogie_type=str(bogie_type), axle=int(axle or 1),
             side=str(side), limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
             start_areas=start_areas, weighted_measures=measures)
     except ValueError as exc:

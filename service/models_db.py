@@ -25,6 +25,7 @@ from sqlalchemy import (
     LargeBinary,
     MetaData,
     String,
+    Text,
     UniqueConstraint,
     func,
 )
@@ -145,7 +146,14 @@ class Route(Base):
 
 
 class WearTable(Base):
-    """A curve-radius table of wear measures (uploaded or computed)."""
+    """A curve-radius table of wear measures (uploaded or computed).
+
+    ``kind`` is ``uploaded`` or ``computed``; a computed table keeps its request (``spec``)
+    and the raw per-contact quantities behind it (``contacts``: pandas ``split`` orient,
+    ``{"columns": [...], "data": [[...], ...]}``; loaded only when asked for). ``sha256`` is
+    the hash of the table's content (the uploaded bytes, or the canonical CSV of a computed
+    table), the key of the compiled-table cache.
+    """
 
     __tablename__ = "wear_tables"
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
@@ -153,6 +161,10 @@ class WearTable(Base):
     source: Mapped[str] = mapped_column(String(500))
     sha256: Mapped[str] = mapped_column(String(64))
     n_rows: Mapped[int] = mapped_column(Integer)
+    kind: Mapped[str] = mapped_column(String(20), default="uploaded",
+                                      server_default="uploaded")
+    spec: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    contacts: Mapped[dict[str, Any] | None] = mapped_column(JSON, deferred=True)
     created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
                                                     server_default=func.now())
 
@@ -194,3 +206,25 @@ class ModelCalibrationMeasurement(Base):
     model_id: Mapped[int] = mapped_column(ForeignKey("models.id", ondelete="CASCADE"),
                                           primary_key=True)
     measurement_id: Mapped[int] = mapped_column(ForeignKey("measurements.id"), primary_key=True)
+
+
+class Simulation(Base):
+    """A wear-loop simulation job: its request, status, progress (0-1), error and result.
+
+    ``status`` is ``queued``, ``running``, ``done`` or ``failed``; ``result`` is
+    ``WearSimulation.to_dict()`` once done (loaded only when asked for).
+    """
+
+    __tablename__ = "simulations"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str | None] = mapped_column(String(200))
+    spec: Mapped[dict[str, Any]] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(20), index=True)
+    progress: Mapped[float] = mapped_column(Float, default=0.0)
+    message: Mapped[str | None] = mapped_column(String(500))
+    error: Mapped[str | None] = mapped_column(Text)
+    result: Mapped[dict[str, Any] | None] = mapped_column(JSON, deferred=True)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+    started_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))

@@ -114,7 +114,60 @@ class WearTableOut(BaseModel):
     source: str
     sha256: str
     n_rows: int
+    kind: str = "uploaded"
+    spec: dict[str, Any] | None = None
     rows: list[WearTableRowOut] | None = None
+
+
+class VehiclePairIn(Strict):
+    """Two presets: the motor bogie of one and the trailer bogie of another (or the same)."""
+
+    motor: str = Field(min_length=1, max_length=50, description="preset for the motor bogie")
+    trailer: str = Field(min_length=1, max_length=50, description="preset for the trailer bogie")
+
+
+class RadiusIn(Strict):
+    radius_m: float | None = Field(gt=0, le=1e6, description="radius [m]; null = tangent")
+    cant_mm: float = Field(default=0.0, ge=0, le=250, description="cant [mm]")
+    speed_kmh: float | None = Field(default=None, gt=0, le=500, description=(
+        "speed [km/h]; null = from the unbalanced lateral acceleration"))
+    share: float | None = Field(default=None, ge=0, le=1, description="share of the route [-]")
+
+
+class WearTableComputeIn(Strict):
+    """``POST /v1/wear-tables/compute``: a table from the physics core (quasi-static curving).
+
+    ``vehicle`` is a preset name (motor and trailer variants) or ``{motor, trailer}`` preset
+    names; the radii come from a stored route's classes (``route_id``: id or name) or are
+    given (``radii``), exactly one of them. A tangent row is always computed.
+    """
+
+    name: str = Field(min_length=1, max_length=200)
+    vehicle: str | VehiclePairIn
+    route_id: int | str | None = None
+    radii: list[RadiusIn] | None = Field(default=None, min_length=1, max_length=200)
+    unbalanced_acceleration_m_s2: float = Field(default=0.58, ge=0, le=2, description=(
+        "a_nc for classes without a speed [m/s²] (seed 001: 0.58)"))
+    friction: float | None = Field(default=None, gt=0, le=1, description=(
+        "wheel-rail friction coefficient (default: the preset's)"))
+    tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
+    max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
+
+    @model_validator(mode="after")
+    def _one_source(self) -> WearTableComputeIn:
+        if (self.route_id is None) == (self.radii is None):
+            raise ValueError("give either route_id or radii (exactly one)")
+        return self
+
+
+class WearTableContactsOut(BaseModel):
+    """The raw per-contact quantities behind a computed table, one record per bogie type,
+    curve class, axle, side and contact patch (units in the column names)."""
+
+    wear_table_id: int
+    n_contacts: int
+    columns: list[str]
+    contacts: list[dict[str, Any]]
 
 
 # --- measurements -----------------------------------------------------------------------
@@ -246,6 +299,9 @@ class ModelOut(BaseModel):
     calibration: dict[str, Any]
     n_calibration_measurements: int
     summary: dict[str, Any]
+    kind: Literal["hybrid", "extended"] = "hybrid"
+    derived_from: int | None = None
+    extension: dict[str, Any] | None = None
 
 
 class RouteRef(Strict):
@@ -266,6 +322,8 @@ class WheelPosition(RouteRef):
 
 
 class PredictIn(WheelPosition):
+    covariates: dict[str, Any] | None = Field(default=None, description=(
+        "the wheel's covariates for an extended model (load_t, running_mode, ...)"))
     mileage_km: list[float] = Field(min_length=1, max_length=1000)
 
     @field_validator("mileage_km")
@@ -323,6 +381,7 @@ class ReprofilingIn(Strict):
     axle: Axle | None = None
     side: Side | None = None
     limits: Limits | None = None
+    covariates: dict[str, Any] | None = None
 
     @model_validator(mode="after")
     def _check(self) -> ReprofilingIn:
@@ -360,3 +419,122 @@ class ReprofilingOut(BaseModel):
     extrapolated: bool
     reason: str | None
     limits: dict[str, float]
+
+
+# --- diagnosis ----------------------------------------------------------------------------
+
+class DiagnoseIn(Strict):
+    """``POST /v1/models/{id}/diagnose``.
+
+    ``filter`` selects the measurements to diagnose (default: every profile measurement on a
+    stored route); the model's calibration measurements are always added (flagged as such).
+    ``save_as`` stores the model extended by the verdict's cause as a new model.
+    """
+
+    filter: Filter = Field(default_factory=dict)
+    save_as: str | None = Field(default=None, min_length=1, max_length=200)
+    causes: list[str] | None = Field(default=None, min_length=1, description=(
+        "cause codes to try (default: the whole catalogue)"))
+    seed: int = Field(default=0, ge=0, description="random seed of the folds and bootstrap")
+
+
+class GainOut(BaseModel):
+    before_error: float | None
+    after_error: float | None
+    relative: float | None
+    ci95_low: float | None
+    ci95_high: float | None
+    calibrated_error: float | None
+    metric: str
+
+
+class FindingOut(BaseModel):
+    cause: str
+    summary: str
+    evidence: dict[str, Any]
+    extension: dict[str, Any]
+    gain: GainOut
+    significant: bool
+    material: bool
+
+
+class DiagnosisOut(BaseModel):
+    model_id: int
+    verdict: str
+    findings: list[FindingOut]
+    skipped: dict[str, str]
+    n_measurements: int
+    n_groups: int
+    group_by: str
+    excluded: dict[str, int] = Field(default_factory=dict, description=(
+        "measurements left out, by reason"))
+    saved_model: ModelOut | None = None
+    save_reason: str | None = Field(default=None, description="why save_as saved nothing")
+
+
+# --- simulations --------------------------------------------------------------------------
+
+WearLawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
+
+
+class SimulationClassIn(Strict):
+    radius_m: float | None = Field(default=None, gt=0, le=1e6, description="null = tangent")
+    direction: Direction = "left"
+    cant_mm: float = Field(default=0.0, ge=0, le=250)
+    speed_kmh: float | None = Field(default=None, gt=0, le=500)
+    share: float = Field(default=1.0, ge=0, le=1)
+
+
+class StepsIn(Strict):
+    """Wheel steps: ``adaptive`` (max depth per step, seed 003's D_step) or ``fixed`` km."""
+
+    mode: Literal["adaptive", "fixed"] = "adaptive"
+    count: int = Field(default=20, ge=1, le=200, description="number of wheel steps")
+    depth_per_step_mm: float | None = Field(default=None, gt=0, le=5)
+    step_km: float | None = Field(default=None, gt=0, le=1e6)
+    max_step_km: float | None = Field(default=None, gt=0, le=1e7)
+    contact_update_depth_mm: float | None = Field(default=None, ge=0, le=5)
+
+
+class SmoothingIn(Strict):
+    method: Literal["moving_average", "spline", "none"] = "moving_average"
+    window_mm: float | None = Field(default=None, gt=0, le=50)
+
+
+class SimulationIn(Strict):
+    """``POST /v1/simulations``: the wear loop of one wheel over a route's curve classes."""
+
+    name: str | None = Field(default=None, max_length=200)
+    vehicle: str = Field(min_length=1, max_length=50, description="vehicle preset")
+    bogie_type: BogieType = "trailer"
+    route_id: int | str | None = None
+    classes: list[SimulationClassIn] | None = Field(default=None, min_length=1,
+                                                    max_length=200)
+    law: WearLawName = "archard_kth"
+    application: Literal["global", "local"] = "global"
+    steps: StepsIn = Field(default_factory=StepsIn)
+    axle: Axle = 1
+    side: Side = "right"
+    smoothing: SmoothingIn | None = None
+    unbalanced_acceleration_m_s2: float = Field(default=0.58, ge=0, le=2)
+    tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
+
+    @model_validator(mode="after")
+    def _one_route(self) -> SimulationIn:
+        if (self.route_id is None) == (self.classes is None):
+            raise ValueError("give either route_id or classes (exactly one)")
+        return self
+
+
+class SimulationOut(BaseModel):
+    id: int
+    name: str | None
+    status: Literal["queued", "running", "done", "failed"]
+    progress: float
+    message: str | None = None
+    error: str | None = None
+    spec: dict[str, Any]
+    created_at: dt.datetime | None = None
+    started_at: dt.datetime | None = None
+    finished_at: dt.datetime | None = None
+    result: dict[str, Any] | None = None

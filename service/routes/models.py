@@ -1,4 +1,5 @@
-"""``/v1/models``: calibrate a hybrid model, read it, predict, remaining mileage, pictures.
+"""``/v1/models``: calibrate a hybrid model, read it, predict, remaining mileage, pictures,
+diagnose (the discrepancy finder) and its HTML report.
 
 Calibration and the pictures are plain ``def`` endpoints: FastAPI runs them in its
 threadpool, off the event loop. Predict and reprofiling run there too, in one hop each, and
@@ -7,20 +8,25 @@ return their answer serialised (see ``_in_session`` and ``_json``).
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
-from typing import Annotated
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Request, Response
-from pydantic import BaseModel
+from fastapi.responses import HTMLResponse
+from pydantic import BaseModel, ValidationError
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from wearcast.service import model_store, pictures
+from wearcast.service import diagnosis_store, model_store, pictures
 from wearcast.service.db import Database
 from wearcast.service.deps import SessionDep
+from wearcast.service.errors import Unprocessable, validation_items
 from wearcast.service.pictures import ImageFormat
 from wearcast.service.schemas import (
     BogieType,
+    DiagnoseIn,
+    DiagnosisOut,
     ModelIn,
     ModelOut,
     PredictIn,
@@ -102,3 +108,43 @@ def profile_picture(model_id: int, session: SessionDep, route_id: str,
                                      bogie_type=bogie_type, axle=axle, side=side,
                                      mileage_km=mileage_km, wheel_id=wheel_id, fmt=format)
     return Response(content=image, media_type=pictures.MEDIA_TYPES[format])
+
+
+@router.post("/models/{model_id}/diagnose", response_model=DiagnosisOut)
+def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep,
+             format: Literal["json", "html"] = "json") -> Response:
+    """What the calibrated model gets wrong, the cause, the extension and its gain.
+
+    ``?format=html`` returns the HTML report instead (figures included); ``save_as`` in the
+    body stores the model extended by the verdict's cause as a new model.
+    """
+    if format == "html":
+        return HTMLResponse(diagnosis_store.report_html(session, model_id, body))
+    return _json(diagnosis_store.diagnose(session, model_id, body))
+
+
+@router.get("/models/{model_id}/diagnose/report", response_class=HTMLResponse)
+def diagnose_report(model_id: int, session: SessionDep,
+                    filter: Annotated[str | None, Query(description=(
+                        "the diagnose filter as a JSON object"))] = None,
+                    cause: str | None = None, seed: Annotated[int, Query(ge=0)] = 0
+                    ) -> HTMLResponse:
+    """The diagnosis as a self-contained HTML report (residuals against the named
+    covariate, predicted vs measured wear areas before and after the extension)."""
+    body = DiagnoseIn(filter=_filter_from_query(filter), seed=seed)
+    return HTMLResponse(diagnosis_store.report_html(session, model_id, body, cause))
+
+
+def _filter_from_query(raw: str | None) -> dict:
+    if raw is None or not raw.strip():
+        return {}
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise Unprocessable("filter", f"not valid JSON: {exc}") from exc
+    if not isinstance(value, dict):
+        raise Unprocessable("filter", "must be a JSON object of field -> value(s)")
+    try:
+        return DiagnoseIn(filter=value).filter
+    except ValidationError as exc:
+        raise Unprocessable("filter", validation_items(exc.errors())[0]["reason"]) from exc

@@ -1,4 +1,8 @@
-"""``/v1/wear-tables``: curve-radius tables of wear measures (CSV upload)."""
+"""``/v1/wear-tables``: curve-radius tables of wear measures (CSV upload or computed).
+
+Computing a table runs the quasi-static curving of the physics core (about a second): the
+endpoint is a plain ``def``, so FastAPI runs it in its threadpool, off the event loop.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +13,7 @@ from fastapi import APIRouter, File, Form, UploadFile
 from wearcast.service import wear_table_store
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Unprocessable
-from wearcast.service.schemas import WearTableOut
+from wearcast.service.schemas import WearTableComputeIn, WearTableContactsOut, WearTableOut
 
 router = APIRouter(tags=["wear tables"])
 
@@ -24,7 +28,20 @@ def upload_wear_table(session: SessionDep, file: Annotated[UploadFile, File()],
     return wear_table_store.wear_table_out(session, row)
 
 
+@router.post("/wear-tables/compute", response_model=WearTableOut, status_code=201)
+def compute_wear_table(body: WearTableComputeIn, session: SessionDep) -> WearTableOut:
+    """Build a table with the physics core for a vehicle preset and a route (or radii)."""
+    row = wear_table_store.compute_wear_table(session, body)
+    return wear_table_store.wear_table_out(session, row)
+
+
 @router.get("/wear-tables/{table_id}", response_model=WearTableOut)
 def get_wear_table(table_id: int, session: SessionDep) -> WearTableOut:
     row = wear_table_store.get_wear_table(session, table_id, "table_id")
     return wear_table_store.wear_table_out(session, row)
+
+
+@router.get("/wear-tables/{table_id}/contacts", response_model=WearTableContactsOut)
+def get_wear_table_contacts(table_id: int, session: SessionDep) -> WearTableContactsOut:
+    """The raw per-contact quantities behind a computed table."""
+    return wear_table_store.wear_table_contacts(session, table_id)

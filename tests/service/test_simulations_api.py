@@ -1,0 +1,127 @@
+"""``POST /v1/simulations``: the wear loop as a background job with progress (issue 5)."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from wearcast.service import models_db as db
+from wearcast.service.app import create_app
+from wearcast.service.settings import Settings
+from wearcast.service.simulation_store import RESTART_REASON
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "service" / "example_fleet"
+TINY = {"vehicle": "metro_b", "law": "archard_kth", "application": "global",
+        "classes": [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
+                    {"radius_m": 500, "cant_mm": 60, "speed_kmh": 60, "direction": "left",
+                     "share": 0.4}],
+        "steps": {"mode": "adaptive", "count": 2}}
+
+
+def _settings(tmp_path: Path) -> Settings:
+    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
+
+
+def _wait(client: TestClient, sim_id: int, timeout_s: float = 60.0) -> dict:
+    deadline = time.monotonic() + timeout_s
+    seen = []
+    while time.monotonic() < deadline:
+        r = client.get(f"/v1/simulations/{sim_id}")
+        assert r.status_code == 200, r.text
+        body = r.json()
+        seen.append(body["progress"])
+        if body["status"] in ("done", "failed"):
+            body["_seen_progress"] = seen
+            return body
+        time.sleep(0.05)
+    raise AssertionError(f"simulation {sim_id} did not finish in {timeout_s} s")
+
+
+def test_tiny_simulation_runs_in_the_background_and_reports_its_result(tmp_path: Path) -> None:
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/simulations", json={**TINY, "name": "tiny"})
+    assert r.status_code == 202, r.text
+    queued = r.json()
+    assert queued["status"] == "queued" and queued["progress"] == 0.0
+    body = _wait(client, queued["id"])
+    assert body["status"] == "done", body
+    assert body["progress"] == 1.0 and body["error"] is None
+    seen = body["_seen_progress"]
+    assert seen == sorted(seen)  # progress never goes back
+    result = body["result"]
+    # two wheel steps: three profiles (initial + 2), mileage rising from 0
+    assert len(result["mileage_km"]) == 3 and result["mileage_km"][0] == 0.0
+    assert result["mileage_km"][2] > result["mileage_km"][1] > 0
+    assert len(result["profiles_mm"]) == 3 and len(result["profiles_mm"][0]) == \
+        len(result["y_mm"])
+    assert result["law"] == "archard_kth" and result["application"] == "global"
+    # seed 003 D_step: an adaptive step removes at most the step depth (0.2 mm default)
+    assert max(result["step_max_depth_mm"]) <= 0.2 + 1e-6
+    assert body["spec"]["resolved_classes"][1]["radius_m"] == 500
+    listing = client.get("/v1/simulations").json()
+    assert listing[0]["id"] == queued["id"] and listing[0]["result"] is None
+
+
+def test_simulation_over_a_stored_route(tmp_path: Path) -> None:
+    client = TestClient(create_app(_settings(tmp_path)))
+    metro = next(r for r in json.loads((EXAMPLE / "routes.json").read_text())
+                 if r["name"] == "metro")
+    assert client.post("/v1/routes", json=metro).status_code == 201
+    r = client.post("/v1/simulations", json={
+        "vehicle": "metro_b", "route_id": "metro", "law": "krause_poll",
+        "steps": {"mode": "fixed", "count": 2, "step_km": 1000}})
+    assert r.status_code == 202, r.text
+    body = _wait(client, r.json()["id"])
+    assert body["status"] == "done", body
+    assert body["result"]["mileage_km"] == pytest.approx([0.0, 1000.0, 2000.0])
+    assert body["result"]["n_classes"] == len(metro["classes"])
+
+
+@pytest.mark.parametrize(("change", "status", "field"), [
+    ({"vehicle": "tgv"}, 422, "vehicle"),
+    ({"law": "magic"}, 422, "law"),
+    ({"application": "local", "law": "krause_poll"}, 422, "application"),
+    ({"steps": {"count": 0}}, 422, "steps.count"),
+    ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
+    ({"classes": [{"radius_m": -3}]}, 422, "classes[0].radius_m"),
+    ({"route_id": "metro"}, 422, "body"),  # both route_id and classes
+])
+def test_bad_simulation_requests_are_refused_before_queuing(tmp_path: Path, change: dict,
+                                                            status: int, field: str) -> None:
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/simulations", json={**TINY, **change})
+    assert r.status_code == status, r.text
+    assert r.json()["detail"][0]["field"] == field
+    assert client.get("/v1/simulations").json() == []  # nothing half-written
+
+
+def test_a_restart_fails_running_jobs_with_a_reason(tmp_path: Path) -> None:
+    settings = _settings(tmp_path)
+    app = create_app(settings)
+    with app.state.database.session_factory() as session:
+        session.add(db.Simulation(spec={"vehicle": "metro_b"}, status="running",
+                                  progress=0.5, message="step 1/2"))
+        session.commit()
+    restarted = TestClient(create_app(settings))
+    body = restarted.get("/v1/simulations/1").json()
+    assert body["status"] == "failed" and body["error"] == RESTART_REASON
+    assert restarted.get("/v1/simulations/2").status_code == 404
+
+
+def test_a_simulation_that_fails_reports_the_error(tmp_path: Path) -> None:
+    # valid input the physics cannot solve (20 m at 150 km/h): the job fails with the
+    # solver's message instead of hanging or killing the worker
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/simulations", json={
+        **TINY, "classes": [{"radius_m": 20, "speed_kmh": 150, "direction": "left"}]})
+    assert r.status_code == 202, r.text
+    body = _wait(client, r.json()["id"])
+    assert body["status"] == "failed" and body["result"] is None
+    assert "CurvingConvergenceError" in body["error"]
+    # the worker survives: the next job runs
+    body = _wait(client, client.post("/v1/simulations", json=TINY).json()["id"])
+    assert body["status"] == "done"
