@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pandas as pd
+
 from wearcast.statistics.hybrid import calibrate, predict, weighted_wear_measure
 from wearcast.statistics.reprofiling import reprofiling_mileage
 from wearcast.statistics.routes import Route, RouteClass

@@ -12,6 +12,7 @@ import sys
 import time
 
 import numpy as np
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import align_to_reference
 from wearcast.statistics.cleaning import clean_profile

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
 from wearcast.physics.contact.geometry import WheelsetTrack, contact_table, s1002_60e1
 from wearcast.physics.profiles.measured import ProfileCurve
 

@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 
 import pandas as pd
+
 from wearcast.statistics import fleet_twin
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "service" / "example_fleet"

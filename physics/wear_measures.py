@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.contact.fastsim import FastsimResult
 
 #: Seed 004 Table 1: KTH wear coefficients per zone (mild 1, severe, mild 2, seizure) [-].

@@ -34,6 +34,7 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 
 ReferenceHeight = Callable[[ArrayLike], NDArray[np.float64]]

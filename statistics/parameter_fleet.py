@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 from scipy.stats import t as student_t
+
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 
 #: S1002 new-profile values [mm] (DESIGN.md "Profile parameters"; EN 13715).

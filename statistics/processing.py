@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import ReferenceHeight, align_to_reference
 from wearcast.statistics.cleaning import CleanedProfile, clean_profile

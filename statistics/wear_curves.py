@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import ReferenceHeight, reference_table
 from wearcast.statistics.cleaning import resample_profile

@@ -15,5 +15,6 @@ REFERENCE_DIR = SHARED_DIR / "reference"
 def reference_dir() -> Path:
     """``../shared/reference``; the test is skipped, saying so, when it is absent."""
     if not REFERENCE_DIR.is_dir():
-        pytest.skip(f"reference data not found at {REFERENCE_DIR} (needs ../shared beside the repo)")
+        pytest.skip(f"reference data not found at {REFERENCE_DIR} "
+                    "(needs ../shared beside the repo)")
     return REFERENCE_DIR

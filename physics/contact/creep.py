@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.contact.fastsim import Bound, FastsimResult, fastsim
 from wearcast.physics.contact.kalker import linear_creep_forces
 

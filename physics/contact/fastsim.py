@@ -40,6 +40,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.contact.kalker import fastsim_flexibilities, kalker_coefficients
 
 Bound = Literal["parabolic", "elliptic"]

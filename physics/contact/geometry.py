@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
 
 _FloatArray = NDArray[np.float64]

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import BSpline, UnivariateSpline, make_interp_spline
+
 from wearcast.physics.profiles.rails import rail_profile, resample_by_arc_length
 from wearcast.physics.profiles.s1002 import S1002_Y_MAX_MM, S1002_Y_MIN_MM, s1002_height_mm
 

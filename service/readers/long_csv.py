@@ -35,6 +35,7 @@ from typing import BinaryIO, Literal
 
 import numpy as np
 import pandas as pd
+
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import (
     META_COLUMNS,

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import BinaryIO
 
 import numpy as np
+
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import read_chunks, read_header, split_columns
 from wearcast.service.readers.records import (

@@ -27,6 +27,7 @@ from datetime import date
 from typing import Literal
 
 import numpy as np
+
 from wearcast.service.readers.errors import ImportFileError
 
 TAPE_CIRCLE_X_MM = 70.0

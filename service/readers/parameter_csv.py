@@ -12,6 +12,7 @@ from collections.abc import Iterator
 from typing import BinaryIO
 
 import numpy as np
+
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import describe, read_chunks, read_header, split_columns
 from wearcast.service.readers.records import (

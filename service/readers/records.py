@@ -22,6 +22,7 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
+
 from wearcast.service.readers.errors import ImportFileError
 
 BogieType = Literal["motor", "trailer"]

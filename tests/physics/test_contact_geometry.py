@@ -2,6 +2,7 @@ import time
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.geometry import (
     WheelsetTrack,
     contact_points,

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.creep import creep_forces, creep_forces_fastsim, she_saturation
 from wearcast.physics.contact.kalker import kalker_coefficients, linear_creep_forces
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.fastsim import contact_combined_flexibilities, fastsim
 from wearcast.physics.contact.kalker import fastsim_flexibilities, linear_creep_forces
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.hertz import (
     effective_modulus_mpa,
     hertz_contact,

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.kalker import (
     fastsim_flexibilities,
     kalker_coefficients,

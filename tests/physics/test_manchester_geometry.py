@@ -16,6 +16,7 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
+
 from wearcast.physics.contact.geometry import contact_points, contact_table, s1002_60e1, wheel_gap
 
 #: CONTACT's wheelset lateral displacements in A-2.2 [mm]

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
 from wearcast.physics.profiles.rails import rail_60e1_height_mm
 from wearcast.physics.profiles.s1002 import s1002_height_mm

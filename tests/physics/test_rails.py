@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+
 from wearcast.physics.profiles.rails import (
     incline,
     rail_60e1_height_mm,

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wearcast.physics.contact.fastsim import fastsim
 from wearcast.physics.wear_measures import (
     HB_TO_MPA,

@@ -9,6 +9,7 @@ from datetime import date
 
 import numpy as np
 import pytest
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.service.readers.bundle import ZipLimits, iter_upload, iter_upload_with_raw
 from wearcast.service.readers.errors import ImportFileError

@@ -8,6 +8,7 @@ from datetime import date
 
 import numpy as np
 import pytest
+
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import iter_profile_records, sniff_kind
 

@@ -6,6 +6,7 @@ from datetime import date
 
 import numpy as np
 import pytest
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame

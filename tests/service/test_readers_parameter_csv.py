@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 
 import pytest
+
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.parameter_csv import iter_parameter_records
 

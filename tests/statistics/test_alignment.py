@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import align_to_reference, reference_table
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
 from wearcast.statistics.cleaning import clean_profile, resample_profile
 

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics import fleet_twin as ft
 

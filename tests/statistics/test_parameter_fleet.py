@@ -3,6 +3,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+
 from wearcast.statistics.parameter_fleet import (
     fit_parameter_trend,
     forecast_parameter_fleet,

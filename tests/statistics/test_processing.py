@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.processing import ProcessedProfile, process_profile, process_profiles
 from wearcast.statistics.profile_parameters import flange_parameters

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
+
 from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
 from wearcast.statistics.cleaning import clean_profile
 from wearcast.statistics.profile_parameters import (

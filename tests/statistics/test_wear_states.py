@@ -2,6 +2,7 @@ import json
 
 import numpy as np
 import pytest
+
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, wear_areas_mm2
 from wearcast.statistics.wear_states import (
     WearStates,

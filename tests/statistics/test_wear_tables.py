@@ -1,6 +1,7 @@
 import numpy as np
 import pandas as pd
 import pytest
+
 from wearcast.statistics.wear_tables import (
     TABLE_COLUMNS,
     RadiusOutOfTableError,
