@@ -6,6 +6,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from wearcast.statistics.hybrid import (
     HybridModel,
     UnknownBogieTypeError,

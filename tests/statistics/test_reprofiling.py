@@ -4,6 +4,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+
 from wearcast.statistics.hybrid import HybridModel, RegionCalibration
 from wearcast.statistics.profile_parameters import WheelLimits
 from wearcast.statistics.reprofiling import reprofiling_mileage
