@@ -17,6 +17,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     failed with a reason, queued ones are queued again).
     """
     from wearcast.service.routes import (
+        coefficient_fits,
         health,
         measurements,
         models,
@@ -38,6 +39,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.state.simulations = runner
     app.router.add_event_handler("shutdown", runner.shutdown)
     install_handlers(app)
-    for module in (health, measurements, routes, wear_tables, models, simulations):
+    for module in (health, measurements, routes, wear_tables, models, simulations,
+                   coefficient_fits):
         app.include_router(module.router, prefix="/v1")
     return app

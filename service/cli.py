@@ -357,6 +357,84 @@ def simulate(
         console.print(f"wrote {out}")
 
 
+@app.command("fit-coefficients")
+def fit_coefficients(
+        vehicle: Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
+                                             "minuetto)")],
+        route_id: Annotated[str | None, typer.Option("--route", help=(
+            "stored route id or name (its curve classes)"))] = None,
+        curve: Annotated[list[str] | None, typer.Option("--class", help=(
+            "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:left|right] (repeatable; RADIUS 'tangent')"))]
+        = None,
+        wear_csv: Annotated[Path | None, typer.Option(help=(
+            "measured wear curve: CSV with columns y_mm, wear_mm"))] = None,
+        measurement_id: Annotated[int | None, typer.Option(
+            "--measurement", help="stored measurement id (its wear curve vs S1002)")] = None,
+        mileage_km: Annotated[float | None, typer.Option(help=(
+            "mileage of the measured wear [km] (default: the measurement's)"))] = None,
+        method: Annotated[list[str] | None, typer.Option(help=(
+            "exact, GA, PSO, TS, SA or DE (repeatable; default exact)"))] = None,
+        zone: Annotated[list[int] | None, typer.Option(help=(
+            "fitted KTH zone 1-4 (repeatable; default 1 2 3, seed 000)"))] = None,
+        step_km: Annotated[float, typer.Option(help="loop step [km] (seed 000: 5000)")] = 5000.0,
+        contact_update_depth_mm: Annotated[float, typer.Option(help=(
+            "re-solve the contact after this much wear [mm] (0 = every step)"))] = 0.0,
+        predict_km: Annotated[float | None, typer.Option(help=(
+            "also predict the maximum depth at this mileage [km]"))] = None,
+        bogie_type: Annotated[str, typer.Option(help="motor or trailer")] = "trailer",
+        axle: Annotated[int, typer.Option(help="tracked wheel's axle (1 leads)")] = 1,
+        side: Annotated[str, typer.Option(help="tracked wheel's side")] = "right",
+        out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None
+        ) -> None:
+    """Fit the KTH wear coefficients to measured wear (seed 000); stored like an API job."""
+    import pandas as pd
+
+    from wearcast.service import coefficient_fit_store as store
+
+    wear = None
+    if wear_csv is not None:
+        try:
+            frame = pd.read_csv(wear_csv)
+            wear = {"y_mm": frame["y_mm"].tolist(), "wear_mm": frame["wear_mm"].tolist()}
+        except (OSError, KeyError, ValueError) as exc:
+            err.print(f"[red]error[/red] wear-csv: cannot read y_mm, wear_mm ({exc})")
+            raise typer.Exit(2) from exc
+    data: dict[str, Any] = {
+        "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
+        "classes": None if not curve else [_loop_class(c) for c in curve], "wear": wear,
+        "measurement_id": measurement_id, "mileage_km": mileage_km,
+        "methods": method or ["exact"], "zones": zone or [1, 2, 3], "step_km": step_km,
+        "contact_update_depth_mm": contact_update_depth_mm, "bogie_type": bogie_type,
+        "axle": axle, "side": side,
+        "predict": None if predict_km is None else {"mileage_km": predict_km}}
+    body = _validated(store.CoefficientFitIn, data)
+    from wearcast.service import simulation_store
+
+    with _session() as (database, session):
+        row = store.create_fit(session, body)
+        with console.status(f"fitting (job {row.id})"):
+            simulation_store.run_simulation(database.session_factory, row.id)
+        session.expire_all()
+        result = store.get_fit(session, row.id)
+    if result.status != "done":
+        err.print(f"[red]coefficient fit {row.id} failed[/red]: {result.error}")
+        raise typer.Exit(1)
+    res = result.result or {}
+    table = Table(title=f"coefficient fit {row.id} (seed 000 Table 2): best "
+                  f"{res.get('best_method')}, identifiable zones {res.get('identifiable_zones')}")
+    columns = ["method", "rmse_mm", "max_depth_mm", "re_max_depth_pct", "time_s", "k1", "k2",
+               "k3", "k4"] + (["max_depth_predict_mm"] if predict_km is not None else [])
+    for column in columns:
+        table.add_column(column, justify="right")
+    for r in res.get("table", []):
+        table.add_row(*[str(r[c]) if isinstance(r.get(c), str) else
+                        ("—" if r.get(c) is None else f"{r[c]:.4g}") for c in columns])
+    console.print(table)
+    if out is not None:
+        out.write_text(json.dumps(result.model_dump(mode="json")), encoding="utf-8")
+        console.print(f"wrote {out}")
+
+
 def _loop_class(text: str) -> dict[str, Any]:
     parts = text.split(":")
     if not 4 <= len(parts) <= 5:

@@ -121,6 +121,11 @@ def run_simulation(factory: SessionFactory, sim_id: int,
         spec = session.scalar(select(db.Simulation.spec).where(db.Simulation.id == sim_id))
     if spec is None:
         return
+    if spec.get("kind") == "coefficient_fit":  # seed 000 calibration jobs share the table
+        from wearcast.service.coefficient_fit_store import run_coefficient_fit
+
+        run_coefficient_fit(factory, sim_id, spec, on_progress)
+        return
     _set(factory, sim_id, status="running", started_at=_now(), progress=0.0,
          message="solving contacts")
 
@@ -158,7 +163,7 @@ def _finite(value: Any) -> Any:
 
 def get_simulation(session: Session, sim_id: int, with_result: bool = True) -> SimulationOut:
     row = session.get(db.Simulation, sim_id)
-    if row is None:
+    if row is None or (row.spec or {}).get("kind") == "coefficient_fit":
         raise NotFound("simulation_id", f"no simulation with id {sim_id}")
     result = row.result if with_result and row.status == "done" else None
     return SimulationOut(id=row.id, name=row.name, status=row.status,  # type: ignore[arg-type]
@@ -168,8 +173,9 @@ def get_simulation(session: Session, sim_id: int, with_result: bool = True) -> S
 
 
 def list_simulations(session: Session, limit: int = 100) -> list[SimulationOut]:
-    ids = session.scalars(select(db.Simulation.id).order_by(db.Simulation.id.desc())
-                          .limit(limit))
+    rows = session.execute(select(db.Simulation.id, db.Simulation.spec)
+                           .order_by(db.Simulation.id.desc())).all()
+    ids = [i for i, spec in rows if (spec or {}).get("kind") != "coefficient_fit"][:limit]
     return [get_simulation(session, i, with_result=False) for i in ids]
 
 

@@ -367,16 +367,24 @@ def make_twin(vehicle: BogieVehicle | str, classes: Any, true_coefficients: Sequ
                     wear_predict_mm=pred, noise_mm=noise_mm, simulation=sim)
 
 
-def comparison_table(problem: CalibrationProblem, methods: Sequence[str] = METHODS, *,
-                     predict_mileage_km: float | None = None,
-                     predict_wear_mm: ArrayLike | None = None, seed: int = 0,
-                     max_runs: int = 5, rtol: float = 1e-4) -> pd.DataFrame:
-    """Seed 000 Table 2 for our methods: RMSE [mm], maximum depth [mm] and its relative error
-    [%], time [s], loop runs, k1..k4, and (optionally) the same at a prediction mileage.
+def compare_methods(problem: CalibrationProblem, methods: Sequence[str] = METHODS, *,
+                    predict_mileage_km: float | None = None,
+                    predict_wear_mm: ArrayLike | None = None, seed: int = 0,
+                    max_runs: int = 5, rtol: float = 1e-4,
+                    progress: Callable[[int, int, str], None] | None = None
+                    ) -> tuple[pd.DataFrame, dict[str, FitResult]]:
+    """Seed 000 Table 2 for our methods and the fits behind it.
 
-    A ``traditional_mean_k`` row evaluates the start coefficients (seed 000 §VI).
+    Returns (table, fits): the table has RMSE [mm], maximum depth [mm] and its relative error
+    [%], time [s], loop runs, objective evaluations, k1..k4, and (optionally) the same at a
+    prediction mileage; a ``traditional_mean_k`` row evaluates the start coefficients (seed 000
+    §VI). ``progress(done, total, method)`` is called after each method.
     """
+    for m in methods:
+        if m not in _SOLVERS:
+            raise ValueError(f"methods: unknown method {m!r}; known: {', '.join(METHODS)}")
     rows = []
+    fits: dict[str, FitResult] = {}
     y = np.asarray(problem.y_mm, dtype=float)
     w = np.asarray(problem.wear_mm, dtype=float)
 
@@ -384,24 +392,39 @@ def comparison_table(problem: CalibrationProblem, methods: Sequence[str] = METHO
         r = {"method": name, "rmse_mm": rmse, "max_depth_mm": max_d, "re_max_depth_pct": re,
              "time_s": t, "model_runs": runs, "evaluations": evals}
         r.update({f"k{i + 1}": float(v) for i, v in enumerate(k)})
-        if predict_mileage_km is not None and predict_wear_mm is not None:
+        if predict_mileage_km is not None:
             sim = run_model(problem, k, predict_mileage_km)
             model = np.interp(y, sim.y_mm, sim.wear_mm[-1])
-            pw = np.asarray(predict_wear_mm, dtype=float)
-            r.update({"rmse_predict_mm": rmse_mm(model, pw),
-                      "max_depth_predict_mm": float(model.max()),
-                      "re_max_depth_predict_pct": 100.0 * (model.max() - pw.max()) / pw.max()})
+            r["max_depth_predict_mm"] = float(model.max())
+            if predict_wear_mm is not None:
+                pw = np.asarray(predict_wear_mm, dtype=float)
+                r.update({"rmse_predict_mm": rmse_mm(model, pw),
+                          "re_max_depth_predict_pct": 100.0 * (model.max() - pw.max())
+                          / pw.max()})
         rows.append(r)
 
     base = run_model(problem, problem.start)
     model = np.interp(y, base.y_mm, base.wear_mm[-1])
     row("traditional_mean_k", problem.start, rmse_mm(model, w), float(model.max()),
         100.0 * (model.max() - w.max()) / w.max(), float("nan"), 1, 0)
-    for m in methods:
+    for i, m in enumerate(methods):
         fit = calibrate(problem, m, seed=seed, max_runs=max_runs, rtol=rtol)
+        fits[m] = fit
         row(m, fit.coefficients, fit.rmse_mm, fit.max_depth_mm, fit.re_max_depth_pct,
             fit.time_s, fit.model_runs, fit.evaluations)
-    return pd.DataFrame(rows)
+        if progress is not None:
+            progress(i + 1, len(methods), m)
+    return pd.DataFrame(rows), fits
+
+
+def comparison_table(problem: CalibrationProblem, methods: Sequence[str] = METHODS, *,
+                     predict_mileage_km: float | None = None,
+                     predict_wear_mm: ArrayLike | None = None, seed: int = 0,
+                     max_runs: int = 5, rtol: float = 1e-4) -> pd.DataFrame:
+    """Seed 000 Table 2 for our methods (the table of :func:`compare_methods`)."""
+    return compare_methods(problem, methods, predict_mileage_km=predict_mileage_km,
+                           predict_wear_mm=predict_wear_mm, seed=seed, max_runs=max_runs,
+                           rtol=rtol)[0]
 
 
 def with_measurement(problem: CalibrationProblem, y_mm: ArrayLike, wear_mm: ArrayLike,

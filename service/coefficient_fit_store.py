@@ -1,0 +1,312 @@
+"""Wear-coefficient calibration (seed 000) as background jobs: validate, queue, run, read back.
+
+A coefficient fit takes the measured wear of one wheel at one mileage (a wear curve given as
+points, or a stored measurement whose profile is cleaned, aligned and reduced to its wear curve
+against S1002), the vehicle and route of that wheel, and fits the Archard/KTH zone
+coefficients with each requested method of :mod:`wearcast.statistics.coefficient_fit` (exact
+bounded least squares, GA, PSO, TS, SA, DE). The answer is seed 000's Table 2 for those
+methods (RMSE, maximum depth and its relative error, time, loop runs), the coefficients, which
+zones the data identifies, and the fitted wear curve of the best method.
+
+Storage reuses the ``simulations`` table (no migration): the job's spec carries
+``kind = "coefficient_fit"``; :mod:`wearcast.service.simulation_store` hands such rows to
+:func:`run_coefficient_fit` (so restart recovery and the worker thread are shared) and keeps
+them out of ``/v1/simulations``.
+"""
+
+from __future__ import annotations
+
+import logging
+import traceback
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, Field, model_validator
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from wearcast.service import models_db as db
+from wearcast.service.db import SessionFactory
+from wearcast.service.errors import NotFound, Unprocessable, from_value_error
+from wearcast.service.schemas import (
+    Axle,
+    BogieType,
+    Side,
+    SimulationClassIn,
+    SmoothingIn,
+    Strict,
+)
+
+log = logging.getLogger(__name__)
+
+KIND = "coefficient_fit"
+MethodName = Literal["exact", "GA", "PSO", "TS", "SA", "DE"]
+#: Default search box per zone (seed 000 §V for zones 1-3; zone 4 around the map mean 350e-4).
+DEFAULT_BOUNDS = {1: (1e-4, 10e-4), 2: (30e-4, 40e-4), 3: (1e-4, 10e-4), 4: (300e-4, 400e-4)}
+
+
+class MeasuredWearIn(Strict):
+    """A measured vertical wear curve w(y) [mm] on the wheel frame (DESIGN.md)."""
+
+    y_mm: list[float] = Field(min_length=5, max_length=5000)
+    wear_mm: list[float] = Field(min_length=5, max_length=5000)
+
+    @model_validator(mode="after")
+    def _same_length(self) -> MeasuredWearIn:
+        if len(self.y_mm) != len(self.wear_mm):
+            raise ValueError("y_mm and wear_mm must have the same length")
+        if any(b <= a for a, b in zip(self.y_mm, self.y_mm[1:], strict=False)):
+            raise ValueError("y_mm must be strictly increasing")
+        if max(self.wear_mm) <= 0:
+            raise ValueError("wear_mm holds no wear (its maximum must be > 0)")
+        return self
+
+
+class PredictIn(Strict):
+    """Predict with the fitted coefficients at another mileage (and score it if measured)."""
+
+    mileage_km: float = Field(gt=0, le=1e7)
+    wear: MeasuredWearIn | None = None
+
+
+class CoefficientFitIn(Strict):
+    """``POST /v1/coefficient-fits``: fit the KTH zone coefficients to one measured wear."""
+
+    name: str | None = Field(default=None, max_length=200)
+    vehicle: str = Field(min_length=1, max_length=50, description="vehicle preset")
+    bogie_type: BogieType = "trailer"
+    route_id: int | str | None = None
+    classes: list[SimulationClassIn] | None = Field(default=None, min_length=1, max_length=200)
+    wear: MeasuredWearIn | None = None
+    measurement_id: int | None = None
+    mileage_km: float | None = Field(default=None, gt=0, le=1e7, description=(
+        "mileage of the measured wear [km]; default the measurement's"))
+    methods: list[MethodName] = Field(default_factory=lambda: ["exact"], min_length=1,
+                                      max_length=6)
+    zones: list[Literal[1, 2, 3, 4]] = Field(default_factory=lambda: [1, 2, 3], min_length=1,
+                                             max_length=4, description="fitted KTH zones")
+    bounds: list[tuple[float, float]] | None = Field(default=None, description=(
+        "(lower, upper) per fitted zone; default seed 000's ranges"))
+    start: tuple[float, float, float, float] | None = Field(default=None, description=(
+        "k1..k4 start and value of the zones not fitted; default seed 000's map means"))
+    step_km: float = Field(default=5000.0, gt=0, le=1e6)
+    application: Literal["global", "local"] = "global"
+    axle: Axle = 1
+    side: Side = "right"
+    smoothing: SmoothingIn | None = None
+    contact_update_depth_mm: float = Field(default=0.0, ge=0, le=5)
+    max_runs: int = Field(default=5, ge=2, le=20)
+    rtol: float = Field(default=1e-3, gt=0, lt=1)
+    seed: int = 0
+    predict: PredictIn | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> CoefficientFitIn:
+        if (self.route_id is None) == (self.classes is None):
+            raise ValueError("give either route_id or classes (exactly one)")
+        if (self.wear is None) == (self.measurement_id is None):
+            raise ValueError("give either wear or measurement_id (exactly one)")
+        if self.wear is not None and self.mileage_km is None:
+            raise ValueError("mileage_km is required with wear")
+        if len(set(self.methods)) != len(self.methods):
+            raise ValueError("methods must not repeat")
+        if len(set(self.zones)) != len(self.zones):
+            raise ValueError("zones must not repeat")
+        if self.bounds is not None and len(self.bounds) != len(self.zones):
+            raise ValueError("bounds must give one (lower, upper) per zone")
+        return self
+
+
+class CoefficientFitOut(BaseModel):
+    id: int
+    name: str | None
+    status: Literal["queued", "running", "done", "failed"]
+    progress: float
+    message: str | None = None
+    error: str | None = None
+    spec: dict[str, Any]
+    result: dict[str, Any] | None = None
+
+
+def _measured_wear(session: Session, body: CoefficientFitIn) -> tuple[list, list, float]:
+    if body.wear is not None:
+        assert body.mileage_km is not None
+        return body.wear.y_mm, body.wear.wear_mm, float(body.mileage_km)
+    from wearcast.service import measurement_store
+    from wearcast.statistics.processing import process_profile
+
+    assert body.measurement_id is not None
+    m = measurement_store.get(session, body.measurement_id)
+    if not m.y_mm:
+        raise Unprocessable("measurement_id", f"measurement {m.id} has no profile points")
+    try:
+        processed = process_profile(m.y_mm, m.z_mm)
+    except ValueError as exc:
+        raise Unprocessable("measurement_id", f"measurement {m.id}: {exc}") from exc
+    ok = np.isfinite(processed.wear_mm)
+    y = processed.grid_y_mm[ok]
+    w = processed.wear_mm[ok]
+    if y.size < 5 or not np.max(w) > 0:
+        raise Unprocessable("measurement_id", f"measurement {m.id} shows no wear to fit")
+    mileage = float(body.mileage_km if body.mileage_km is not None else m.mileage_km)
+    if not mileage > 0:
+        raise Unprocessable("mileage_km", "the measurement's mileage must be > 0")
+    return y.tolist(), w.tolist(), mileage
+
+
+def problem_from_spec(spec: dict[str, Any]):
+    """The :class:`~wearcast.statistics.coefficient_fit.CalibrationProblem` of a stored spec
+    (ValueError phrased ``field: reason``)."""
+    from wearcast.physics.vehicles import preset_names, vehicle_preset
+    from wearcast.physics.wear_distribution import Smoothing
+    from wearcast.physics.wear_loop import as_loop_classes
+    from wearcast.statistics.coefficient_fit import SEED_000_MEAN_K, CalibrationProblem
+
+    if spec["vehicle"] not in preset_names():
+        raise ValueError(f"vehicle: unknown vehicle preset {spec['vehicle']!r}; known presets: "
+                         f"{', '.join(preset_names())}")
+    try:
+        classes = as_loop_classes(spec["resolved_classes"])
+    except ValueError as exc:
+        raise ValueError(f"classes: {exc}") from exc
+    zones = [int(z) for z in spec["zones"]]
+    bounds = spec.get("bounds") or [DEFAULT_BOUNDS[z] for z in zones]
+    smoothing = Smoothing()
+    if spec.get("smoothing"):
+        try:
+            smoothing = Smoothing(**{k: v for k, v in spec["smoothing"].items()
+                                     if v is not None})
+        except ValueError as exc:
+            raise ValueError(f"smoothing: {exc}") from exc
+    measured = spec["resolved_wear"]
+    try:
+        return CalibrationProblem(
+            vehicle=vehicle_preset(spec["vehicle"], spec.get("bogie_type", "trailer")),
+            classes=classes, y_mm=np.asarray(measured["y_mm"], dtype=float),
+            wear_mm=np.asarray(measured["wear_mm"], dtype=float),
+            mileage_km=float(measured["mileage_km"]), step_km=float(spec["step_km"]),
+            free=tuple(z - 1 for z in zones),
+            bounds=tuple((float(lo), float(hi)) for lo, hi in bounds),
+            start=tuple(spec.get("start") or SEED_000_MEAN_K),  # type: ignore[arg-type]
+            application=spec["application"], smoothing=smoothing, axle=int(spec["axle"]),
+            side=spec["side"], contact_update_depth_mm=float(spec["contact_update_depth_mm"]))
+    except ValueError as exc:
+        text = str(exc)
+        field = "bounds" if "bound" in text else "body"
+        raise ValueError(f"{field}: {text}") from exc
+
+
+def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
+    """Validate a request completely and store it as a queued job."""
+    from wearcast.service.simulation_store import resolve_classes
+
+    if body.step_km * 200 < (body.mileage_km or 0.0) or (
+            body.predict is not None and body.step_km * 200 < body.predict.mileage_km):
+        raise Unprocessable("step_km", "more than 200 loop steps to reach the mileage; "
+                            "use a larger step_km")
+    y, w, mileage = _measured_wear(session, body)
+    spec = body.model_dump(mode="json")
+    spec["kind"] = KIND
+    spec["resolved_classes"] = resolve_classes(session, body)  # type: ignore[arg-type]
+    spec["resolved_wear"] = {"y_mm": y, "wear_mm": w, "mileage_km": mileage}
+    if body.step_km * 200 < mileage:
+        raise Unprocessable("step_km", "more than 200 loop steps to reach the mileage; "
+                            "use a larger step_km")
+    try:
+        problem_from_spec(spec)
+    except ValueError as exc:
+        raise from_value_error(exc) from exc
+    row = db.Simulation(name=body.name, spec=spec, status="queued", progress=0.0,
+                        message="queued")
+    session.add(row)
+    session.commit()
+    return row
+
+
+def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, Any],
+                        on_progress: Any = None) -> None:
+    """Run a queued fit to the end; status, progress (per method) and result in its row."""
+    from wearcast.service.simulation_store import _finite, _now, _set
+    from wearcast.statistics.coefficient_fit import compare_methods
+
+    methods = list(spec["methods"])
+    _set(factory, job_id, status="running", started_at=_now(), progress=0.0,
+         message=f"fitting with {methods[0]}")
+
+    def progress(done: int, total: int, method: str) -> None:
+        nxt = f", next {methods[done]}" if done < total else ""
+        _set(factory, job_id, progress=min(1.0, done / total),
+             message=f"{done}/{total} methods done ({method}{nxt})")
+        if on_progress is not None:
+            on_progress(done, total, method)
+
+    try:
+        problem = problem_from_spec(spec)
+        predict = spec.get("predict") or {}
+        pw = (predict.get("wear") or None)
+        pw_on_y = None
+        if pw is not None:
+            pw_on_y = np.interp(problem.y_mm, pw["y_mm"], pw["wear_mm"])
+        table, fits = compare_methods(
+            problem, methods, predict_mileage_km=predict.get("mileage_km"),
+            predict_wear_mm=pw_on_y, seed=int(spec.get("seed", 0)),
+            max_runs=int(spec.get("max_runs", 5)), rtol=float(spec.get("rtol", 1e-3)))
+        payload = _finite(result_payload(problem, table, fits))
+    except Exception as exc:  # the job reports any failure; it never kills the worker
+        log.warning("coefficient fit %s failed: %s", job_id, traceback.format_exc())
+        _set(factory, job_id, status="failed", finished_at=_now(),
+             error=f"{type(exc).__name__}: {exc}", message="failed")
+        return
+    _set(factory, job_id, status="done", progress=1.0, finished_at=_now(), result=payload,
+         message="done")
+
+
+def result_payload(problem: Any, table: Any, fits: dict[str, Any]) -> dict[str, Any]:
+    """JSON result: comparison table rows, best method, per-method coefficients, identifiable
+    zones and the best fit's wear curve on the measured y."""
+    best = min(fits, key=lambda m: fits[m].rmse_mm)
+    fit = fits[best]
+    zones = [i + 1 for i in problem.free]
+    y = np.asarray(problem.y_mm, dtype=float)
+    return {
+        "table": table.to_dict(orient="records"),
+        "best_method": best,
+        "coefficients": {m: f.coefficients.tolist() for m, f in fits.items()},
+        "fitted_zones": zones,
+        "identifiable_zones": [z for z, ok in zip(zones, fit.identifiable, strict=True) if ok],
+        "mileage_km": problem.mileage_km,
+        "y_mm": y.tolist(),
+        "measured_wear_mm": np.asarray(problem.wear_mm, dtype=float).tolist(),
+        "fitted_wear_mm": np.interp(y, fit.simulation.y_mm,
+                                    fit.simulation.wear_mm[-1]).tolist(),
+    }
+
+
+def _row(session: Session, job_id: int) -> db.Simulation:
+    row = session.get(db.Simulation, job_id)
+    if row is None or (row.spec or {}).get("kind") != KIND:
+        raise NotFound("coefficient_fit_id", f"no coefficient fit with id {job_id}")
+    return row
+
+
+def get_fit(session: Session, job_id: int, with_result: bool = True) -> CoefficientFitOut:
+    row = _row(session, job_id)
+    result = row.result if with_result and row.status == "done" else None
+    return CoefficientFitOut(id=row.id, name=row.name, status=row.status,  # type: ignore
+                             progress=float(row.progress), message=row.message,
+                             error=row.error, spec=row.spec, result=result)
+
+
+def list_fits(session: Session, limit: int = 100) -> list[CoefficientFitOut]:
+    rows = session.execute(select(db.Simulation.id, db.Simulation.spec)
+                           .order_by(db.Simulation.id.desc())).all()
+    ids = [i for i, spec in rows if (spec or {}).get("kind") == KIND][:limit]
+    return [get_fit(session, i, with_result=False) for i in ids]
+
+
+def submit(session: Session, runner: Any, body: CoefficientFitIn) -> CoefficientFitOut:
+    """Validate, store as queued and hand to the app's job runner."""
+    row = create_fit(session, body)
+    runner.submit(row.id)
+    return CoefficientFitOut(id=row.id, name=row.name, status="queued", progress=0.0,
+                             message="queued", spec=row.spec)

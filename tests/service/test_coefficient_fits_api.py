@@ -1,0 +1,120 @@
+"""``POST /v1/coefficient-fits``: seed 000's wear-coefficient calibration as a background job."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+from typer.testing import CliRunner
+
+from wearcast.physics.wear_loop import LoopClass
+from wearcast.service.app import create_app
+from wearcast.service.settings import Settings
+from wearcast.statistics.coefficient_fit import make_twin
+
+CLASSES = [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
+           {"radius_m": 1500, "speed_kmh": 70, "direction": "left", "share": 0.4}]
+TRUE_K1 = 3e-4
+
+
+@pytest.fixture(scope="module")
+def twin():
+    # Tangent + 1500 m: only KTH zone 1 occurs; 200 km in 100 km steps (twin of seed 000's
+    # fit-at-one-mileage, predict-at-another; short so that the test is fast).
+    classes = [LoopClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
+                         c["share"]) for c in CLASSES]
+    return make_twin("metro_b", classes, (TRUE_K1, 35e-4, 5e-4, 350e-4), 200.0, 400.0, 100.0)
+
+
+def _settings(tmp_path: Path) -> Settings:
+    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
+
+
+def _body(twin, **change):
+    body = {"name": "twin", "vehicle": "metro_b", "classes": CLASSES,
+            "wear": {"y_mm": twin.y_mm[::5].tolist(), "wear_mm": twin.wear_fit_mm[::5].tolist()},
+            "mileage_km": 200.0, "step_km": 100.0, "methods": ["exact", "PSO"], "zones": [1],
+            "predict": {"mileage_km": 400.0,
+                        "wear": {"y_mm": twin.y_mm.tolist(),
+                                 "wear_mm": twin.wear_predict_mm.tolist()}}}
+    body.update(change)
+    return body
+
+
+def _wait(client: TestClient, job_id: int, timeout_s: float = 60.0) -> dict:
+    deadline = time.monotonic() + timeout_s
+    seen = []
+    while time.monotonic() < deadline:
+        r = client.get(f"/v1/coefficient-fits/{job_id}")
+        assert r.status_code == 200, r.text
+        body = r.json()
+        seen.append(body["progress"])
+        if body["status"] in ("done", "failed"):
+            body["_seen"] = seen
+            return body
+        time.sleep(0.05)
+    raise AssertionError(f"fit {job_id} did not finish in {timeout_s} s")
+
+
+def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin):
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/coefficient-fits", json=_body(twin))
+    assert r.status_code == 202, r.text
+    assert r.json()["status"] == "queued"
+    body = _wait(client, r.json()["id"])
+    assert body["status"] == "done", body
+    assert body["_seen"] == sorted(body["_seen"])  # progress never goes back
+    res = body["result"]
+    # noise-free twin: the exact method returns the true k1 (zone 1 is the only zone met)
+    assert res["coefficients"]["exact"][0] == pytest.approx(TRUE_K1, rel=1e-3)
+    assert res["coefficients"]["PSO"][0] == pytest.approx(TRUE_K1, rel=2e-2)
+    assert res["identifiable_zones"] == [1] and res["best_method"] in ("exact", "PSO")
+    rows = {row["method"]: row for row in res["table"]}
+    assert set(rows) == {"traditional_mean_k", "exact", "PSO"}
+    assert rows["exact"]["rmse_mm"] < 1e-3 * max(res["measured_wear_mm"])
+    assert rows["exact"]["rmse_mm"] <= rows["traditional_mean_k"]["rmse_mm"]
+    # and it predicts the wear at 400 km it never saw
+    assert rows["exact"]["rmse_predict_mm"] < 1e-3 * twin.wear_predict_mm.max()
+    # fit jobs are not simulations and vice versa
+    assert client.get(f"/v1/simulations/{body['id']}").status_code == 404
+    assert client.get("/v1/simulations").json() == []
+    assert [f["id"] for f in client.get("/v1/coefficient-fits").json()] == [body["id"]]
+
+
+@pytest.mark.parametrize(("change", "status", "field"), [
+    ({"vehicle": "tgv"}, 422, "vehicle"),
+    ({"methods": ["magic"]}, 422, "methods[0]"),
+    ({"zones": [5]}, 422, "zones[0]"),
+    ({"bounds": [[2e-4, 1e-4]]}, 422, "bounds"),
+    ({"measurement_id": 7}, 422, "body"),  # both wear and measurement_id
+    ({"wear": None, "measurement_id": 7}, 404, "measurement_id"),
+    ({"step_km": 0.5}, 422, "step_km"),
+    ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
+])
+def test_bad_fit_requests_are_refused_before_queuing(tmp_path, twin, change, status, field):
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/coefficient-fits", json=_body(twin, **change))
+    assert r.status_code == status, r.text
+    assert r.json()["detail"][0]["field"] == field
+    assert client.get("/v1/coefficient-fits").json() == []
+
+
+def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
+    from wearcast.service.cli import app
+
+    monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
+    monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
+    csv = tmp_path / "wear.csv"
+    csv.write_text("y_mm,wear_mm\n" + "\n".join(
+        f"{y},{w}" for y, w in zip(twin.y_mm, twin.wear_fit_mm, strict=True)))
+    result = CliRunner().invoke(app, [
+        "fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
+        "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
+        "--step-km", "100", "--zone", "1", "--out", str(tmp_path / "fit.json")])
+    assert result.exit_code == 0, result.output
+    assert "exact" in result.output and "0.0003" in result.output
+    bad = CliRunner().invoke(app, ["fit-coefficients", "--vehicle", "metro_b", "--class",
+                                   "tangent:0:70:1", "--mileage-km", "200"])
+    assert bad.exit_code == 2
