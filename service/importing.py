@@ -20,7 +20,11 @@ from __future__ import annotations
 import hashlib
 import io
 import math
+import multiprocessing
+import os
+import threading
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from itertools import islice
 from pathlib import Path
@@ -41,6 +45,9 @@ Record: TypeAlias = ProfileRecord | ParameterRecord
 Progress = Callable[[int], None]
 
 DEFAULT_CHUNK = 500
+#: Chunks with at least this many new profiles are processed by a pool of worker processes;
+#: smaller ones (single posts, the example fleet, tests) stay in the calling process.
+PARALLEL_MIN_PROFILES = 256
 
 
 @dataclass(frozen=True)
@@ -136,25 +143,90 @@ class _Registry:
         self.session.execute(insert(db.Wheel), list(new_wheels.values()))
 
 
-def _process(record: ProfileRecord) -> Any:
-    from wearcast.statistics.processing import process_profile
-
+def _check_reference(record: ProfileRecord) -> None:
     meta = record.meta
     if meta.reference_profile.upper() != "S1002":
         raise ImportFileError(meta.source_file, f"reference profile {meta.reference_profile!r} "
                               "is not supported (only S1002)", line=meta.source_line,
                               field="reference_profile")
+
+
+def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray) -> tuple[Any, Any] | tuple[None, str]:
+    """(processed profile, Sd/Sh/qR as measured) or (None, the reason it cannot be used).
+
+    Runs in worker processes too, so it returns the error as text instead of raising.
+    """
+    from wearcast.statistics.processing import process_profile
+    from wearcast.statistics.profile_parameters import flange_parameters
+
     try:
-        return process_profile(record.y_mm, record.z_mm)
+        processed = process_profile(y_mm, z_mm)
     except ValueError as exc:
-        raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} at "
-                              f"{meta.mileage_km:g} km cannot be used: {exc}",
-                              line=meta.source_line, field="z_mm") from exc
+        return None, str(exc)
+    # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument), not of
+    # the profile aligned to the reference: the alignment's lateral shift would move Sd.
+    return processed, flange_parameters(processed.cleaned.y_mm, processed.cleaned.z_mm)
+
+
+def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray]]
+                   ) -> list[tuple[Any, Any] | tuple[None, str]]:
+    return [_process_arrays(y, z) for y, z in profiles]
+
+
+_POOL: ProcessPoolExecutor | None = None
+_POOL_WORKERS = 0
+_POOL_LOCK = threading.Lock()
+
+
+def _pool() -> ProcessPoolExecutor | None:
+    """A process pool of one worker per core (spawned once, on the first large chunk).
+
+    ``spawn`` rather than ``fork``: the service runs threads, and forking a threaded process
+    can inherit held locks. None on a single core or when ``WEARCAST_IMPORT_WORKERS=0``.
+    """
+    global _POOL, _POOL_WORKERS
+    workers = int(os.environ.get("WEARCAST_IMPORT_WORKERS", os.cpu_count() or 1))
+    if workers <= 1:
+        return None
+    with _POOL_LOCK:
+        if _POOL is None:
+            _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+            _POOL_WORKERS = workers
+        return _POOL
+
+
+def _process_records(records: list[ProfileRecord]) -> list[tuple[Any, Any]]:
+    """Process the profiles of a chunk (in parallel when it is large), keeping their order.
+
+    Raises the ImportFileError of the first unusable profile, naming its file and line.
+    """
+    for record in records:
+        _check_reference(record)
+    arrays = [(r.y_mm, r.z_mm) for r in records]
+    pool = _pool() if len(records) >= PARALLEL_MIN_PROFILES else None
+    if pool is None:
+        results = _process_batch(arrays)
+    else:
+        n_parts = _POOL_WORKERS * 4
+        size = -(-len(arrays) // n_parts)
+        parts = [arrays[i:i + size] for i in range(0, len(arrays), size)]
+        results = [r for part in pool.map(_process_batch, parts) for r in part]
+    for record, (processed, detail) in zip(records, results, strict=True):
+        if processed is None:
+            meta = record.meta
+            raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} at "
+                                  f"{meta.mileage_km:g} km cannot be used: {detail}",
+                                  line=meta.source_line, field="z_mm")
+    return results  # type: ignore[return-value]
 
 
 def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
-                    ) -> dict[str, Any]:
-    """The ``measurements`` row of one record (profiles processed here)."""
+                    processed: tuple[Any, Any] | None = None) -> dict[str, Any]:
+    """The ``measurements`` row of one record.
+
+    ``processed`` is the profile's (processed profile, measured Sd/Sh/qR) when already
+    computed (see :func:`_process_records`); otherwise it is computed here.
+    """
     meta = record.meta
     row: dict[str, Any] = {
         "batch_id": batch_id, "wheel_id": meta.wheel_id, "mileage_km": float(meta.mileage_km),
@@ -176,15 +248,11 @@ def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
                    reported_sd_mm=float(record.sd_mm), reported_sh_mm=float(record.sh_mm),
                    reported_qr_mm=float(record.qr_mm))
         return row
-    processed = _process(record)
-    from wearcast.statistics.profile_parameters import flange_parameters
     from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 
+    processed, params = processed or _process_records([record])[0]
     grid = np.asarray(getattr(processed, "grid_y_mm", DEFAULT_GRID_Y_MM))
     reported = record.instrument_parameters or {}
-    # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument), not of
-    # the profile aligned to the reference: the alignment's lateral shift would move Sd.
-    params = flange_parameters(processed.cleaned.y_mm, processed.cleaned.z_mm)
     row.update(
         kind="profile", n_points=int(len(record.y_mm)), y_mm=f32(record.y_mm),
         z_mm=f32(record.z_mm), wear_mm=f32(processed.wear_mm),
@@ -242,7 +310,9 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
             fresh.append(record)
         if fresh:
             registry.ensure_wheels(fresh)
-            rows = [measurement_row(r, batch_id, registry) for r in fresh]
+            profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
+            done = dict(zip(map(id, profiles), _process_records(profiles), strict=True))
+            rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
             counts.points += sum(r["n_points"] for r in rows)
             if batch_id is None:
                 for row in rows:
