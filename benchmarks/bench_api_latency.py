@@ -15,6 +15,10 @@ and the table), and fires the timed requests from ``--clients`` concurrent
 (cold) request, p50/p99 latency and throughput per endpoint. The client runs on the same
 machine and takes its share of the CPU. Every request computes its answer: only immutable
 inputs (the model, the compiled table, the route) are cached by the service.
+
+``--client raw`` (a minimal asyncio HTTP/1.1 client) spends far less CPU than httpx, so on a
+small machine its figures measure the server rather than the client. The header names the
+client, the workers and the machine's load average, which every figure depends on.
 """
 
 from __future__ import annotations
@@ -213,6 +217,14 @@ def own_cpu_seconds() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+def _load() -> str:
+    """The machine's load averages: other jobs on it take CPU from server and client."""
+    try:
+        return "/".join(f"{v:.2f}" for v in os.getloadavg())
+    except OSError:
+        return "unknown"
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="predict/reprofiling latency under load")
     parser.add_argument("--quick", action="store_true", help="200 requests per endpoint")
@@ -241,10 +253,12 @@ def main(argv: list[str] | None = None) -> None:
                   f"worker(s) on a {os.cpu_count()}-CPU machine shared with the client; "
                   f"{n} timed requests per endpoint after {warmup} untimed, "
                   f"{args.clients} concurrent clients")
-            print(f"client: {args.client}; CPU columns: milliseconds of CPU per request "
-                  f"spent by the server processes and by the client")
+            print(f"client: {args.client}; workers: {args.workers}; clients: {args.clients}; "
+                  f"machine load average (1/5/15 min) at the start: {_load()}")
+            print("CPU columns: milliseconds of CPU per request spent by the server processes "
+                  "and by the client; load: 1-min load average after the endpoint's run")
             print(f"{'endpoint':<12} {'cold ms':>8} {'p50 ms':>8} {'p99 ms':>8} {'req/s':>8} "
-                  f"{'errors':>7} {'srv CPU':>8} {'cli CPU':>8}")
+                  f"{'errors':>7} {'srv CPU':>8} {'cli CPU':>8} {'load':>6}")
             for endpoint in ("predict", "reprofiling"):
                 path = f"/v1/models/{model_id}/{endpoint}"
                 first = bodies(endpoint, 1)[0]
@@ -261,7 +275,8 @@ def main(argv: list[str] | None = None) -> None:
                 client_cpu = (own_cpu_seconds() - client_cpu) / n * 1e3
                 p50, p99 = np.percentile(latencies, [50, 99]) * 1e3
                 print(f"{endpoint:<12} {cold:>8.1f} {p50:>8.1f} {p99:>8.1f} {n / wall:>8.1f} "
-                      f"{failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f}", flush=True)
+                      f"{failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f} "
+                      f"{os.getloadavg()[0]:>6.2f}", flush=True)
         finally:
             server.terminate()
             try:

@@ -11,15 +11,27 @@ A stored model's state carries its kind: a plain hybrid model (``HybridModel.to_
 it: an extended model is turned into the plain hybrid model of the wheel asked about
 (``ExtendedModel.for_wheel``, from the route's attributes and the request's ``covariates``),
 and ``nonlinear_progression`` predicts with its mileage exponent.
+
+Hot path (``POST /v1/models/{id}/predict`` and ``/reprofiling``): models and routes are
+never updated or deleted once created (no endpoint or store function does either), so after a
+first request has read them, :func:`cached_inputs` finds the deserialised model, its compiled
+table and the stored route in process under (database URL, model id) and (database URL,
+route id or name) without touching the database. :func:`predict_json` and
+:func:`reprofiling_json` then compute the answer (every request computes its own: nothing
+caches a response) and serialise it with orjson straight from the numpy arrays.
 """
 
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
+from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
+import orjson
 from sqlalchemy import bindparam, func, insert, select
 from sqlalchemy.orm import Session, defer
 
@@ -29,7 +41,6 @@ from wearcast.service.errors import ApiError, NotFound, Unprocessable, from_valu
 from wearcast.service.schemas import (
     ModelIn,
     ModelOut,
-    OptionalQuantiles,
     PredictIn,
     PredictionAt,
     PredictionOut,
@@ -38,6 +49,7 @@ from wearcast.service.schemas import (
     ReprofilingOut,
 )
 from wearcast.statistics import hybrid
+from wearcast.statistics import reprofiling as stat_reprofiling
 from wearcast.statistics.discrepancy import ExtendedModel
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
@@ -300,29 +312,198 @@ def run_prediction(loaded: LoadedModel | ModelInputs, route: Route, *, bogie_typ
         raise _statistics_error(exc) from exc
 
 
+# --- the hot path: inputs served from process memory -----------------------------------------
+
+V = TypeVar("V")
+
+#: Models and stored routes the hot path keeps in process, per database.
+HOT_CACHE_SIZE = 256
+
+
+class _HotCache(Generic[V]):
+    """A bounded thread-safe LRU map with a plain ``get`` (None on a miss) and ``put``.
+
+    Only for values that never change under their key (see the module docstring).
+    """
+
+    def __init__(self, maxsize: int) -> None:
+        self.maxsize = maxsize
+        self._data: OrderedDict[Hashable, V] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: Hashable) -> V | None:
+        with self._lock:
+            value = self._data.get(key)
+            if value is None:
+                self.misses += 1
+                return None
+            self._data.move_to_end(key)
+            self.hits += 1
+            return value
+
+    def put(self, key: Hashable, value: V) -> None:
+        with self._lock:
+            self._data[key] = value
+            self._data.move_to_end(key)
+            while len(self._data) > self.maxsize:
+                self._data.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._data.clear()
+            self.hits = self.misses = 0
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+
+@dataclass(frozen=True)
+class RouteInputs:
+    """A route as the hot path needs it: the domain route, its name (``inline`` for a route
+    given in the request) and its stored attributes (extended models read covariates there)."""
+
+    route: Route
+    name: str
+    attributes: Mapping[str, Any]
+
+
+_hot_models: _HotCache[ModelInputs] = _HotCache(HOT_CACHE_SIZE)
+_hot_routes: _HotCache[RouteInputs] = _HotCache(HOT_CACHE_SIZE)
+
+
+def _route_ref(route_id: int | str) -> tuple[str, int | str]:
+    return ("id", route_id) if isinstance(route_id, int) else ("name", route_id)
+
+
+def cached_inputs(database_url: str, model_id: int, route_id: int | str | None,
+                  route: Any = None) -> tuple[ModelInputs, RouteInputs] | None:
+    """The model's inputs and the route from process memory, or None when either has not
+    been read from this database yet. No database access.
+
+    ``route`` is an inline :class:`~wearcast.service.schemas.RouteSpec` (when ``route_id`` is
+    None): it is built from the request (422 naming the field when invalid).
+    """
+    inputs = _hot_models.get((database_url, model_id))
+    if inputs is None:
+        return None
+    if route_id is None:
+        return inputs, _inline_route(route)
+    stored = _hot_routes.get((database_url, *_route_ref(route_id)))
+    return None if stored is None else (inputs, stored)
+
+
+def _inline_route(route: Any) -> RouteInputs:
+    if route is None:
+        raise Unprocessable("route_id", "give either route_id or route")
+    return RouteInputs(route_store.build_route(route, "inline", "route."), "inline", {})
+
+
+def load_inputs(session: Session, model_id: int, route_id: int | str | None,
+                route: Any = None) -> tuple[ModelInputs, RouteInputs]:
+    """:func:`cached_inputs` read from the database (404/422 naming the field), and kept in
+    process for the next requests."""
+    url = str(session.get_bind().url)
+    inputs = model_inputs(session, model_id)
+    _hot_models.put((url, model_id), inputs)
+    if route_id is None:
+        return inputs, _inline_route(route)
+    row = route_store.find_route(session, route_id)
+    if row is None:
+        raise NotFound("route_id", f"no route with id or name {route_id!r}")
+    stored = RouteInputs(route_store.to_domain(row), row.name, dict(row.attributes or {}))
+    # a string of digits that named a route (no route had that id) may name another route
+    # once a route with that id exists: only lookups that cannot change are kept
+    by_id = isinstance(route_id, int) or (route_id.isdigit() and row.id == int(route_id))
+    if by_id or not route_id.isdigit():
+        _hot_routes.put((url, *_route_ref(route_id)), stored)
+    return inputs, stored
+
+
+def _covariates(inputs: ModelInputs, route: RouteInputs,
+                given: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The covariates an extended model reads: the route's attributes overlaid with the
+    request's (None for a plain model, which reads none)."""
+    if not isinstance(inputs.model, ExtendedModel):
+        return None
+    return {**route.attributes, **(given or {})}
+
+
+def compute_prediction(inputs: ModelInputs, route: RouteInputs, body: PredictIn
+                       ) -> hybrid.Prediction:
+    return run_prediction(inputs, route.route, bogie_type=body.bogie_type, axle=body.axle,
+                          side=body.side, mileage_km=body.mileage_km,
+                          covariates=_covariates(inputs, route, body.covariates))
+
+
 def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
     """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
-    inputs = model_inputs(session, model_id)
-    route, route_name = route_store.resolve_cached(session, body.route_id, body.route)
-    covariates = None
-    if isinstance(inputs.model, ExtendedModel):
-        covariates = route_covariates(session, route_name, body.covariates)
-    result = run_prediction(inputs, route, bogie_type=body.bogie_type, axle=body.axle,
-                            side=body.side, mileage_km=body.mileage_km, covariates=covariates)
-    return prediction_out(model_id, route_name, body, result)
+    inputs, route = load_inputs(session, model_id, body.route_id, body.route)
+    return prediction_out(model_id, route.name, body, compute_prediction(inputs, route, body))
 
 
-_reference_cache: wear_table_store.LruCache[list[float]] = wear_table_store.LruCache(8)
+def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: PredictIn
+                 ) -> bytes:
+    """:func:`predict`'s answer as JSON bytes (the :class:`PredictionOut` schema)."""
+    result = compute_prediction(inputs, route, body)
+    return orjson.dumps(_prediction_payload(model_id, route.name, body, result),
+                        option=orjson.OPT_SERIALIZE_NUMPY)
 
 
-def _reference_heights(grid_y_mm: np.ndarray) -> list[float]:
-    """S1002 heights [mm] on a lateral grid, cached by the grid's bytes (a new list each
-    call, so callers cannot change the cached one)."""
+_reference_cache: wear_table_store.LruCache[np.ndarray] = wear_table_store.LruCache(8)
+
+
+def _reference_array(grid_y_mm: np.ndarray) -> np.ndarray:
+    """S1002 heights [mm] on a lateral grid (read-only), cached by the grid's bytes."""
     from wearcast.physics.profiles.s1002 import s1002_height_mm
 
     grid = np.ascontiguousarray(grid_y_mm, dtype=float)
-    return list(_reference_cache.get_or_create(
-        grid.tobytes(), lambda: s1002_height_mm(grid).tolist()))
+
+    def make() -> np.ndarray:
+        z = np.ascontiguousarray(s1002_height_mm(grid), dtype=float)
+        z.setflags(write=False)
+        return z
+
+    return _reference_cache.get_or_create(grid.tobytes(), make)
+
+
+def _reference_heights(grid_y_mm: np.ndarray) -> list[float]:
+    """S1002 heights [mm] on a lateral grid as a new list (callers may change it)."""
+    return _reference_array(grid_y_mm).tolist()
+
+
+def _quantile_dict(values: np.ndarray, quantiles: tuple[float, ...]) -> dict[str, float]:
+    pick = dict(zip(quantiles, values.tolist(), strict=True))
+    return {"p10": pick[0.1], "p50": pick[0.5], "p90": pick[0.9]}
+
+
+def _prediction_payload(model_id: int, route_name: str, body: PredictIn,
+                        result: hybrid.Prediction) -> dict[str, Any]:
+    """The :class:`PredictionOut` fields with numpy arrays where orjson can write them
+    directly (non-finite numbers become null, as :func:`prediction_out` does)."""
+    q = result.quantiles
+    wear = np.ascontiguousarray(result.wear_mm, dtype=float)
+    z = np.ascontiguousarray(result.z_mm, dtype=float)
+    flange, tread = result.flange_area_mm2, result.tread_area_mm2
+    sd, sh, qr = (np.asarray(v, dtype=float).tolist()
+                  for v in (result.sd_mm, result.sh_mm, result.qr_mm))
+    points = [{
+        "mileage_km": s, "flange_area_mm2": _quantile_dict(flange[:, i], q),
+        "tread_area_mm2": _quantile_dict(tread[:, i], q),
+        "sd_mm": sd[i], "sh_mm": sh[i], "qr_mm": qr[i],
+        "extrapolated": bool(result.extrapolated[i]), "wear_mm": wear[i], "z_mm": z[i],
+    } for i, s in enumerate(np.asarray(result.mileage_km, dtype=float).tolist())]
+    return {
+        "model_id": model_id, "route": route_name, "bogie_type": body.bogie_type,
+        "axle": body.axle, "side": body.side,
+        "weighted_measure": {k: float(v) for k, v in result.weighted_measure.items()},
+        "rates_mm2_per_km": {"flange": _quantile_dict(result.flange_rate_mm2_per_km, q),
+                             "tread": _quantile_dict(result.tread_rate_mm2_per_km, q)},
+        "start_areas_mm2": {k: float(v) for k, v in result.start_areas_mm2.items()},
+        "y_mm": np.ascontiguousarray(result.grid_y_mm, dtype=float),
+        "reference_z_mm": _reference_array(result.grid_y_mm), "points": points,
+    }
 
 
 def prediction_out(model_id: int, route_name: str, body: PredictIn,
@@ -364,6 +545,77 @@ def _latest_profile(session: Session, wheel_id: str) -> tuple[db.Wheel, db.Measu
     return wheel, latest
 
 
+@dataclass(frozen=True)
+class WheelStart:
+    """Where a wheel's remaining mileage starts: its position and latest measured state."""
+
+    bogie_type: str
+    axle: int
+    side: str
+    mileage_km: float = 0.0
+    measurement_id: int | None = None
+    areas_mm2: dict[str, float] | None = None
+    covariates: dict[str, Any] | None = None
+
+
+def wheel_start(session: Session | None, body: ReprofilingIn) -> WheelStart:
+    """The wheel's position from the request, or with ``wheel_id`` from storage (with its
+    latest measured profile as the start state); needs a session only with ``wheel_id``."""
+    if body.wheel_id is None:
+        return WheelStart(str(body.bogie_type), int(body.axle or 1), str(body.side))
+    assert session is not None
+    wheel, latest = _latest_profile(session, body.wheel_id)
+    for name, given, stored in (("bogie_type", body.bogie_type, wheel.bogie_type),
+                                ("axle", body.axle, wheel.axle),
+                                ("side", body.side, wheel.side)):
+        if given is not None and given != stored:
+            raise Unprocessable(name, f"wheel {wheel.wheel_id!r} has {name} {stored!r}")
+    covariates = {key: value for key in ("load_t", "running_mode", "instrument_id")
+                  if (value := getattr(latest, key, None)) is not None}
+    return WheelStart(
+        wheel.bogie_type, int(wheel.axle), wheel.side, float(latest.mileage_km), latest.id,
+        {"flange": max(0.0, float(latest.flange_area_mm2 or 0.0)),
+         "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}, covariates)
+
+
+def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
+                        body: ReprofilingIn, start: WheelStart) -> dict[str, Any]:
+    """The :class:`ReprofilingOut` fields (plain floats; None where not finite)."""
+    limits = body.limits.model_dump(exclude_none=True) if body.limits else None
+    position = {"bogie_type": start.bogie_type, "axle": start.axle, "side": start.side}
+    try:
+        measures = weighted_measures(inputs, route.route, **position)
+        model = inputs.model
+        if isinstance(model, ExtendedModel):
+            covariates = _covariates(inputs, route, body.covariates) or {}
+            for key, value in (start.covariates or {}).items():
+                covariates.setdefault(key, value)
+            model = wheel_model(model, route.route, inputs.table, covariates=covariates,
+                                **position)
+        result = stat_reprofiling.reprofiling_mileage(
+            model, route.route, inputs.table, **position,
+            limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
+            start_areas=start.areas_mm2, weighted_measures=measures)
+    except ValueError as exc:
+        raise _statistics_error(exc) from exc
+    remaining = [result.mileage_p10_km, result.mileage_p50_km, result.mileage_p90_km]
+
+    def opt(offset: float) -> dict[str, float | None]:
+        p10, p50, p90 = (offset + v if math.isfinite(v) else None for v in remaining)
+        return {"p10": p10, "p50": p50, "p90": p90}
+
+    return {
+        "model_id": model_id, "route": route.name, "wheel_id": body.wheel_id, **position,
+        "start_mileage_km": start.mileage_km, "start_measurement_id": start.measurement_id,
+        "start_areas_mm2": start.areas_mm2 or {"flange": 0.0, "tread": 0.0},
+        "remaining_km": opt(0.0), "mileage_km": opt(start.mileage_km),
+        "governing_limit": result.governing_limit, "sd_mm": _none_if_nan(result.sd_mm),
+        "sh_mm": _none_if_nan(result.sh_mm), "qr_mm": _none_if_nan(result.qr_mm),
+        "extrapolated": bool(result.extrapolated), "reason": result.reason,
+        "limits": {k: float(v) for k, v in result.limits.items()},
+    }
+
+
 def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> ReprofilingOut:
     """Mileage at which the first limit is crossed, P10/P50/P90, and the governing limit.
 
@@ -371,55 +623,12 @@ def reprofiling(session: Session, model_id: int, body: ReprofilingIn) -> Reprofi
     starts at its latest measured profile (its measured wear areas); ``mileage_km`` is then
     that measurement's mileage plus the remaining mileage.
     """
-    from wearcast.statistics import reprofiling as stat_reprofiling
+    inputs, route = load_inputs(session, model_id, body.route_id, body.route)
+    payload = reprofiling_payload(inputs, route, model_id, body, wheel_start(session, body))
+    return ReprofilingOut.model_validate(payload)
 
-    inputs = model_inputs(session, model_id)
-    route, route_name = route_store.resolve_cached(session, body.route_id, body.route)
-    start_mileage, start_id, start_areas = 0.0, None, None
-    bogie_type, axle, side = body.bogie_type, body.axle, body.side
-    if body.wheel_id is not None:
-        wheel, latest = _latest_profile(session, body.wheel_id)
-        for name, given, stored in (("bogie_type", bogie_type, wheel.bogie_type),
-                                    ("axle", axle, wheel.axle), ("side", side, wheel.side)):
-            if given is not None and given != stored:
-                raise Unprocessable(name, f"wheel {wheel.wheel_id!r} has {name} {stored!r}")
-        bogie_type, axle, side = wheel.bogie_type, wheel.axle, wheel.side
-        start_mileage, start_id = float(latest.mileage_km), latest.id
-        start_areas = {"flange": max(0.0, float(latest.flange_area_mm2 or 0.0)),
-                       "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}
-    limits = body.limits.model_dump(exclude_none=True) if body.limits else None
-    try:
-        measures = weighted_measures(inputs, route, bogie_type=str(bogie_type),
-                                     axle=int(axle or 1), side=str(side))
-        model = inputs.model
-        if isinstance(model, ExtendedModel):
-            covariates = route_covariates(session, route_name, body.covariates)
-            if body.wheel_id is not None:
-                for key in ("load_t", "running_mode", "instrument_id"):
-                    value = getattr(latest, key, None)
-                    if value is not None:
-                        covariates.setdefault(key, value)
-            model = wheel_model(model, route, inputs.table, bogie_type=str(bogie_type),
-                                axle=int(axle or 1), side=str(side), covariates=covariates)
-        result = stat_reprofiling.reprofiling_mileage(
-            model, route, inputs.table, bogie_type=str(bogie_type), axle=int(axle or 1),
-            side=str(side), limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
-            start_areas=start_areas, weighted_measures=measures)
-    except ValueError as exc:
-        raise _statistics_error(exc) from exc
-    remaining = [result.mileage_p10_km, result.mileage_p50_km, result.mileage_p90_km]
 
-    def opt(values: list[float], offset: float) -> OptionalQuantiles:
-        p10, p50, p90 = (offset + v if math.isfinite(v) else None for v in values)
-        return OptionalQuantiles(p10=p10, p50=p50, p90=p90)
-
-    return ReprofilingOut(
-        model_id=model_id, route=route_name, wheel_id=body.wheel_id,
-        bogie_type=str(bogie_type), axle=int(axle or 1), side=str(side),
-        start_mileage_km=start_mileage, start_measurement_id=start_id,
-        start_areas_mm2=start_areas or {"flange": 0.0, "tread": 0.0},
-        remaining_km=opt(remaining, 0.0), mileage_km=opt(remaining, start_mileage),
-        governing_limit=result.governing_limit, sd_mm=_none_if_nan(result.sd_mm),
-        sh_mm=_none_if_nan(result.sh_mm), qr_mm=_none_if_nan(result.qr_mm),
-        extrapolated=bool(result.extrapolated), reason=result.reason,
-        limits={k: float(v) for k, v in result.limits.items()})
+def reprofiling_json(inputs: ModelInputs, route: RouteInputs, model_id: int,
+                     body: ReprofilingIn, start: WheelStart) -> bytes:
+    """:func:`reprofiling`'s answer as JSON bytes (the :class:`ReprofilingOut` schema)."""
+    return orjson.dumps(reprofiling_payload(inputs, route, model_id, body, start))

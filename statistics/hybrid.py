@@ -290,6 +290,12 @@ class HybridModel:
         cols.setflags(write=False)
         return cols
 
+    @cached_property
+    def parameter_kernel(self) -> ParameterKernel:
+        """What :func:`parameters_at_areas` needs on :attr:`parameter_columns`, computed
+        once per model: the joined state curves there, the reference heights and grid."""
+        return ParameterKernel.build(self)
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "measure": self.measure,
@@ -314,6 +320,71 @@ class HybridModel:
             join_window_mm=float(data.get("join_window_mm", 4.0)),
             reference_profile=str(data.get("reference_profile", "S1002")),
         )
+
+
+@dataclass(frozen=True)
+class StateInterpolant:
+    """One region's joined state curves with the zero curve first, (m + 1, c) [mm], and the
+    state areas with 0 first, (m + 1,) [mm²]: the curve for area A is the linear
+    interpolation between the neighbouring rows, the last state scaled beyond it (as
+    :func:`wear_states.interpolation_weights`)."""
+
+    knots_mm2: NDArray
+    curves_mm: NDArray
+
+    def __call__(self, areas_mm2: NDArray) -> tuple[NDArray, NDArray]:
+        """(curves (n, c) [mm], extrapolated (n,)) for areas (n,) [mm²]."""
+        a = areas_mm2
+        if not np.isfinite(a).all() or (a < 0).any():
+            raise ValueError("area_mm2: must be finite and >= 0")
+        m = self.knots_mm2.size - 1
+        if m == 0:
+            return np.zeros((a.size, self.curves_mm.shape[1])), a > 0
+        knots, curves = self.knots_mm2, self.curves_mm
+        # the interval of each area: searchsorted gives >= 1 for areas >= 0
+        i = np.minimum(np.searchsorted(knots, a, side="right") - 1, m - 1)
+        lo = knots[i]
+        t = ((a - lo) / (knots[i + 1] - lo))[:, None]
+        out = curves[i] * (1.0 - t) + curves[i + 1] * t
+        extrapolated = a > knots[m] * (1 + 1e-12)
+        if extrapolated.any():
+            out[extrapolated] = curves[m] * (a[extrapolated] / knots[m])[:, None]
+        return out, extrapolated
+
+
+@dataclass(frozen=True)
+class ParameterKernel:
+    """Per-model constants of :func:`parameters_at_areas` (no request data): the state
+    interpolants of both regions on :attr:`HybridModel.parameter_columns`, the grid and
+    reference heights there [mm] and the last lateral position [mm] at which a flank point
+    found on the columns is the whole grid's."""
+
+    flange: StateInterpolant
+    tread: StateInterpolant
+    y_mm: NDArray
+    reference_z_mm: NDArray
+    y_safe_mm: float
+
+    @classmethod
+    def build(cls, model: HybridModel) -> ParameterKernel:
+        cols = model.parameter_columns
+        y = model.grid_y_mm[cols]
+        regions = []
+        for region, joined in zip(REGIONS, model.joined_state_curves_mm, strict=True):
+            rs = model.states.region(region)
+            curves = np.vstack([np.zeros((1, cols.size)), joined[:, cols]])
+            knots = np.concatenate([[0.0], rs.areas_mm2])
+            for a in (curves, knots):
+                a.setflags(write=False)
+            regions.append(StateInterpolant(knots, curves))
+        # the flank crossings use the grid point after the crossing: both points must lie
+        # before the last two prefix points for the prefix to give the whole-grid result
+        n_prefix = int(np.count_nonzero(y <= PARAMETER_MAX_Y_MM))
+        y_safe = float(y[n_prefix - 2]) if n_prefix >= 2 else -math.inf
+        ref = np.ascontiguousarray(model.reference_z_mm[cols])
+        for a in (y, ref):
+            a.setflags(write=False)
+        return cls(regions[0], regions[1], y, ref, y_safe)
 
 
 def _route_lookup(route_by_wheel: Route | Mapping[Any, Route], row_route: Any,
@@ -578,23 +649,23 @@ def parameters_at_areas(model: HybridModel, flange_area_mm2: ArrayLike,
     :attr:`HybridModel.parameter_columns` only; a profile whose Sd or qR point is not well
     inside them (or whose parameters are undefined there) is recomputed on the whole grid.
     """
-    cols = model.parameter_columns
-    y = model.grid_y_mm
-    wear, extrapolated = _joined_wear(model, flange_area_mm2, tread_area_mm2, cols)
-    z = model.reference_z_mm[cols][None, :] - wear
-    params = flange_parameters_batch(y[cols], z).stacked()
-    # the flank crossings use the grid point after the crossing: both points must lie
-    # before the last two prefix points for the prefix to give the whole-grid result
-    n_prefix = int(np.count_nonzero(y[cols] <= PARAMETER_MAX_Y_MM))
-    y_safe = y[cols[n_prefix - 2]] if n_prefix >= 2 else -np.inf
+    kernel = model.parameter_kernel
+    fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float)).ravel()
+    ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float)).ravel()
+    wear_f, ef = kernel.flange(fa)
+    wear_t, et = kernel.tread(ta)
+    extrapolated = ef | et
+    z = kernel.reference_z_mm - wear_f
+    z -= wear_t
+    params = flange_parameters_batch(kernel.y_mm, z).stacked()
     y_sd = params[:, 0] + BACK_FACE_Y_MM
     y_qr = y_sd - params[:, 2]
-    ok = np.isfinite(params).all(axis=1) & (y_sd < y_safe) & (y_qr < y_safe)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(params).all(axis=1) & (y_sd < kernel.y_safe_mm) & \
+            (y_qr < kernel.y_safe_mm)
     redo = np.flatnonzero(~ok)
     if redo.size:
-        fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float))[redo]
-        ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float))[redo]
-        params[redo] = profile_at_areas(model, fa, ta)[2]
+        params[redo] = profile_at_areas(model, fa[redo], ta[redo])[2]
     return params, extrapolated
 
 

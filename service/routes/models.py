@@ -2,20 +2,19 @@
 diagnose (the discrepancy finder) and its HTML report.
 
 Calibration and the pictures are plain ``def`` endpoints: FastAPI runs them in its
-threadpool, off the event loop. Predict and reprofiling run there too, in one hop each, and
-return their answer serialised (see ``_in_session`` and ``_json``).
+threadpool, off the event loop. Predict and reprofiling are the hot paths: once a worker has
+read a model and a route they run on the event loop without touching the database, and
+return their answer serialised by orjson (see ``predict`` below).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import HTMLResponse
 from pydantic import BaseModel, ValidationError
-from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from wearcast.service import diagnosis_store, model_store, pictures
@@ -60,26 +59,55 @@ def _json(out: BaseModel) -> Response:
     return Response(content=out.model_dump_json(), media_type="application/json")
 
 
-def _in_session(request: Request, call: Callable[[Session], BaseModel]) -> Response:
-    """``call`` with a session of its own, its answer serialised (runs in the threadpool)."""
+def _bytes(content: bytes) -> Response:
+    return Response(content=content, media_type="application/json")
+
+
+def _database_url(request: Request) -> str:
+    return str(request.app.state.database.engine.url)
+
+
+def _predict_loading(request: Request, model_id: int, body: PredictIn) -> Response:
+    """Predict with its inputs read from the database (runs in the threadpool)."""
     database: Database = request.app.state.database
     with database.session_factory() as session:
-        return _json(call(session))
+        inputs, route = model_store.load_inputs(session, model_id, body.route_id, body.route)
+    return _bytes(model_store.predict_json(inputs, route, model_id, body))
 
 
-# Predict and reprofiling are the hot paths: a few milliseconds of CPU each. They run in the
-# threadpool like the plain ``def`` endpoints, but in a single hop: a ``def`` endpoint with
-# the session dependency takes three (open the session, the endpoint, close the session).
+def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -> Response:
+    """Reprofiling with its inputs (and the wheel's latest state) read from the database."""
+    database: Database = request.app.state.database
+    with database.session_factory() as session:
+        inputs, route = model_store.load_inputs(session, model_id, body.route_id, body.route)
+        start = model_store.wheel_start(session, body)
+    return _bytes(model_store.reprofiling_json(inputs, route, model_id, body, start))
+
+
+# Predict and reprofiling are the hot paths: about a millisecond of CPU each. When the model
+# and the route are in process memory (every request after a worker's first), they are
+# computed right here on the event loop, without a database session or a threadpool hop
+# (the hop costs more CPU than it could save: the computation holds the GIL). Otherwise (the
+# first request, a wheel's latest state) the database is read in the threadpool.
 @router.post("/models/{model_id}/predict", response_model=PredictionOut)
 async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
-    return await run_in_threadpool(
-        _in_session, request, lambda s: model_store.predict(s, model_id, body))
+    cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
+                                       body.route)
+    if cached is None:
+        return await run_in_threadpool(_predict_loading, request, model_id, body)
+    return _bytes(model_store.predict_json(*cached, model_id, body))
 
 
 @router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
 async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> Response:
-    return await run_in_threadpool(
-        _in_session, request, lambda s: model_store.reprofiling(s, model_id, body))
+    cached = None
+    if body.wheel_id is None:  # a wheel's latest measurement may change: always read
+        cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
+                                           body.route)
+    if cached is None:
+        return await run_in_threadpool(_reprofiling_loading, request, model_id, body)
+    start = model_store.wheel_start(None, body)
+    return _bytes(model_store.reprofiling_json(*cached, model_id, body, start))
 
 
 @router.get("/models/{model_id}/pictures/wear-area", response_class=Response,

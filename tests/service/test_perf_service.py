@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sqlalchemy import event
 from typer.testing import CliRunner
 
 with warnings.catch_warnings():
@@ -25,6 +26,7 @@ from wearcast.service.app import create_app
 from wearcast.service.cli import app as cli_app
 from wearcast.service.cli import serve_app
 from wearcast.service.demo import load_example_fleet
+from wearcast.service.schemas import PredictIn, PredictionOut, ReprofilingIn, ReprofilingOut
 from wearcast.service.settings import Settings
 from wearcast.service.wear_table_store import LruCache
 from wearcast.statistics import hybrid, reprofiling
@@ -154,25 +156,62 @@ def test_every_request_computes_its_answer(example, monkeypatch):
     assert first == again and calls == {"predict": 2, "reprofiling": 3}
 
 
-def test_table_rows_and_model_state_are_read_once(example, monkeypatch):
+def test_cached_requests_run_no_sql_and_read_nothing_again(example, monkeypatch):
     client, model_id = example
-    client.post(f"/v1/models/{model_id}/reprofiling", json={"route_id": "aosta", **POSITION})
+    body = {"route_id": "aosta", **POSITION}
+    client.post(f"/v1/models/{model_id}/reprofiling", json=body)
 
     def no_reads(*args, **kwargs):
-        raise AssertionError("the cached table should not be read again")
+        raise AssertionError("the cached table and model should not be read again")
 
     monkeypatch.setattr(wear_table_store, "table_frame", no_reads)
     monkeypatch.setattr(hybrid.HybridModel, "from_dict", no_reads)
-    hits = model_store._models.hits
-    answer = client.post(f"/v1/models/{model_id}/reprofiling",
-                         json={"route_id": "aosta", **POSITION})
-    assert answer.status_code == 200 and model_store._models.hits > hits
+    statements: list[str] = []
+    engine = client.app.state.database.engine
+
+    def count(conn, cursor, statement, *args):
+        statements.append(statement)
+
+    event.listen(engine, "before_cursor_execute", count)
+    try:
+        hits = model_store._hot_models.hits
+        answer = client.post(f"/v1/models/{model_id}/reprofiling", json=body)
+        predicted = client.post(f"/v1/models/{model_id}/predict",
+                                json={**body, "mileage_km": [1e5]})
+        assert answer.status_code == 200 and predicted.status_code == 200
+        assert statements == [] and model_store._hot_models.hits == hits + 2
+        # a wheel's latest measurement can change: reprofiling by wheel_id reads storage
+        missing_wheel = client.post(f"/v1/models/{model_id}/reprofiling",
+                                    json={"route_id": "aosta", "wheel_id": "no-such-wheel"})
+        assert missing_wheel.status_code == 404 and statements
+    finally:
+        event.remove(engine, "before_cursor_execute", count)
     missing = client.post("/v1/models/999/predict",
                           json={"route_id": "aosta", "mileage_km": [1.0], **POSITION})
     assert missing.status_code == 404 and missing.json()["detail"][0]["field"] == "model_id"
     unknown = client.post(f"/v1/models/{model_id}/reprofiling",
                           json={"route_id": "nowhere", **POSITION})
     assert unknown.status_code == 404 and unknown.json()["detail"][0]["field"] == "route_id"
+
+
+def test_hot_path_answers_match_the_python_api_and_their_schemas(example):
+    # the HTTP answers are written by orjson from numpy arrays; they must be the documented
+    # schemas and carry the values of model_store.predict/reprofiling (pydantic-built)
+    client, model_id = example
+    pred_in = {"route_id": "metro", "mileage_km": [0.0, 5e4, 3e6], **POSITION}
+    rep_in = {"route_id": "metro", **POSITION, "limits": {"qr_min_mm": 9.0}}
+    for _ in range(2):  # the first request loads the inputs, the second is served cached
+        pred = client.post(f"/v1/models/{model_id}/predict", json=pred_in)
+        rep = client.post(f"/v1/models/{model_id}/reprofiling", json=rep_in)
+        assert pred.status_code == 200 and rep.status_code == 200
+        with client.app.state.database.session_factory() as session:
+            want_pred = model_store.predict(session, model_id, PredictIn(**pred_in))
+            want_rep = model_store.reprofiling(session, model_id, ReprofilingIn(**rep_in))
+        got_pred = PredictionOut.model_validate_json(pred.content)
+        got_rep = ReprofilingOut.model_validate_json(rep.content)
+        assert got_pred.model_dump() == want_pred.model_dump()
+        assert got_rep.model_dump() == want_rep.model_dump()
+    assert got_pred.points[-1].extrapolated  # 3e6 km lies beyond the last wear state
 
 
 def test_another_database_with_the_same_ids_is_never_served_from_the_cache(example,
