@@ -151,7 +151,7 @@ class ContactTable:
 
     def rigid_rise(self, shift_mm: ArrayLike) -> NDArray[np.float64]:
         """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
-        return np.interp(shift_mm, self.shift_mm, self.rigid_rise_mm)
+        return np.interp(np.asarray(shift_mm, dtype=float), self.shift_mm, self.rigid_rise_mm)
 
     def candidates(self, shift_mm: ArrayLike, n_slots: int = 3) -> dict[str, NDArray]:
         """Up to ``n_slots`` contact candidates per wheel at arbitrary shifts.
@@ -441,12 +441,11 @@ def curve_case(radius_m: float | None, cant_mm: float = 0.0, speed_m_s: float | 
     (None: from the unbalanced acceleration, :func:`speed_from_cant_deficiency`), direction."""
     if direction not in SIDES:
         raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
-    tangent = radius_m is None or not np.isfinite(radius_m)
-    if not tangent and radius_m <= 0:
+    if radius_m is not None and np.isfinite(radius_m) and radius_m <= 0:
         raise ValueError(f"radius_m must be positive, got {radius_m}")
     if cant_mm < 0:
         raise ValueError(f"cant_mm must be >= 0, got {cant_mm}")
-    if tangent:
+    if radius_m is None or not np.isfinite(radius_m):  # tangent track
         v = tangent_speed_m_s if speed_m_s is None else speed_m_s
         return CurveCase(0.0, 0.0, float(v), torque_nm)
     if speed_m_s is None:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import pandas as pd
@@ -106,7 +107,8 @@ def _operating_points(classes: Sequence[CurveClass], unbalanced_acceleration_m_s
     speeds = []
     for c in classes:
         if c.is_tangent:
-            v = (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / _KMH
+            v: float | None = (
+                (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / _KMH)
             case = curve_case(None, 0.0, v, "left", torque_nm=torque_nm)
         else:
             v = None if c.speed_kmh is None else c.speed_kmh / _KMH
@@ -135,7 +137,8 @@ def _contact_rows(bogie_type: str, k: int, cls: CurveClass, result: CurvingResul
                 b = float(result.b_mm[axle, s, slot])
                 rows.append({
                     "bogie_type": bogie_type, "class_index": k,
-                    "radius_m": np.nan if cls.is_tangent else float(cls.radius_m),
+                    "radius_m": (np.nan if cls.is_tangent or cls.radius_m is None
+                                 else float(cls.radius_m)),
                     "cant_mm": cls.cant_mm, "speed_kmh": speed_m_s * _KMH,
                     "direction": cls.direction, "share": cls.share,
                     "wheelset": "leading" if axle == 0 else "trailing", "axle": axle + 1,
@@ -197,8 +200,8 @@ def _table_from_contacts(contacts: pd.DataFrame) -> pd.DataFrame:
     per_region = df.groupby(wheel + ["region"], sort=False).agg(
         tau_max=("tau_max", "max"), t_gamma=("t_gamma", "sum"))
     # every wheel gets both regions; a region without a patch gets 0
-    per_region = per_region.unstack("region", fill_value=0.0).stack("region",
-                                                                     future_stack=True)
+    per_region = cast(pd.DataFrame, per_region.unstack("region", fill_value=0.0)
+                      .stack("region", future_stack=True))
     per_region = per_region.fillna(0.0).reset_index()
     # tangent track: both wheels are "tangent" -> their mean
     cls_keys = ["bogie_type", "class_index", "radius_key", "share", "wheelset", "rail", "region"]

@@ -126,7 +126,7 @@ def resolve_cached(session: Session, route_id: int | str | None, route: RouteSpe
     def load() -> stat_routes.Route:
         return to_domain(get_route(session, route_pk))
 
-    return _routes.get_or_create((str(session.get_bind().url), *key), load), key[1]
+    return _routes.get_or_create((str(session.get_bind().engine.url), *key), load), key[1]
 
 
 def list_routes(session: Session) -> list[db.Route]:

@@ -247,7 +247,9 @@ def _classes(session: Session, body: WearTableComputeIn) -> _Classes:
     cants = [float(c.get("cant_mm") or 0.0) for c in items]
     speeds = [None if c.get("speed_kmh") is None else float(c["speed_kmh"]) for c in items]
     raw_shares = [c.get("share") for c in items]
-    shares = None if any(v is None for v in raw_shares) else [float(v) for v in raw_shares]
+    given_shares = [v for v in raw_shares if v is not None]
+    shares = ([float(v) for v in given_shares] if len(given_shares) == len(raw_shares)
+              else None)
     if all(r is not None for r in radii):
         radii.append(None)
         cants.append(0.0)

@@ -67,7 +67,8 @@ class ReferenceTable:
 
     def height_mm(self, y_mm: ArrayLike) -> NDArray[np.float64]:
         """Reference height at y [mm]; NaN outside the tabulated range."""
-        return np.interp(y_mm, self.y_mm, self.z_mm, left=np.nan, right=np.nan)
+        return np.interp(np.asarray(y_mm, dtype=float), self.y_mm, self.z_mm, left=np.nan,
+                         right=np.nan)
 
 
 @lru_cache(maxsize=16)

@@ -236,9 +236,9 @@ def flange_parameters_batch(
             sd[i], sh[i], qr[i] = fp.sd_mm, fp.sh_mm, fp.qr_mm
         return FlangeParameterArrays(sd, sh, qr)
     finite = np.isfinite(z).all(axis=1)
-    for i in np.flatnonzero(~finite):
-        fp = flange_parameters(y, z[i], tip_region_y_mm=tip_region_y_mm)
-        sd[i], sh[i], qr[i] = fp.sd_mm, fp.sh_mm, fp.qr_mm
+    for r in np.flatnonzero(~finite):
+        fp = flange_parameters(y, z[r], tip_region_y_mm=tip_region_y_mm)
+        sd[r], sh[r], qr[r] = fp.sd_mm, fp.sh_mm, fp.qr_mm
     zf = z[finite]
     if zf.shape[0]:
         # z at the tape circle, as np.interp(0, y, z) row by row

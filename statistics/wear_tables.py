@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -148,12 +148,15 @@ def compile_wear_table(table: pd.DataFrame | WearTable) -> WearTable:
     df = validate_wear_table(table)
     tangent: dict[tuple[str, str, str, str], float] = {}
     for row in df[df["rail"] == "tangent"].itertuples(index=False):
-        tangent[(row.bogie_type, row.wheelset, row.region, row.measure)] = float(row.value)
+        tkey = cast(tuple[str, str, str, str],
+                    (row.bogie_type, row.wheelset, row.region, row.measure))
+        tangent[tkey] = float(cast(float, row.value))
     curves: dict[tuple[str, str, str, str, str], tuple[np.ndarray, np.ndarray]] = {}
     curved = df[df["rail"] != "tangent"]
-    for (bogie, wheelset, rail, region, measure), rows in curved.groupby(
+    for group_key, rows in curved.groupby(
         ["bogie_type", "wheelset", "rail", "region", "measure"], sort=False
     ):
+        bogie, wheelset, rail, region, measure = cast(tuple[str, str, str, str, str], group_key)
         k = 1.0 / rows["radius_m"].to_numpy(dtype=float)
         v = rows["value"].to_numpy(dtype=float)
         order = np.argsort(k)
@@ -222,7 +225,7 @@ def table_value(
 def wear_table_to_records(table: pd.DataFrame | WearTable) -> list[dict[str, Any]]:
     """JSON-friendly rows of a table (``radius_m`` None on tangent rows)."""
     df = compile_wear_table(table).frame
-    records = df.to_dict(orient="records")
+    records = cast(list[dict[str, Any]], df.to_dict(orient="records"))
     for r in records:
         if isinstance(r["radius_m"], float) and math.isnan(r["radius_m"]):
             r["radius_m"] = None

@@ -53,11 +53,11 @@ def she_saturation(u: ArrayLike) -> NDArray[np.float64]:
 
     1 - u/3 + u^2/27 for u < 3, 1/u beyond (SHE 1983).
     """
-    u = np.abs(np.asarray(u, dtype=float))
-    uc = np.minimum(u, 3.0)
+    ua = np.abs(np.asarray(u, dtype=float))
+    uc = np.minimum(ua, 3.0)
     poly = 1.0 - uc / 3.0 + uc**2 / 27.0
     with np.errstate(divide="ignore"):
-        return np.where(u < 3.0, poly, 1.0 / np.maximum(u, 3.0))
+        return np.where(ua < 3.0, poly, 1.0 / np.maximum(ua, 3.0))
 
 
 def creep_forces(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLike,

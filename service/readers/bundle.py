@@ -26,7 +26,7 @@ import posixpath
 import zipfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import BinaryIO
+from typing import IO, Any, BinaryIO, TypeAlias
 
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import iter_profile_records, read_header, sniff_kind
@@ -40,7 +40,7 @@ from wearcast.service.readers.miniprof import (
 from wearcast.service.readers.parameter_csv import iter_parameter_records
 from wearcast.service.readers.records import MeasurementMeta, ParameterRecord, ProfileRecord
 
-Record = ProfileRecord | ParameterRecord
+Record: TypeAlias = ProfileRecord | ParameterRecord
 ManifestArg = Mapping[str, MeasurementMeta] | bytes | BinaryIO | None
 
 
@@ -91,7 +91,7 @@ def _read_all(data_or_stream: bytes | BinaryIO) -> bytes:
     return data_or_stream.read()
 
 
-def _csv_records(stream: BinaryIO, name: str) -> Iterator[Record]:
+def _csv_records(stream: IO[bytes], name: str) -> Iterator[Record]:
     """Sniff the header, then stream the right CSV reader over the whole file."""
     if not stream.seekable():
         stream = io.BytesIO(stream.read())
@@ -172,6 +172,7 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
     mp = parse_miniprof(data, display)
     if mp.is_rail:
         to_wheel_frame(mp)  # raises the rail refusal
+    wanted: list[tuple[int | None, MeasurementMeta]]
     if mp.parts:
         whole = manifest.find(member, None, display)
         if whole is not None and len(mp.parts) == 1:
@@ -192,7 +193,7 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
             raise ImportFileError(
                 display, f"manifest says side {meta.side!r} (line {meta.source_line}) but the "
                 f"file says Side={mp.header.get('Side', '')} ({mp.side_hint})", field="side")
-        updates: dict[str, object] = {
+        updates: dict[str, Any] = {
             "source_file": display if part is None else f"{display}#{part}",
             "source_line": None}
         if meta.measured_on is None and mp.measured_on is not None:
@@ -270,9 +271,9 @@ def _zip_records(data_or_stream: bytes | BinaryIO, name: str, manifest: Manifest
             ext = _extension(info.filename)
             if ext == ".csv":
                 if keep_raw:
-                    raw = RawMember.of(display, archive.read(info))
-                    for record in _csv_records(io.BytesIO(raw.data), display):
-                        yield record, raw
+                    csv_raw = RawMember.of(display, archive.read(info))
+                    for record in _csv_records(io.BytesIO(csv_raw.data), display):
+                        yield record, csv_raw
                 else:
                     with archive.open(info) as member:
                         for record in _csv_records(member, display):
@@ -304,9 +305,9 @@ def _iter(data_or_stream: bytes | BinaryIO, file_name: str, manifest: ManifestAr
         yield from _zip_records(data_or_stream, file_name, manifest, keep_raw, limits)
     elif ext == ".csv":
         if keep_raw:
-            raw = RawMember.of(file_name, _read_all(data_or_stream))
-            for record in _csv_records(io.BytesIO(raw.data), file_name):
-                yield record, raw
+            csv_raw = RawMember.of(file_name, _read_all(data_or_stream))
+            for record in _csv_records(io.BytesIO(csv_raw.data), file_name):
+                yield record, csv_raw
         else:
             for record in _csv_records(_as_stream(data_or_stream), file_name):
                 yield record, None

@@ -31,10 +31,11 @@ import csv
 import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import BinaryIO, Literal
+from typing import IO, Literal, cast
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import (
@@ -77,7 +78,7 @@ def sniff_kind(header_columns: Sequence[str]) -> Literal["profile", "parameter"]
                      "(sd_mm, sh_mm, qr_mm)")
 
 
-def read_header(stream: BinaryIO, file_name: str) -> list[str]:
+def read_header(stream: IO[bytes], file_name: str) -> list[str]:
     """Consume and parse the header line of a CSV stream (names stripped, BOM removed)."""
     raw = stream.readline()
     if raw.startswith(_UTF8_BOM):
@@ -91,7 +92,7 @@ def read_header(stream: BinaryIO, file_name: str) -> list[str]:
     return [name.strip() for name in next(csv.reader([text]))]
 
 
-def read_chunks(stream: BinaryIO, file_name: str, columns: Sequence[str],
+def read_chunks(stream: IO[bytes], file_name: str, columns: Sequence[str],
                 text_columns: Sequence[str], chunk_rows: int
                 ) -> Iterator[tuple[pd.DataFrame, np.ndarray]]:
     """Chunks of the CSV body (after the header) with each row's 1-based file line.
@@ -111,7 +112,7 @@ def read_chunks(stream: BinaryIO, file_name: str, columns: Sequence[str],
                 n = len(chunk)
                 lines = np.arange(next_line, next_line + n, dtype=np.int64)
                 next_line += n
-                blank = chunk.isna().to_numpy().all(axis=1)
+                blank = cast(NDArray[np.bool_], chunk.isna().to_numpy().all(axis=1))
                 if blank.any():
                     chunk = chunk.loc[~blank]
                     lines = lines[~blank]
@@ -210,7 +211,7 @@ def _check_consistency(coded: Sequence[CodedColumn], starts_mask: np.ndarray,
         raise ImportFileError(file_name, worst[2], line=worst[0], field=worst[1])
 
 
-def iter_profile_records(stream: BinaryIO, file_name: str, *, chunk_rows: int = 200_000
+def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int = 200_000
                          ) -> Iterator[ProfileRecord]:
     """Yield one ProfileRecord per measurement of a long profile CSV, streaming.
 

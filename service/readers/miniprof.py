@@ -383,6 +383,7 @@ def to_wheel_frame(mp: MiniProfFile, part: int | None = None) -> tuple[np.ndarra
         raise ImportFileError(name, "rail profile (.ban / rail header): only wheel profiles "
                               "(.whl, .mpt) can be imported as wheel measurements")
     if mp.parts:
+        chosen: MiniProfPart | None
         if part is None:
             if len(mp.parts) > 1:
                 raise ImportFileError(name, f"file has {len(mp.parts)} profile parts; name "

@@ -18,7 +18,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import date
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -311,11 +311,11 @@ def build_metas(coded: Sequence[CodedColumn], rows: np.ndarray, mileage_km: np.n
 
     ``mileage_km`` [km] and ``lines`` are per row of the frame the columns came from.
     """
-    columns: dict[str, list[object]] = {}
+    columns: dict[str, list[Any]] = {}
     for column in coded:
         columns[column.name] = column.values[column.codes[rows]].tolist()
     n = len(rows)
-    none = [None] * n
+    none: list[Any] = [None] * n
     standard = {name: columns.get(name, none) for name in CONVERTERS}
     cov_lists = [(name, columns[name]) for name in covariates]
     mileage = mileage_km[rows].tolist()
