@@ -136,11 +136,26 @@ class DemoRow:
 
 
 @dataclass(frozen=True)
+class DemoDiagnosis:
+    """What the demo's diagnosis found (``run_demo`` step 2)."""
+
+    verdict: str
+    #: (cause, relative gain, 95 % CI low, high, Holm p, reported) per finding
+    findings: tuple[tuple[str, float, float, float, float, bool], ...]
+    report: Path
+    extended_model_id: int | None
+    save_reason: str | None
+    extended_prediction: str | None
+
+
+@dataclass(frozen=True)
 class DemoResult:
     model_id: int
     rows: tuple[DemoRow, ...]
     pictures: tuple[Path, ...]
     database_url: str
+    diagnosis: DemoDiagnosis | None = None
+    hidden_effect: DemoDiagnosis | None = None
 
 
 def _measured_at(session: Session, route: str, bogie_type: str, axle: int,
@@ -195,7 +210,9 @@ def run_demo(out_dir: Path | str, *, echo: Callable[[str], None] = print) -> Dem
     motor bogies (seed 001 §4: calibration on the motor bogies of train I), predict unit A's
     trailer bogies, unit B and the new 100 % tangent route, print the comparison table and
     the reprofiling mileages, and write the pictures when ``wearcast.service.pictures``
-    exists. Returns what it printed, as data."""
+    exists. Then diagnose the whole fleet with the discrepancy finder (``_diagnose``): print
+    the verdict and the findings, write ``diagnosis_report.html`` into ``out_dir``, save the
+    extended model and predict with it. Returns what it printed, as data."""
     from wearcast.service import model_store
     from wearcast.service.db import Database
     from wearcast.service.schemas import ModelIn, PredictIn, ReprofilingIn
@@ -245,7 +262,11 @@ def run_demo(out_dir: Path | str, *, echo: Callable[[str], None] = print) -> Dem
         result_rows = tuple(rows)
         echo(format_table(result_rows))
         pictures = _pictures(out, model_id, predictions, database, echo)
-        return DemoResult(model_id, result_rows, pictures, settings.resolved_database_url)
+        with database.session_factory() as session:
+            diagnosis = _diagnose(session, out, model_id, echo)
+        hidden = _hidden_effect_demo(out / "hidden_effect", echo)
+        return DemoResult(model_id, result_rows, pictures, settings.resolved_database_url,
+                          diagnosis, hidden)
     finally:
         database.dispose()
 
@@ -267,3 +288,116 @@ def _pictures(out: Path, model_id: int, predictions: list[Any], database: Any,
     for p in paths:
         echo(f"wrote {p}")
     return paths
+
+
+def format_findings(findings: tuple[tuple[str, float, float, float, float, bool], ...]) -> str:
+    """The demo's findings table: cause, held-out gain with its 95 % interval, Holm p."""
+    head = f"{'cause':<24}{'held-out gain [95 % CI]':<28}{'p (Holm)':>10}  reported"
+    lines = [head, "-" * len(head)]
+    for cause, gain, lo, hi, p, reported in findings:
+        band = f"{100 * gain:+.1f} % [{100 * lo:+.1f}, {100 * hi:+.1f}]"
+        lines.append(f"{cause:<24}{band:<28}{p:>10.2g}  {'yes' if reported else 'no'}")
+    return "\n".join(lines)
+
+
+def _diagnose(session: Session, out: Path, model_id: int,
+              echo: Callable[[str], None], *, route: str = "metro",
+              report_name: str = "diagnosis_report.html") -> DemoDiagnosis:
+    """Run the discrepancy finder on every stored measurement (issue 4), print the verdict
+    and findings, write the HTML report, save the extended model and predict with it."""
+    from wearcast.service import diagnosis_store, model_store
+    from wearcast.service.schemas import DiagnoseIn, PredictIn
+    from wearcast.statistics import discrepancy
+
+    run = diagnosis_store.run_diagnosis(session, model_id, DiagnoseIn())
+    d = run.diagnosis
+    findings = tuple((f.cause, f.gain.relative, f.gain.ci95_low, f.gain.ci95_high,
+                      float(f.evidence["p_value"]), f.significant and f.material)
+                     for f in d.findings)
+    echo(f"diagnosis of model {model_id} on {d.n_measurements} measurements "
+         f"({d.n_groups} groups by {d.group_by}): verdict {d.verdict}")
+    if d.verdict != "none":
+        top = d.finding(d.verdict)
+        assert top is not None
+        echo(f"  {top.summary}")
+    echo(format_findings(findings))
+    for code, reason in d.skipped.items():
+        echo(f"  skipped {code}: {reason}")
+    report = out / report_name
+    report.write_text(discrepancy.report_html(d, discrepancy.diagnosis_figures(d)),
+                      encoding="utf-8")
+    echo(f"wrote {report}")
+    saved, reason = diagnosis_store.save_extension(session, run, f"demo: {d.verdict} extension")
+    shown = None
+    if saved is not None:
+        echo(f"saved the extended model as model {saved.id} ({d.verdict})")
+        if reason:
+            echo(f"  {reason}")
+        lines = []
+        for bogie in ("motor", "trailer"):
+            for mid, label in ((model_id, "calibrated"), (int(saved.id), "extended")):
+                p = model_store.predict(session, mid, PredictIn(
+                    route_id=route, bogie_type=bogie, axle=1, side="left",
+                    mileage_km=[COMPARE_AT_KM])).points[0]
+                lines.append(f"  {label:<10} model {mid}: {route} {bogie:<7} axle 1 at "
+                             f"{COMPARE_AT_KM:,.0f} km: tread {p.tread_area_mm2.p50:.1f} mm2, "
+                             f"flange {p.flange_area_mm2.p50:.1f} mm2 (P50)")
+        shown = "\n".join(lines)
+        echo(shown)
+    else:
+        echo(f"no extended model saved: {reason}")
+    return DemoDiagnosis(d.verdict, findings, report, None if saved is None else int(saved.id),
+                         reason, shown)
+
+
+def _hidden_effect_demo(out: Path, echo: Callable[[str], None]) -> DemoDiagnosis:
+    """The finder on a fleet-twin dataset with a known hidden effect (motor-bogie treads
+    wearing 1.3 x faster, ``twin_effects.traction``), imported through the API into its own
+    database, calibrated on unit A's motor bogies: verdict, findings, report, the saved
+    extended model and a prediction with it."""
+    import io
+
+    from fastapi.testclient import TestClient
+
+    from wearcast.service.app import create_app
+    from wearcast.service.settings import Settings
+    from wearcast.statistics import fleet_twin as ft
+    from wearcast.statistics import twin_effects as te
+
+    out.mkdir(parents=True, exist_ok=True)
+    echo("hidden-effect example: fleet twin with motor-bogie treads wearing 1.3 x faster "
+         "(the model does not know it)")
+    table = ft.synthetic_wear_table()
+    cfg = te.scenario_config(seed=7, wear_effects=(te.traction(1.3),), vehicles_per_unit=2,
+                             points_per_profile=150)
+    twin = ft.generate_fleet(cfg, table)
+    settings = Settings(data_dir=out / "data", database_url=None)
+    with TestClient(create_app(settings)) as client:
+        for unit in cfg.units:
+            r = client.post("/v1/routes", json=unit.route.to_json())
+            if r.status_code != 409:
+                r.raise_for_status()
+        buf = io.BytesIO()
+        table.to_csv(buf, index=False)
+        r = client.post("/v1/wear-tables", files={"file": ("table.csv", buf.getvalue(),
+                                                           "text/csv")})
+        r.raise_for_status()
+        table_id = r.json()["id"]
+        r = client.post("/v1/measurements/import", files={
+            "file": ("profiles.csv", twin.profiles.to_csv(index=False).encode(), "text/csv")})
+        r.raise_for_status()
+        r = client.post("/v1/models", json={
+            "name": "hidden effect: unit A motor bogies", "measure": "tau_max",
+            "running_mode": "mixed", "wear_table_id": table_id,
+            "calibration": {"route_id": "aosta",
+                            "filter": {"vehicle_id": ["A1", "A2"], "bogie_type": "motor"}}})
+        r.raise_for_status()
+        model_id = int(r.json()["id"])
+    from wearcast.service.db import Database
+
+    database = Database(settings)
+    try:
+        with database.session_factory() as session:
+            return _diagnose(session, out, model_id, echo, route="aosta")
+    finally:
+        database.dispose()

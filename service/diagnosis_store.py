@@ -151,8 +151,10 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
                    ) -> tuple[db.Model | None, str | None]:
     """Store the model extended by the verdict's cause as a new model.
 
-    Returns (the new model row, None), or (None, why nothing was saved) when the verdict is
-    ``none`` or the cause corrects the data rather than the model.
+    Returns (the new model row, None), (the row, a note on how to use it) for
+    ``profile_misalignment`` (the saved model carries per-instrument corrections of the
+    measurements, its rates are the base model's), or (None, why nothing was saved) when
+    the verdict is ``none``.
     """
     diagnosis = run.diagnosis
     if diagnosis.verdict == "none":
@@ -160,9 +162,18 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
     finding = diagnosis.finding(diagnosis.verdict)
     assert finding is not None
     extended = discrepancy.apply_extension(run.model, finding)
-    if extended is run.model:
-        return None, (f"{finding.cause} corrects the measured profiles, not the model: "
-                      "recalibrate on corrected profiles")
+    note = None
+    if finding.cause == "profile_misalignment":
+        params = finding.extension["parameters"]
+        if "corrections" not in params:
+            return None, ("profile_misalignment: no reference instrument among the "
+                          "calibration measurements, so no correction could be fitted")
+        note = (f"saved: the model predicts wear exactly as model {run.row.id}; it carries the "
+                "per-instrument geometric corrections relative to instrument "
+                f"{params['reference_instrument']!r} (extension.parameters.corrections). Apply "
+                "them to that instrument's measured profiles or wear curves "
+                "(wearcast.statistics.discrepancy.correct_profile / correct_wear_curves) "
+                "before comparing or recalibrating, and fix the instrument.")
     parent = run.row
     state = model_store._jsonable(extended.to_dict())
     measure = extended.measure if isinstance(extended, hybrid.HybridModel) else parent.measure
@@ -181,7 +192,7 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
                         [{"model_id": row.id, "measurement_id": m}
                          for m in ids[start:start + 5000]])
     session.commit()
-    return row, None
+    return row, note
 
 
 def _gain(g: dict[str, Any]) -> GainOut:

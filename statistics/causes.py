@@ -626,12 +626,29 @@ class ProfileMisalignment(Cause):
         coef, *_ = np.linalg.lstsq(x, mean * np.sqrt(counts), rcond=None)
         return coef
 
+    def _reference(self, data: FinderData, inst: NDArray[Any], train: Mask) -> str:
+        """The instrument the model's wear states came from: the calibration rows' most
+        frequent instrument (else the most frequent one overall)."""
+        cal = data.frame["in_calibration"].to_numpy(bool) if "in_calibration" in \
+            data.frame.columns else np.zeros(data.n, dtype=bool)
+        pool = inst[cal & train] if (cal & train).any() else inst[train]
+        levels, counts = np.unique(pool.astype(str), return_counts=True)
+        return str(levels[np.argmax(counts)])
+
     def fit(self, data: FinderData, train: Mask) -> Fit:
         inst = data.frame["instrument_id"].astype(str).to_numpy()
         coefs = {i: self._coef(data, train & (inst == i)) for i in _levels(inst)}
-        params = {i: dict(zip(self.basis_names, map(float, c), strict=True))
-                  for i, c in coefs.items()}
-        return Fit({"instruments": params}, np.zeros(2), coefs)
+        params: dict[str, Any] = {
+            "instruments": {i: dict(zip(self.basis_names, map(float, c), strict=True))
+                            for i, c in coefs.items()}}
+        ref = self._reference(data, inst, train)
+        if ref in coefs:
+            # the correction that brings each instrument onto the reference instrument
+            params["reference_instrument"] = ref
+            params["corrections"] = {
+                i: dict(zip(self.basis_names, map(float, c - coefs[ref]), strict=True))
+                for i, c in coefs.items()}
+        return Fit(params, np.zeros(2), coefs)
 
     def correction(self, data: FinderData, fit: Fit) -> Array:
         inst = data.frame["instrument_id"].astype(str).to_numpy()
@@ -644,11 +661,15 @@ class ProfileMisalignment(Cause):
         return data.base
 
     def describe(self, fit: Fit) -> str:
-        worst = max(fit.params["instruments"].items(),
+        table = fit.params.get("corrections", fit.params["instruments"])
+        worst = max(table.items(),
                     key=lambda kv: abs(kv[1]["lateral_scale"]) * 40 + abs(kv[1]["flange_offset_mm"])
                     + abs(kv[1]["lateral_shift_mm"]))
         p = worst[1]
-        return (f"instrument {worst[0]}: lateral scale error {1000 * p['lateral_scale']:+.1f} "
+        ref = fit.params.get("reference_instrument")
+        return (f"instrument {worst[0]}"
+                + (f" (relative to {ref})" if ref is not None else "")
+                + f": lateral scale error {1000 * p['lateral_scale']:+.1f} "
                 f"per mille, flange offset {p['flange_offset_mm']:+.3f} mm, "
                 f"lateral shift {p['lateral_shift_mm']:+.3f} mm")
 

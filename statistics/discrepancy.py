@@ -191,19 +191,108 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
     )
 
 
-def _cv_rows(data: cz.FinderData, cause: cz.Cause, folds: NDArray[np.int64]
-             ) -> NDArray[np.float64]:
-    """Held-out per-row error of a cause (or null) over the folds."""
+def _cv_rows(data: cz.FinderData, cause: cz.Cause, folds: NDArray[np.int64],
+             residuals: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    """Held-out per-row error of a cause (or null) over the folds.
+
+    When ``residuals`` is given ((n, 2) for the area metric, (n, 3) for the shape metric) it
+    is filled with the held-out signed residuals (log-area residuals per region, or the
+    basis coefficients of the remaining wear-curve shape residual).
+    """
     out = np.empty(data.n)
     for k in np.unique(folds):
         test = folds == k
         fit = cause.fit(data, ~test)
         if cause.metric == "shape":
-            rows = cz.shape_row_sse(data, cause.correction(data, fit))  # type: ignore[attr-defined]
+            corr = cause.correction(data, fit)  # type: ignore[attr-defined]
+            rows = cz.shape_row_sse(data, corr)
+            if residuals is not None:
+                assert data.shape_res is not None
+                coef, *_ = np.linalg.lstsq(data.basis.T, (data.shape_res[test] - corr[test]).T,
+                                           rcond=None)
+                residuals[test] = coef.T
         else:
-            rows = cz.row_sse(data, cause.predict(data, fit))
+            pred = cause.predict(data, fit)
+            rows = cz.row_sse(data, pred)
+            if residuals is not None:
+                residuals[test] = cz.log_residual(data.measured, pred, data.floor)[test]
         out[test] = rows[test]
     return out
+
+
+def design_effect(values: NDArray[np.float64], vehicle: NDArray[Any],
+                  covariate: NDArray[Any] | None = None) -> tuple[float, int]:
+    """Design effect of wheels clustered in vehicles for a wheel-level mean.
+
+    values : (n_wheels,) the per-wheel quantity being tested (held-out error differences)
+    vehicle : (n_wheels,) vehicle of each wheel
+    covariate : (n_wheels,) the cause's covariate (constant within vehicles); its systematic
+        part (level means, or a quadratic in a numeric covariate) is removed first, so that
+        only the random between-vehicle variation counts as clustering
+
+    One-way ANOVA by vehicle: rho = (MSB - MSW) / (MSB + (m0 - 1) MSW) (Donner 1986, with
+    the between-vehicle degrees of freedom reduced by the covariate's parameters) and
+    deff = 1 + (m0 - 1) rho. Returns (deff, n_vehicles).
+    """
+    v = np.asarray(values, dtype=float)
+    n_w = v.size
+    v_codes, v_inv = np.unique(np.asarray(vehicle).astype(str), return_inverse=True)
+    g = v_codes.size
+    q = 1
+    x = np.ones((n_w, 1))
+    if covariate is not None:
+        num = pd.to_numeric(pd.Series(covariate), errors="coerce")
+        if num.notna().all() and num.nunique() > 4:
+            z = (num.to_numpy(float) - num.mean()) / max(float(num.std()), 1e-12)
+            x = np.column_stack([np.ones(n_w), z, z * z])
+        else:
+            codes = pd.factorize(pd.Series(covariate).astype(str))[0]
+            x = np.eye(codes.max() + 1)[codes]
+        q = x.shape[1]
+    if g - q < 1 or n_w <= g:
+        return float(n_w) / max(g, 1), g
+    coef, *_ = np.linalg.lstsq(x, v, rcond=None)
+    e = v - x @ coef
+    m_g = np.bincount(v_inv, minlength=g).astype(float)
+    m0 = (n_w - np.sum(m_g ** 2) / n_w) / (g - 1)
+    mean_g = np.bincount(v_inv, weights=e, minlength=g) / m_g
+    msb = np.sum(m_g * mean_g ** 2) / (g - q)
+    msw = np.sum((e - mean_g[v_inv]) ** 2) / (n_w - g)
+    den = msb + (m0 - 1) * msw
+    rho = float(np.clip((msb - msw) / den, 0.0, 1.0)) if den > 0 else 1.0
+    return float(1.0 + (m0 - 1.0) * rho), g
+
+
+def _pvalue(before: NDArray[np.float64], after: NDArray[np.float64], wheel: NDArray[Any],
+            vehicle: NDArray[Any], covariate: NDArray[Any] | None) -> tuple[float, str]:
+    """One-sided p-value that the extension lowers the held-out error, and how it was got.
+
+    Wheel-level causes (``covariate`` None): paired t-test over wheels. Vehicle-level causes
+    (covariate constant within vehicles): the wheel-level test with its variance inflated by
+    the design effect of the error differences' vehicle clustering (``design_effect``) and
+    degrees of freedom n_wheels / deff - 1, never fewer than n_vehicles - 1: with strongly
+    clustered wheels this is the vehicle-level test, with independent wheels the wheel-level
+    one.
+    """
+    uniq, inv = np.unique(wheel, return_inverse=True)
+    d = np.bincount(inv, weights=before - after, minlength=uniq.size)
+    if uniq.size < 2 or np.std(d) == 0:
+        return 1.0, "no variation"
+    deff, g = 1.0, 0
+    if covariate is not None:
+        first = pd.Series(np.arange(inv.size)).groupby(inv).first().to_numpy()
+        deff, g = design_effect(d, np.asarray(vehicle)[first], np.asarray(covariate)[first])
+    se = np.std(d, ddof=1) / np.sqrt(uniq.size) * np.sqrt(deff)
+    df = max(float(max(g - 1, 1)), min(uniq.size - 1.0, uniq.size / deff - 1.0))
+    p = float(stats.t.sf(float(np.mean(d) / se), df))
+    if covariate is not None:
+        how = (f"one-sided t-test over {uniq.size} wheels of held-out error differences, "
+               f"variance x design effect {deff:.2f} for {g} vehicles (df {df:.1f}), "
+               "Holm-adjusted")
+    else:
+        how = (f"one-sided paired t-test over {uniq.size} wheel_id groups of held-out error "
+               "differences, Holm-adjusted")
+    return p, how
 
 
 def _vehicle_level(values: NDArray[Any], vehicle: NDArray[Any]) -> bool:
@@ -296,11 +385,8 @@ def diagnose(
         uniq, inv = np.unique(level, return_inverse=True)
         b_g = np.bincount(inv, weights=before, minlength=uniq.size)
         a_g = np.bincount(inv, weights=after, minlength=uniq.size)
-        d = b_g - a_g
-        if uniq.size >= 2 and np.std(d) > 0:
-            p = float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
-        else:
-            p = 1.0
+        p, how = _pvalue(before, after, wheel, vehicle,
+                         np.asarray(cause.covariate(data)) if level is vehicle else None)
         idx = rng.integers(0, uniq.size, size=(n_boot, uniq.size))
         rel_boot = 1.0 - a_g[idx].sum(axis=1) / np.maximum(b_g[idx].sum(axis=1), 1e-300)
         lo, hi = np.percentile(rel_boot, [2.5, 97.5])
@@ -311,12 +397,11 @@ def diagnose(
                     calibrated_error=float(calibrated_rows.sum() / n),
                     metric="wear_curve_shape" if cause.metric == "shape" else "log_area")
         raw_p.append(p)
-        results.append((cause, gain, p, uniq.size,
-                        "vehicle_id" if level is vehicle else "wheel_id"))
+        results.append((cause, gain, p, how))
     adj = _holm(raw_p) if raw_p else np.array([])
     findings, preds = [], {}
     covs: dict[str, list[Any]] = {}
-    for (cause, gain, p, n_level, level_name), p_adj in zip(results, adj, strict=True):
+    for (cause, gain, p, how), p_adj in zip(results, adj, strict=True):
         full = cause.fit(data, np.ones(data.n, dtype=bool))
         significant = bool(p_adj < alpha)
         material = bool(gain.relative >= min_relative_gain and gain.ci95_low > 0)
@@ -325,8 +410,7 @@ def diagnose(
         if cause.metric != "shape":
             preds[cause.code] = cause.predict(data, full).tolist()
         evidence = {
-            "p_value": p_adj, "p_value_raw": p, "test": f"one-sided paired t-test over "
-            f"{n_level} {level_name} groups of held-out error differences, Holm-adjusted",
+            "p_value": p_adj, "p_value_raw": p, "test": how,
             "effect_size": _effect_size(cause, full), "subgroup": _subgroup(cause, data),
             "interval": {"relative_gain_ci95": [gain.ci95_low, gain.ci95_high]},
             "confounded_with": _confounded(cause, chosen, data, vehicle),
@@ -421,6 +505,18 @@ class ExtendedModel:
                    dict(data["parameters"]), {k: float(v) for k, v in
                                               data["log_scale"].items()})
 
+    def correct_wear_curves(self, frame: pd.DataFrame, curves_mm: Any) -> NDArray[np.float64]:
+        """``profile_misalignment`` only: measured wear curves on the base model's grid with
+        each instrument's geometric error removed (module ``correct_wear_curves``)."""
+        return correct_wear_curves(self, frame, curves_mm, grid_y_mm=self.base.grid_y_mm,
+                                   split_y_mm=self.base.split_y_mm)
+
+    def correct_profile(self, instrument_id: str, y_mm: Any, z_mm: Any
+                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``profile_misalignment`` only: a raw profile's points corrected (module
+        ``correct_profile``)."""
+        return correct_profile(self, instrument_id, y_mm, z_mm, split_y_mm=self.base.split_y_mm)
+
     def rate_factors(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
                      axle: int, side: str, covariates: Mapping[str, Any] | None = None
                      ) -> dict[str, float]:
@@ -497,8 +593,9 @@ def apply_extension(model: HybridModel, finding: Finding) -> HybridModel | Exten
     """The model extended by a finding.
 
     ``wear_measure`` gives a plain HybridModel with the other measure and refitted c_s;
-    ``profile_misalignment`` corrects the data, not the model (the base model is returned,
-    to be recalibrated on corrected profiles); every other cause an ``ExtendedModel``.
+    ``profile_misalignment`` corrects the data, not the rates: an ``ExtendedModel`` that
+    predicts exactly as the base model and carries the per-instrument corrections
+    (``correct_wear_curves``, ``correct_profile``); every other cause an ``ExtendedModel``.
     """
     ext = finding.extension
     params = dict(ext["parameters"])
@@ -507,8 +604,72 @@ def apply_extension(model: HybridModel, finding: Finding) -> HybridModel | Exten
                        flange=replace(model.flange, c_s=float(params["c_s_flange"])),
                        tread=replace(model.tread, c_s=float(params["c_s_tread"])))
     if finding.cause == "profile_misalignment":
-        return model
+        # the wear model itself is right; what the extension carries is the per-instrument
+        # geometric correction of the measurements (``correct_wear_curves``,
+        # ``correct_profile``); its rates are the base model's (no scale change)
+        return ExtendedModel(model, finding.cause, params, {"flange": 0.0, "tread": 0.0})
     return ExtendedModel(model, finding.cause, params, dict(ext["log_scale"]))
+
+
+def _instrument_corrections(extension: Finding | ExtendedModel | Mapping[str, Any]
+                            ) -> dict[str, dict[str, float]]:
+    if isinstance(extension, Finding):
+        params = extension.extension["parameters"]
+    elif isinstance(extension, ExtendedModel):
+        params = extension.parameters
+    else:
+        params = extension.get("parameters", extension)
+    corr = params.get("corrections")
+    if corr is None:
+        raise ValueError("extension: not a profile_misalignment extension with corrections")
+    return {str(k): {n: float(x) for n, x in v.items()} for k, v in corr.items()}
+
+
+def correct_wear_curves(extension: Finding | ExtendedModel | Mapping[str, Any],
+                        frame: pd.DataFrame, curves_mm: Any, *, grid_y_mm: Any,
+                        split_y_mm: float = -30.0) -> NDArray[np.float64]:
+    """Measured wear curves with each instrument's fitted geometric error removed [mm].
+
+    extension : the ``profile_misalignment`` finding, the saved ExtendedModel or its
+        parameters (``corrections`` per instrument relative to the reference instrument)
+    frame : one row per curve with ``instrument_id``; curves_mm : (n, g) on ``grid_y_mm``
+
+    w_corrected = w - (e y z' + d_f z' [y < split] + d_s z') with the instrument's lateral
+    scale error e, flange-tread offset d_f and lateral shift d_s (residuals.geometric_basis,
+    seed 000 §IV.A). Instruments without a correction are returned unchanged.
+    """
+    corr = _instrument_corrections(extension)
+    curves = np.array(curves_mm, dtype=float, copy=True)
+    basis = geometric_basis(grid_y_mm, split_y_mm)
+    if curves.ndim != 2 or curves.shape[1] != basis.shape[1]:
+        raise ValueError(f"curves: must have shape (n, {basis.shape[1]}) on grid_y_mm")
+    if "instrument_id" not in frame.columns or len(frame) != curves.shape[0]:
+        raise ValueError("frame: needs instrument_id and one row per curve")
+    inst = frame["instrument_id"].astype(str).to_numpy()
+    names = cz.ProfileMisalignment.basis_names
+    for name, c in corr.items():
+        coef = np.array([c[k] for k in names])
+        curves[inst == name] -= coef @ basis
+    return curves
+
+
+def correct_profile(extension: Finding | ExtendedModel | Mapping[str, Any], instrument_id: str,
+                    y_mm: Any, z_mm: Any, *, split_y_mm: float = -30.0
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A measured profile's points with the instrument's fitted geometric error undone [mm].
+
+    Inverse of the error model of ``correct_wear_curves``: y <- y - d_s - d_f [y < split],
+    then y <- y / (1 + e) about the tape circle; z unchanged. Align and process the
+    corrected points as usual (``processing.process_profile``).
+    """
+    corr = _instrument_corrections(extension).get(str(instrument_id))
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    if corr is None:
+        return y.copy(), z.copy()
+    y = y - corr["lateral_shift_mm"]
+    y = np.where(y < split_y_mm, y - corr["flange_offset_mm"], y)
+    return y / (1.0 + corr["lateral_scale"]), z.copy()
 
 
 # --- figures and report -----------------------------------------------------------------------

@@ -1,10 +1,12 @@
 """API-level hidden-effect tests for ``POST /v1/models/{id}/diagnose`` (issue 4).
 
-They import a fleet-twin dataset through the API (routes with their attributes, the table,
-the long CSV), calibrate as a user would (unit A's motor bogies) and call the diagnose
-endpoint: the verdict must name the hidden cause (or ``none`` on effect-free data), the saved
-extended model must be usable by predict and reprofiling, and the HTML report must carry the
-figures.
+For every cause of the catalogue they hide the effect at a moderate strength in a fleet-twin
+dataset, import it through the API as a user would (routes with their attributes such as
+``flange_lubrication``, the curve-radius table with both measures, the long CSV with
+``measured_on``, ``load_t``, ``instrument_id`` and ``running_mode`` columns), calibrate on
+unit A's motor bogies and call the diagnose endpoint: the verdict must name the hidden cause
+(or ``none`` on effect-free data) with a material held-out gain, the saved extended model
+must be usable by predict and reprofiling, and the HTML report must carry the figures.
 """
 
 from __future__ import annotations
@@ -22,13 +24,21 @@ from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics import twin_effects as te
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=16)
 def _twin(effect: str, seed: int = 0):
     table = ft.synthetic_wear_table()
-    effects = {"none": (), "traction": (te.traction(1.3),),
-               "flange_lubrication": (te.flange_lubrication(0.5),),
-               "nonlinear_progression": (te.nonlinear_progression(0.75),)}
-    cfg = te.scenario_config(seed=seed, wear_effects=effects[effect])
+    # moderate strengths of every cause of the catalogue (the generator's truths)
+    effects = {"none": ((), ()), "traction": ((te.traction(1.3),), ()),
+               "running_direction": ((te.running_direction(table, 0.8),), ()),
+               "curve_asymmetry": ((te.curve_asymmetry(table, 0.7),), ()),
+               "flange_lubrication": ((te.flange_lubrication(0.5),), ()),
+               "wear_measure": ((te.wear_measure(table),), ()),
+               "nonlinear_progression": ((te.nonlinear_progression(0.75),), ()),
+               "seasonal_friction": ((te.seasonal_friction(0.3),), ()),
+               "vehicle_load": ((te.vehicle_load(1.5),), ()),
+               "profile_misalignment": ((), (te.flange_tread_offset("MP-2", 0.3),))}
+    wear, profile = effects[effect]
+    cfg = te.scenario_config(seed=seed, wear_effects=wear, profile_effects=profile)
     return cfg, table, ft.generate_fleet(cfg, table)
 
 
@@ -59,7 +69,18 @@ def _load(client: TestClient, effect: str) -> int:
     return r.json()["id"]
 
 
-@pytest.mark.parametrize("cause", ["traction", "flange_lubrication", "nonlinear_progression"])
+CAUSES = ["traction", "running_direction", "curve_asymmetry", "flange_lubrication",
+          "wear_measure", "nonlinear_progression", "seasonal_friction", "vehicle_load",
+          "profile_misalignment"]
+
+
+def test_every_cause_of_the_catalogue_is_tested():
+    from wearcast.statistics.causes import CAUSE_CODES
+
+    assert sorted(CAUSES) == sorted(CAUSE_CODES)
+
+
+@pytest.mark.parametrize("cause", CAUSES)
 def test_api_names_hidden_cause(tmp_path, cause):
     client = _client(tmp_path)
     model_id = _load(client, cause)
@@ -152,3 +173,28 @@ def test_report_html_has_the_figures(tmp_path):
     r = client.post(f"/v1/models/{model_id}/diagnose?format=html",
                     json={"causes": ["traction"]})
     assert r.status_code == 200 and "<svg" in r.text
+
+
+def test_saved_misalignment_model_carries_the_instrument_correction(tmp_path):
+    # the twin shifts MP-2's flange part by +0.3 mm (te.flange_tread_offset): the saved model
+    # predicts exactly as the calibrated one and carries MP-2's correction relative to MP-1
+    # (unit A's instrument, the calibration's); the rigid alignment absorbs part of the
+    # offset through its lateral shift and rotation, hence the wide tolerance.
+    client = _client(tmp_path)
+    model_id = _load(client, "profile_misalignment")
+    r = client.post(f"/v1/models/{model_id}/diagnose",
+                    json={"causes": ["profile_misalignment", "traction"], "save_as": "fixed"})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["verdict"] == "profile_misalignment"
+    saved = body["saved_model"]
+    assert saved["kind"] == "extended" and "correct_wear_curves" in body["save_reason"]
+    params = saved["extension"]["parameters"]
+    assert params["reference_instrument"] == "MP-1"
+    assert params["corrections"]["MP-2"]["flange_offset_mm"] == pytest.approx(0.3, abs=0.15)
+    assert params["corrections"]["MP-1"]["flange_offset_mm"] == 0.0
+    ask = {"route_id": "aosta", "mileage_km": [80_000], "bogie_type": "trailer", "axle": 2,
+           "side": "right"}
+    base = client.post(f"/v1/models/{model_id}/predict", json=ask).json()
+    ext = client.post(f"/v1/models/{saved['id']}/predict", json=ask).json()
+    assert ext["rates_mm2_per_km"] == base["rates_mm2_per_km"]
