@@ -27,7 +27,11 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.statistics.profile_parameters import BACK_FACE_Y_MM, flange_parameters_batch
+from wearcast.statistics.profile_parameters import (
+    BACK_FACE_Y_MM,
+    BatchGrid,
+    flange_parameters_batch,
+)
 from wearcast.statistics.routes import DIRECTIONS, Route, rail_for
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, DEFAULT_SPLIT_Y_MM
 from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, normal_quantile
@@ -324,46 +328,66 @@ class HybridModel:
 
 @dataclass(frozen=True)
 class StateInterpolant:
-    """One region's joined state curves with the zero curve first, (m + 1, c) [mm], and the
-    state areas with 0 first, (m + 1,) [mm²]: the curve for area A is the linear
-    interpolation between the neighbouring rows, the last state scaled beyond it (as
-    :func:`wear_states.interpolation_weights`)."""
+    """One region's joined state curves as line pieces in the area: the curve for area A
+    [mm²] in piece i is ``offset_mm[i] + A · slope_mm[i]`` [mm], (m + 1, c). Piece i < m
+    interpolates linearly between state i - 1 and i (state -1 the zero curve at area 0),
+    piece m scales the last state beyond its area (as
+    :func:`wear_states.interpolation_weights`). ``knots_mm2`` (m + 1,) holds 0 and the
+    state areas."""
 
     knots_mm2: NDArray
-    curves_mm: NDArray
+    offset_mm: NDArray
+    slope_mm: NDArray
 
-    def __call__(self, areas_mm2: NDArray) -> tuple[NDArray, NDArray]:
-        """(curves (n, c) [mm], extrapolated (n,)) for areas (n,) [mm²]."""
+    @classmethod
+    def build(cls, knots_mm2: NDArray, curves_mm: NDArray) -> StateInterpolant:
+        """From the state areas with 0 first (m + 1,) [mm²] and the curves with the zero
+        curve first (m + 1, c) [mm]."""
+        m = knots_mm2.size - 1
+        slope = np.zeros_like(curves_mm)
+        offset = np.zeros_like(curves_mm)
+        if m > 0:
+            dk = np.diff(knots_mm2)[:, None]
+            slope[:m] = np.diff(curves_mm, axis=0) / dk
+            offset[:m] = curves_mm[:m] - knots_mm2[:m, None] * slope[:m]
+            slope[m] = curves_mm[m] / knots_mm2[m]
+        for a in (knots_mm2, offset, slope):
+            a.setflags(write=False)
+        return cls(knots_mm2, offset, slope)
+
+    def pieces(self, areas_mm2: NDArray) -> tuple[NDArray, NDArray]:
+        """(piece index (n,), extrapolated (n,)) of areas (n,) [mm²]."""
         a = areas_mm2
         if not np.isfinite(a).all() or (a < 0).any():
             raise ValueError("area_mm2: must be finite and >= 0")
-        m = self.knots_mm2.size - 1
-        if m == 0:
-            return np.zeros((a.size, self.curves_mm.shape[1])), a > 0
-        knots, curves = self.knots_mm2, self.curves_mm
-        # the interval of each area: searchsorted gives >= 1 for areas >= 0
-        i = np.minimum(np.searchsorted(knots, a, side="right") - 1, m - 1)
-        lo = knots[i]
-        t = ((a - lo) / (knots[i + 1] - lo))[:, None]
-        out = curves[i] * (1.0 - t) + curves[i + 1] * t
+        knots = self.knots_mm2
+        m = knots.size - 1
         extrapolated = a > knots[m] * (1 + 1e-12)
-        if extrapolated.any():
-            out[extrapolated] = curves[m] * (a[extrapolated] / knots[m])[:, None]
-        return out, extrapolated
+        i = np.minimum(np.searchsorted(knots, a, side="right") - 1, max(m - 1, 0))
+        i[extrapolated] = m
+        return i, extrapolated
+
+    def __call__(self, areas_mm2: NDArray) -> tuple[NDArray, NDArray]:
+        """(curves (n, c) [mm], extrapolated (n,)) for areas (n,) [mm²]."""
+        i, extrapolated = self.pieces(areas_mm2)
+        return self.offset_mm[i] + areas_mm2[:, None] * self.slope_mm[i], extrapolated
 
 
 @dataclass(frozen=True)
 class ParameterKernel:
     """Per-model constants of :func:`parameters_at_areas` (no request data): the state
-    interpolants of both regions on :attr:`HybridModel.parameter_columns`, the grid and
-    reference heights there [mm] and the last lateral position [mm] at which a flank point
-    found on the columns is the whole grid's."""
+    interpolants of both regions on :attr:`HybridModel.parameter_columns`, the reference
+    heights there [mm], the columns' grid for the batched Sd/Sh/qR and the last lateral
+    position [mm] at which a flank point found on the columns is the whole grid's."""
 
     flange: StateInterpolant
     tread: StateInterpolant
     y_mm: NDArray
     reference_z_mm: NDArray
     y_safe_mm: float
+    grid: BatchGrid | None
+    #: reference minus the flange pieces' offsets, (m_f + 1, c) [mm]
+    _ref_minus_flange_offset: NDArray = field(repr=False)
 
     @classmethod
     def build(cls, model: HybridModel) -> ParameterKernel:
@@ -374,17 +398,28 @@ class ParameterKernel:
             rs = model.states.region(region)
             curves = np.vstack([np.zeros((1, cols.size)), joined[:, cols]])
             knots = np.concatenate([[0.0], rs.areas_mm2])
-            for a in (curves, knots):
-                a.setflags(write=False)
-            regions.append(StateInterpolant(knots, curves))
+            regions.append(StateInterpolant.build(knots, curves))
         # the flank crossings use the grid point after the crossing: both points must lie
         # before the last two prefix points for the prefix to give the whole-grid result
         n_prefix = int(np.count_nonzero(y <= PARAMETER_MAX_Y_MM))
         y_safe = float(y[n_prefix - 2]) if n_prefix >= 2 else -math.inf
         ref = np.ascontiguousarray(model.reference_z_mm[cols])
-        for a in (y, ref):
+        ref_minus = ref[None, :] - regions[0].offset_mm
+        for a in (y, ref, ref_minus):
             a.setflags(write=False)
-        return cls(regions[0], regions[1], y, ref, y_safe)
+        return cls(regions[0], regions[1], y, ref, y_safe, BatchGrid.build(y), ref_minus)
+
+    def profiles(self, flange_area_mm2: NDArray, tread_area_mm2: NDArray
+                 ) -> tuple[NDArray, NDArray]:
+        """Worn profiles z = z_ref - w on the columns (M, c) [mm] and extrapolation flags
+        (M,) for region areas (M,) [mm²]."""
+        i_f, ef = self.flange.pieces(flange_area_mm2)
+        i_t, et = self.tread.pieces(tread_area_mm2)
+        z = self._ref_minus_flange_offset[i_f]
+        z -= flange_area_mm2[:, None] * self.flange.slope_mm[i_f]
+        z -= self.tread.offset_mm[i_t]
+        z -= tread_area_mm2[:, None] * self.tread.slope_mm[i_t]
+        return z, ef | et
 
 
 def _route_lookup(route_by_wheel: Route | Mapping[Any, Route], row_route: Any,
@@ -652,12 +687,11 @@ def parameters_at_areas(model: HybridModel, flange_area_mm2: ArrayLike,
     kernel = model.parameter_kernel
     fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float)).ravel()
     ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float)).ravel()
-    wear_f, ef = kernel.flange(fa)
-    wear_t, et = kernel.tread(ta)
-    extrapolated = ef | et
-    z = kernel.reference_z_mm - wear_f
-    z -= wear_t
-    params = flange_parameters_batch(kernel.y_mm, z).stacked()
+    z, extrapolated = kernel.profiles(fa, ta)
+    if kernel.grid is not None and np.isfinite(z).all():
+        params = kernel.grid.parameters(z)
+    else:
+        params = flange_parameters_batch(kernel.y_mm, z).stacked()
     y_sd = params[:, 0] + BACK_FACE_Y_MM
     y_qr = y_sd - params[:, 2]
     with np.errstate(invalid="ignore"):

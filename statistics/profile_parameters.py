@@ -165,41 +165,92 @@ class FlangeParameterArrays:
         return np.column_stack([self.sd_mm, self.sh_mm, self.qr_mm])
 
 
-def _flank_crossings(y: NDArray, z: NDArray, rows: NDArray, start: NDArray, level: NDArray
-                     ) -> NDArray:
-    """Vectorised :func:`_flank_crossing` for rows ``rows`` (M,) of ``z`` (N, g) [mm].
+def _flank_crossings(y: NDArray, z: NDArray, start: NDArray, levels: NDArray) -> NDArray:
+    """Vectorised :func:`_flank_crossing`: rows of ``z`` (M, g) [mm], their start indices
+    ``start`` (M,) and L levels per row ``levels`` (M, L) [mm]; returns y (M, L) [mm].
 
-    Same rule as the scalar version, row by row: the first grid point at or after ``start``
-    below ``level``, then the quadratic through the bracketing points and the next one, with
-    the same fall-backs to the chord.
+    Same rule as the scalar version, row by row and level by level: the first grid point at
+    or after ``start`` below the level, then the quadratic through the bracketing points and
+    the next one, with the same fall-backs to the chord. Only the columns from the smallest
+    start on are searched.
     """
     g = z.shape[1]
-    below = (z[rows] < level[:, None]) & (np.arange(g)[None, :] >= start[:, None])
-    found = below.any(axis=1)
-    k = np.argmax(below, axis=1)
-    at_start = k == start
+    s0 = int(start.min()) if start.size else 0
+    zs = z[:, s0:]
+    below = zs[:, None, :] < levels[:, :, None]
+    if not (start == s0).all():
+        below &= (np.arange(s0, g) >= start[:, None])[:, None, :]
+    found = below.any(axis=2)
+    k = below.argmax(axis=2) + s0
+    at_start = k == start[:, None]
     k1 = np.maximum(k, 1)
-    y0, y1 = y[k1 - 1], y[k1]
-    z0, z1 = z[rows, k1 - 1], z[rows, k1]
+    k2 = np.minimum(k1 + 1, g - 1)
+    y0, y1, y2 = y[k1 - 1], y[k1], y[k2]
+    flat = z.reshape(-1)
+    row = (np.arange(z.shape[0]) * g)[:, None]
+    z0, z1, z2 = flat[row + (k1 - 1)], flat[row + k1], flat[row + k2]
     h = y1 - y0
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_lin = (level - z0) * h / (z1 - z0)
-        k2 = np.minimum(k1 + 1, g - 1)
-        y2, z2 = y[k2], z[rows, k2]
+        t_lin = (levels - z0) * h / (z1 - z0)
         d01 = (z1 - z0) / h
         a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
         b = d01 - a * h
-        c = z0 - level
-        disc = b * b - 4.0 * a * c
-        root = np.sqrt(np.where(disc >= 0.0, disc, 0.0))
+        disc = b * b - 4.0 * a * (z0 - levels)
+        root = np.sqrt(np.maximum(disc, 0.0))
         t1 = (-b - root) / (2.0 * a)
         t2 = (-b + root) / (2.0 * a)
-    quadratic = (k1 + 1 < g) & ~(np.abs(a) * h < 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
+    quadratic = (k1 + 1 < g) & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
     ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
-    ok2 = quadratic & ~ok1 & (t2 >= 0.0) & (t2 <= h)
+    ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
     t = np.where(ok1, t1, np.where(ok2, t2, t_lin))
     out = np.where(at_start, y[k], y0 + t)
     return np.where(found, out, np.nan)
+
+
+@dataclass(frozen=True)
+class BatchGrid:
+    """What the batched Sd/Sh/qR need of a lateral grid, computed once per grid: the grid
+    y [mm], the tip-region columns [lo, hi) and the tape-circle interpolation (columns j,
+    j + 1 and the weight of j + 1). ``None`` from :meth:`build` when the grid cannot give
+    the parameters (too short, no tape circle, no tip region)."""
+
+    y_mm: NDArray
+    tip_lo: int
+    tip_hi: int
+    tape_j: int
+    tape_w: float
+
+    @classmethod
+    def build(cls, y_mm: NDArray, tip_region_y_mm: tuple[float, float] = (-65.0, -40.0)
+              ) -> BatchGrid | None:
+        y = np.asarray(y_mm, dtype=float)
+        lo, hi = (int(v) for v in np.searchsorted(y, tip_region_y_mm))
+        if (not np.all(np.isfinite(y)) or y.size < 3 or y[0] > 0.0 or y[-1] < 0.0
+                or hi <= lo):
+            return None
+        j = min(int(np.searchsorted(y, 0.0, side="right")) - 1, y.size - 2)
+        w = 0.0 if y[j] == 0.0 else (0.0 - y[j]) / (y[j + 1] - y[j])
+        return cls(y, lo, hi, j, float(w))
+
+    def parameters(self, z: NDArray) -> NDArray:
+        """(M, 3) Sd, Sh, qR [mm] of finite rows ``z`` (M, g) on this grid."""
+        n = z.shape[0]
+        j = self.tape_j
+        if self.tape_w == 0.0:
+            z_tape = z[:, j]
+        else:  # as np.interp(0, y, z) row by row
+            z_tape = (z[:, j + 1] - z[:, j]) * self.tape_w + z[:, j]
+        k = self.tip_lo + np.argmax(z[:, self.tip_lo:self.tip_hi], axis=1)
+        z_tip = z[np.arange(n), k]
+        levels = np.empty((n, 2))
+        levels[:, 0] = z_tape + SD_HEIGHT_MM
+        levels[:, 1] = z_tip - QR_DEPTH_MM
+        both = _flank_crossings(self.y_mm, z, k, levels)
+        out = np.empty((n, 3))
+        out[:, 0] = both[:, 0] - BACK_FACE_Y_MM
+        out[:, 1] = z_tip - z_tape
+        out[:, 2] = both[:, 0] - both[:, 1]
+        return out
 
 
 def flange_parameters_batch(
@@ -227,38 +278,15 @@ def flange_parameters_batch(
     if y.ndim != 1 or z.ndim != 2 or z.shape[1] != y.size:
         raise ValueError(f"z_mm: must have shape (N, {y.size}), got {np.shape(z_mm)}")
     n = z.shape[0]
-    sd, sh, qr = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
-    lo, hi = np.searchsorted(y, tip_region_y_mm)
-    if (not np.all(np.isfinite(y)) or y.size < 3 or y[0] > 0.0 or y[-1] < 0.0 or hi <= lo
-            or n == 0):
-        for i in range(n):
-            fp = flange_parameters(y, z[i], tip_region_y_mm=tip_region_y_mm)
-            sd[i], sh[i], qr[i] = fp.sd_mm, fp.sh_mm, fp.qr_mm
-        return FlangeParameterArrays(sd, sh, qr)
-    finite = np.isfinite(z).all(axis=1)
+    out = np.full((n, 3), np.nan)
+    grid = BatchGrid.build(y, tip_region_y_mm) if n else None
+    finite = np.isfinite(z).all(axis=1) if grid is not None else np.zeros(n, bool)
     for r in np.flatnonzero(~finite):
         fp = flange_parameters(y, z[r], tip_region_y_mm=tip_region_y_mm)
-        sd[r], sh[r], qr[r] = fp.sd_mm, fp.sh_mm, fp.qr_mm
-    zf = z[finite]
-    if zf.shape[0]:
-        # z at the tape circle, as np.interp(0, y, z) row by row
-        j = min(int(np.searchsorted(y, 0.0, side="right")) - 1, y.size - 2)
-        if y[j] == 0.0:
-            z_tape = zf[:, j]
-        else:
-            slope = (zf[:, j + 1] - zf[:, j]) / (y[j + 1] - y[j])
-            z_tape = slope * (0.0 - y[j]) + zf[:, j]
-        nf = zf.shape[0]
-        k = lo + np.argmax(zf[:, lo:hi], axis=1)
-        z_tip = zf[np.arange(nf), k]
-        # the Sd and the qR points of every row in one pass
-        both = _flank_crossings(y, zf, np.tile(np.arange(nf), 2), np.tile(k, 2),
-                                np.concatenate([z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM]))
-        y_sd, y_qr = both[:nf], both[nf:]
-        sd[finite] = y_sd - BACK_FACE_Y_MM
-        sh[finite] = z_tip - z_tape
-        qr[finite] = y_sd - y_qr
-    return FlangeParameterArrays(sd, sh, qr)
+        out[r] = fp.sd_mm, fp.sh_mm, fp.qr_mm
+    if grid is not None and finite.any():
+        out[finite] = grid.parameters(z if finite.all() else z[finite])
+    return FlangeParameterArrays(out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy())
 
 
 def parameters_from_wear_curve(

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -61,6 +62,22 @@ def _as_limits(limits: WheelLimits | Mapping[str, float] | None) -> WheelLimits:
     return WheelLimits(**{k: float(v) for k, v in limits.items()})
 
 
+_SIGNS = np.array([1.0, -1.0, 1.0])
+
+
+def _margin_offsets(limits: WheelLimits) -> np.ndarray:
+    """Offsets with which ``params · _SIGNS + offsets`` are the margins of :func:`_margins`."""
+    return np.array([-limits.sd_min_mm, limits.sh_max_mm, -limits.qr_min_mm])
+
+
+@lru_cache(maxsize=16)
+def _search_grid(horizon_km: float, n_grid: int) -> np.ndarray:
+    """0 and the geometric grid horizon/1e5 ... horizon (``n_grid`` points) [km], read-only."""
+    grid = np.concatenate([[0.0], np.geomspace(horizon_km / 1e5, horizon_km, n_grid)])
+    grid.setflags(write=False)
+    return grid
+
+
 @dataclass(frozen=True)
 class LimitCrossing:
     """First limit crossing for one set of rates."""
@@ -79,11 +96,12 @@ def _evaluate(model: HybridModel, start: Mapping[str, float], rates: Mapping[str
     """Parameters (Q, n, 3), margins (Q, n, 3) and extrapolation flags (Q, n) at mileages
     ``s_km`` (Q, n), row q grown with the rates ``rates[region][q]`` [mm²/km] — one batch."""
     q, n = s_km.shape
-    flange = start["flange"] + rates["flange"][:, None] * s_km
-    tread = start["tread"] + rates["tread"][:, None] * s_km
-    params, extra = parameters_at_areas(model, flange.ravel(), tread.ravel())
-    return (params.reshape(q, n, 3), _margins(params, limits).reshape(q, n, 3),
-            extra.reshape(q, n))
+    flange = (start["flange"] + rates["flange"][:, None] * s_km).reshape(-1)
+    tread = (start["tread"] + rates["tread"][:, None] * s_km).reshape(-1)
+    params, extra = parameters_at_areas(model, flange, tread)
+    margins = params * _SIGNS + _margin_offsets(limits)
+    margins[~np.isfinite(margins)] = -np.inf  # an undefined parameter counts as crossed
+    return params.reshape(q, n, 3), margins.reshape(q, n, 3), extra.reshape(q, n)
 
 
 def _params_from_margins(margins: np.ndarray, limits: WheelLimits) -> np.ndarray:
@@ -91,6 +109,19 @@ def _params_from_margins(margins: np.ndarray, limits: WheelLimits) -> np.ndarray
     params = np.stack([margins[..., 0] + limits.sd_min_mm, limits.sh_max_mm - margins[..., 1],
                        margins[..., 2] + limits.qr_min_mm], axis=-1)
     return np.where(np.isfinite(margins), params, np.nan)
+
+
+@dataclass
+class _Bracket:
+    """The bracket [lo, hi] [km] of one rate set's first crossing: margins (3,) [mm] and
+    extrapolation flags at both ends (all margins >= 0 at lo, some < 0 at hi)."""
+
+    lo: float
+    hi: float
+    m_lo: np.ndarray
+    m_hi: np.ndarray
+    e_lo: bool
+    e_hi: bool
 
 
 def _first_crossings(model: HybridModel, start: Mapping[str, float],
@@ -114,87 +145,94 @@ def _first_crossings(model: HybridModel, start: Mapping[str, float],
     closer (about 1e-7 relative to a Brent root on the test models).
     """
     n_q = rates["flange"].size
-    grid = np.concatenate([[0.0], np.geomspace(horizon_km / 1e5, horizon_km, n_grid)])
+    grid = _search_grid(float(horizon_km), int(n_grid))
     params, margins, extra = _evaluate(model, start, rates, limits,
                                        np.broadcast_to(grid, (n_q, grid.size)))
-    worst = margins.min(axis=2)
-    crossed = worst < 0
+    crossed = margins.min(axis=2) < 0
+    any_crossed = crossed.any(axis=1).tolist()
+    first = crossed.argmax(axis=1).tolist()
     out: list[LimitCrossing | None] = [None] * n_q
+    brackets: dict[int, _Bracket] = {}
     nan = float("nan")
     for q in range(n_q):
-        if not crossed[q].any():
+        j = first[q]
+        if not any_crossed[q]:
             out[q] = LimitCrossing(math.inf, None, nan, nan, nan, bool(extra[q].any()))
-        elif crossed[q, 0]:
+        elif j == 0:
             out[q] = LimitCrossing(0.0, LIMIT_NAMES[int(np.argmin(margins[q, 0]))],
                                    *(float(v) for v in params[q, 0]), bool(extra[q, 0]))
-    idx = np.flatnonzero([o is None for o in out])
-    if idx.size:
-        sub = {r: rates[r][idx] for r in REGIONS}
-        j = np.argmax(crossed[idx], axis=1)
-        bracket = (grid[j - 1], grid[j], margins[idx, j - 1], margins[idx, j],
-                   extra[idx, j - 1], extra[idx, j])
-        bracket = _refine(model, start, sub, limits, bracket, n_refine, rtol, atol_km)
-        for a, crossing in enumerate(_crossing_in(model, start, sub, limits, bracket)):
-            out[int(idx[a])] = crossing
+        else:
+            brackets[q] = _Bracket(float(grid[j - 1]), float(grid[j]), margins[q, j - 1],
+                                   margins[q, j], bool(extra[q, j - 1]), bool(extra[q, j]))
+    if brackets:
+        _refine(model, start, rates, limits, brackets, n_refine, rtol, atol_km)
+        for q, crossing in _crossings_in(model, start, rates, limits, brackets).items():
+            out[q] = crossing
     return [o for o in out if o is not None]
 
 
-Bracket = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+def _subset(rates: Mapping[str, np.ndarray], rows: list[int]) -> dict[str, np.ndarray]:
+    return {r: rates[r][rows] for r in REGIONS}
 
 
 def _refine(model: HybridModel, start: Mapping[str, float], rates: Mapping[str, np.ndarray],
-            limits: WheelLimits, bracket: Bracket, n_refine: int, rtol: float,
-            atol_km: float) -> Bracket:
-    """Shrink brackets (lo, hi, margins and extrapolation flags at both ends) of the first
-    crossing until no wider than max(rtol · hi, atol_km): one batch per level."""
-    lo, hi, m_lo, m_hi, e_lo, e_hi = bracket
-    rows = np.arange(lo.size)
+            limits: WheelLimits, brackets: dict[int, _Bracket], n_refine: int, rtol: float,
+            atol_km: float) -> None:
+    """Shrink the brackets (by rate-set row) of the first crossing in place until no wider
+    than max(rtol · hi, atol_km): one batch per level, each shrinking (n_refine + 1)-fold."""
     t = np.arange(1, n_refine + 1) / (n_refine + 1)
-    for _ in range(64):  # each level shrinks a bracket (n_refine + 1)-fold
-        wide = (hi - lo) > np.maximum(rtol * hi, atol_km)
-        if not wide.any():
-            break
+    for _ in range(64):
+        rows = [q for q, b in brackets.items() if b.hi - b.lo > max(rtol * b.hi, atol_km)]
+        if not rows:
+            return
+        lo = np.array([brackets[q].lo for q in rows])
+        hi = np.array([brackets[q].hi for q in rows])
         s_new = lo[:, None] + t[None, :] * (hi - lo)[:, None]
-        _, m_new, e_new = _evaluate(model, start, rates, limits, s_new)
-        hit = np.concatenate([m_new.min(axis=2) < 0, np.ones((lo.size, 1), bool)], axis=1)
-        k = np.argmax(hit, axis=1)  # first crossed point; n_refine = the old hi
-        s_all = np.concatenate([lo[:, None], s_new, hi[:, None]], axis=1)
-        m_all = np.concatenate([m_lo[:, None], m_new, m_hi[:, None]], axis=1)
-        e_all = np.concatenate([e_lo[:, None], e_new, e_hi[:, None]], axis=1)
-        lo, hi = np.where(wide, s_all[rows, k], lo), np.where(wide, s_all[rows, k + 1], hi)
-        m_lo = np.where(wide[:, None], m_all[rows, k], m_lo)
-        m_hi = np.where(wide[:, None], m_all[rows, k + 1], m_hi)
-        e_lo = np.where(wide, e_all[rows, k], e_lo)
-        e_hi = np.where(wide, e_all[rows, k + 1], e_hi)
-    return lo, hi, m_lo, m_hi, e_lo, e_hi
+        _, m_new, e_new = _evaluate(model, start, _subset(rates, rows), limits, s_new)
+        hit = m_new.min(axis=2) < 0
+        any_hit = hit.any(axis=1).tolist()
+        k_hit = hit.argmax(axis=1).tolist()
+        for a, q in enumerate(rows):
+            b = brackets[q]
+            k = k_hit[a] if any_hit[a] else n_refine  # n_refine: the old hi
+            if k < n_refine:
+                b.hi, b.m_hi, b.e_hi = float(s_new[a, k]), m_new[a, k], bool(e_new[a, k])
+            if k > 0:
+                b.lo, b.m_lo, b.e_lo = (float(s_new[a, k - 1]), m_new[a, k - 1],
+                                        bool(e_new[a, k - 1]))
 
 
-def _crossing_in(model: HybridModel, start: Mapping[str, float],
-                 rates: Mapping[str, np.ndarray], limits: WheelLimits, bracket: Bracket
-                 ) -> list[LimitCrossing]:
+def _crossings_in(model: HybridModel, start: Mapping[str, float],
+                  rates: Mapping[str, np.ndarray], limits: WheelLimits,
+                  brackets: dict[int, _Bracket]) -> dict[int, LimitCrossing]:
     """The first crossing inside each final bracket (step 3 of :func:`_first_crossings`)."""
-    lo, hi, m_lo, m_hi, e_lo, e_hi = bracket
-    crossed = m_hi < 0
-    finite = np.isfinite(m_lo) & np.isfinite(m_hi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frac = np.where(finite & crossed, m_lo / (m_lo - m_hi), 1.0)
-    # a limit whose parameter vanishes (margin -inf) at hi crosses there
-    s_limit = np.where(crossed, lo[:, None] + np.clip(frac, 0.0, 1.0) * (hi - lo)[:, None],
-                       np.inf)
-    limit = np.argmin(s_limit, axis=1)
-    root = s_limit[np.arange(lo.size), limit]
-    w = np.where(hi > lo, (root - lo) / np.where(hi > lo, hi - lo, 1.0), 1.0)[:, None]
-    with np.errstate(invalid="ignore"):
-        params = _params_from_margins(m_lo + w * (m_hi - m_lo), limits)
-    extra = e_hi.copy()
-    again = np.flatnonzero(~finite.all(axis=1) | (e_lo != e_hi))
-    if again.size:
-        p_root, _, e_root = _evaluate(model, start, {r: rates[r][again] for r in REGIONS},
-                                      limits, root[again, None])
-        params[again], extra[again] = p_root[:, 0], e_root[:, 0]
-    return [LimitCrossing(float(root[a]), LIMIT_NAMES[int(limit[a])],
-                          *(float(v) for v in params[a]), bool(extra[a]))
-            for a in range(lo.size)]
+    found: dict[int, tuple[float, int, np.ndarray, bool]] = {}
+    again: list[int] = []
+    for q, b in brackets.items():
+        m_lo, m_hi = b.m_lo.tolist(), b.m_hi.tolist()
+        s_limit = [math.inf] * 3
+        for i in range(3):
+            if m_hi[i] < 0:  # crossed at hi
+                if math.isfinite(m_lo[i]) and math.isfinite(m_hi[i]):
+                    frac = min(max(m_lo[i] / (m_lo[i] - m_hi[i]), 0.0), 1.0)
+                else:  # a limit whose parameter vanishes (margin -inf) at hi crosses there
+                    frac = 1.0
+                s_limit[i] = b.lo + frac * (b.hi - b.lo)
+        limit = s_limit.index(min(s_limit))
+        root = s_limit[limit]
+        w = (root - b.lo) / (b.hi - b.lo) if b.hi > b.lo else 1.0
+        with np.errstate(invalid="ignore"):
+            params = _params_from_margins(b.m_lo + w * (b.m_hi - b.m_lo), limits)
+        found[q] = (root, limit, params, b.e_hi)
+        if (b.e_lo != b.e_hi or not (np.isfinite(b.m_lo).all() and np.isfinite(b.m_hi).all())):
+            again.append(q)
+    if again:
+        roots = np.array([[found[q][0]] for q in again])
+        p_root, _, e_root = _evaluate(model, start, _subset(rates, again), limits, roots)
+        for a, q in enumerate(again):
+            found[q] = (found[q][0], found[q][1], p_root[a, 0], bool(e_root[a, 0]))
+    return {q: LimitCrossing(root, LIMIT_NAMES[limit], *(float(v) for v in params), extra)
+            for q, (root, limit, params, extra) in found.items()}
 
 
 @dataclass(frozen=True)
