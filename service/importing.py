@@ -25,10 +25,11 @@ import os
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from itertools import islice
 from pathlib import Path
-from typing import Any, BinaryIO, TypeAlias
+from typing import Any, BinaryIO, NamedTuple, TypeAlias
 
 import numpy as np
 from sqlalchemy import insert, select, tuple_
@@ -151,8 +152,25 @@ def _check_reference(record: ProfileRecord) -> None:
                               field="reference_profile")
 
 
-def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray) -> tuple[Any, Any] | tuple[None, str]:
-    """(processed profile, Sd/Sh/qR as measured) or (None, the reason it cannot be used).
+class _Processed(NamedTuple):
+    """What the measurements row keeps of a processed profile (small, so it pickles fast)."""
+
+    wear_mm: np.ndarray
+    grid_start_mm: float
+    grid_step_mm: float
+    flange_area_mm2: float
+    tread_area_mm2: float
+    lateral_shift_mm: float
+    vertical_shift_mm: float
+    rotation_rad: float
+    rms_residual_mm: float
+    sd_mm: float
+    sh_mm: float
+    qr_mm: float
+
+
+def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray) -> _Processed | str:
+    """The processed profile, or the reason it cannot be used.
 
     Runs in worker processes too, so it returns the error as text instead of raising.
     """
@@ -160,16 +178,22 @@ def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray) -> tuple[Any, Any] | tup
     from wearcast.statistics.profile_parameters import flange_parameters
 
     try:
-        processed = process_profile(y_mm, z_mm)
+        p = process_profile(y_mm, z_mm)
     except ValueError as exc:
-        return None, str(exc)
+        return str(exc)
     # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument), not of
     # the profile aligned to the reference: the alignment's lateral shift would move Sd.
-    return processed, flange_parameters(processed.cleaned.y_mm, processed.cleaned.z_mm)
+    params = flange_parameters(p.cleaned.y_mm, p.cleaned.z_mm)
+    grid = np.asarray(p.grid_y_mm)
+    return _Processed(np.asarray(p.wear_mm, dtype=np.float32), float(grid[0]),
+                      float(grid[1] - grid[0]), float(p.areas.flange_mm2),
+                      float(p.areas.tread_mm2), float(p.lateral_shift_mm),
+                      float(p.vertical_shift_mm), float(p.rotation_rad),
+                      float(p.rms_residual_mm), float(params.sd_mm), float(params.sh_mm),
+                      float(params.qr_mm))
 
 
-def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray]]
-                   ) -> list[tuple[Any, Any] | tuple[None, str]]:
+def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray]]) -> list[_Processed | str]:
     return [_process_arrays(y, z) for y, z in profiles]
 
 
@@ -195,37 +219,61 @@ def _pool() -> ProcessPoolExecutor | None:
         return _POOL
 
 
-def _process_records(records: list[ProfileRecord]) -> list[tuple[Any, Any]]:
-    """Process the profiles of a chunk (in parallel when it is large), keeping their order.
+def _discard_pool() -> None:
+    global _POOL
+    with _POOL_LOCK:
+        if _POOL is not None:
+            _POOL.shutdown(wait=False, cancel_futures=True)
+        _POOL = None
 
-    Raises the ImportFileError of the first unusable profile, naming its file and line.
+
+def _submit(records: list[ProfileRecord]) -> Callable[[], list[_Processed]]:
+    """Start processing a chunk's profiles; the returned callable waits for the results.
+
+    Large chunks go to the worker pool, so the caller can parse and insert meanwhile; a pool
+    that cannot run (e.g. a script without a ``__main__`` guard under ``spawn``) falls back to
+    processing in this process. The callable raises the ImportFileError of the first unusable
+    profile, naming its file and line.
     """
     for record in records:
         _check_reference(record)
     arrays = [(r.y_mm, r.z_mm) for r in records]
     pool = _pool() if len(records) >= PARALLEL_MIN_PROFILES else None
-    if pool is None:
-        results = _process_batch(arrays)
-    else:
-        n_parts = _POOL_WORKERS * 4
-        size = -(-len(arrays) // n_parts)
-        parts = [arrays[i:i + size] for i in range(0, len(arrays), size)]
-        results = [r for part in pool.map(_process_batch, parts) for r in part]
-    for record, (processed, detail) in zip(records, results, strict=True):
-        if processed is None:
-            meta = record.meta
-            raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} at "
-                                  f"{meta.mileage_km:g} km cannot be used: {detail}",
-                                  line=meta.source_line, field="z_mm")
-    return results  # type: ignore[return-value]
+    futures = []
+    if pool is not None:
+        size = -(-len(arrays) // (_POOL_WORKERS * 2))
+        try:
+            futures = [pool.submit(_process_batch, arrays[i:i + size])
+                       for i in range(0, len(arrays), size)]
+        except (BrokenProcessPool, RuntimeError):
+            _discard_pool()
+            futures = []
+
+    def results() -> list[_Processed]:
+        try:
+            done = [r for f in futures for r in f.result()] if futures else None
+        except BrokenProcessPool:
+            _discard_pool()
+            done = None
+        if done is None:
+            done = _process_batch(arrays)
+        for record, result in zip(records, done, strict=True):
+            if isinstance(result, str):
+                meta = record.meta
+                raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} "
+                                      f"at {meta.mileage_km:g} km cannot be used: {result}",
+                                      line=meta.source_line, field="z_mm")
+        return done  # type: ignore[return-value]
+
+    return results
 
 
 def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
-                    processed: tuple[Any, Any] | None = None) -> dict[str, Any]:
+                    processed: _Processed | None = None) -> dict[str, Any]:
     """The ``measurements`` row of one record.
 
     ``processed`` is the profile's (processed profile, measured Sd/Sh/qR) when already
-    computed (see :func:`_process_records`); otherwise it is computed here.
+    computed (see :func:`_submit`); otherwise it is computed here.
     """
     meta = record.meta
     row: dict[str, Any] = {
@@ -248,23 +296,18 @@ def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
                    reported_sd_mm=float(record.sd_mm), reported_sh_mm=float(record.sh_mm),
                    reported_qr_mm=float(record.qr_mm))
         return row
-    from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
-
-    processed, params = processed or _process_records([record])[0]
-    grid = np.asarray(getattr(processed, "grid_y_mm", DEFAULT_GRID_Y_MM))
+    p = processed if processed is not None else _submit([record])()[0]
     reported = record.instrument_parameters or {}
     row.update(
         kind="profile", n_points=int(len(record.y_mm)), y_mm=f32(record.y_mm),
-        z_mm=f32(record.z_mm), wear_mm=f32(processed.wear_mm),
-        wear_grid_start_mm=float(grid[0]), wear_grid_step_mm=float(grid[1] - grid[0]),
-        flange_area_mm2=_finite_or_none(processed.areas.flange_mm2),
-        tread_area_mm2=_finite_or_none(processed.areas.tread_mm2),
-        sd_mm=_finite_or_none(params.sd_mm), sh_mm=_finite_or_none(params.sh_mm),
-        qr_mm=_finite_or_none(params.qr_mm),
-        lateral_shift_mm=float(processed.lateral_shift_mm),
-        vertical_shift_mm=float(processed.vertical_shift_mm),
-        rotation_rad=float(processed.rotation_rad),
-        rms_residual_mm=float(processed.rms_residual_mm),
+        z_mm=f32(record.z_mm), wear_mm=f32(p.wear_mm),
+        wear_grid_start_mm=p.grid_start_mm, wear_grid_step_mm=p.grid_step_mm,
+        flange_area_mm2=_finite_or_none(p.flange_area_mm2),
+        tread_area_mm2=_finite_or_none(p.tread_area_mm2),
+        sd_mm=_finite_or_none(p.sd_mm), sh_mm=_finite_or_none(p.sh_mm),
+        qr_mm=_finite_or_none(p.qr_mm),
+        lateral_shift_mm=p.lateral_shift_mm, vertical_shift_mm=p.vertical_shift_mm,
+        rotation_rad=p.rotation_rad, rms_residual_mm=p.rms_residual_mm,
         instrument_parameters=dict(reported) or None,
         reported_sd_mm=_finite_or_none(reported.get("sd_mm")),
         reported_sh_mm=_finite_or_none(reported.get("sh_mm")),
@@ -294,6 +337,25 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
     seen: set[tuple[str, float]] = set()
     new_ids: list[int] = []
     iterator: Iterator[Record] = iter(records)
+
+    def insert_rows(fresh: list[Record], processed: Callable[[], list[_Processed]]) -> None:
+        if not fresh:
+            return
+        profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
+        done = dict(zip(map(id, profiles), processed(), strict=True))
+        rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
+        counts.points += sum(r["n_points"] for r in rows)
+        if batch_id is None:
+            for row in rows:
+                new_ids.append(session.execute(
+                    insert(db.Measurement).returning(db.Measurement.id), [row]).scalar_one())
+        else:
+            session.execute(insert(db.Measurement), rows)
+        counts.created += len(rows)
+
+    # A chunk's profiles are processed (in worker processes when large) while the next chunk
+    # is parsed and checked for duplicates; its rows are inserted after that.
+    pending: tuple[list[Record], Callable[[], list[_Processed]], int] | None = None
     while chunk := list(islice(iterator, chunk_size)):
         counts.records += len(chunk)
         keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
@@ -310,19 +372,16 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
             fresh.append(record)
         if fresh:
             registry.ensure_wheels(fresh)
-            profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
-            done = dict(zip(map(id, profiles), _process_records(profiles), strict=True))
-            rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
-            counts.points += sum(r["n_points"] for r in rows)
-            if batch_id is None:
-                for row in rows:
-                    new_ids.append(session.execute(
-                        insert(db.Measurement).returning(db.Measurement.id), [row]).scalar_one())
-            else:
-                session.execute(insert(db.Measurement), rows)
-            counts.created += len(rows)
+        handle = _submit([r for r in fresh if isinstance(r, ProfileRecord)])
+        if pending is not None:
+            insert_rows(pending[0], pending[1])
+            if progress is not None:
+                progress(pending[2])
+        pending = (fresh, handle, len(chunk))
+    if pending is not None:
+        insert_rows(pending[0], pending[1])
         if progress is not None:
-            progress(len(chunk))
+            progress(pending[2])
     return counts, new_ids
 
 
