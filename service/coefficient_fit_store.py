@@ -41,8 +41,17 @@ log = logging.getLogger(__name__)
 
 KIND = "coefficient_fit"
 MethodName = Literal["exact", "GA", "PSO", "TS", "SA", "DE"]
+Zone = Literal[1, 2, 3, 4]
 #: Default search box per zone (seed 000 §V for zones 1-3; zone 4 around the map mean 350e-4).
 DEFAULT_BOUNDS = {1: (1e-4, 10e-4), 2: (30e-4, 40e-4), 3: (1e-4, 10e-4), 4: (300e-4, 400e-4)}
+
+
+def _default_methods() -> list[MethodName]:
+    return ["exact"]
+
+
+def _default_zones() -> list[Zone]:
+    return [1, 2, 3]
 
 
 class MeasuredWearIn(Strict):
@@ -81,10 +90,10 @@ class CoefficientFitIn(Strict):
     measurement_id: int | None = None
     mileage_km: float | None = Field(default=None, gt=0, le=1e7, description=(
         "mileage of the measured wear [km]; default the measurement's"))
-    methods: list[MethodName] = Field(default_factory=lambda: ["exact"], min_length=1,
+    methods: list[MethodName] = Field(default_factory=_default_methods, min_length=1,
                                       max_length=6)
-    zones: list[Literal[1, 2, 3, 4]] = Field(default_factory=lambda: [1, 2, 3], min_length=1,
-                                             max_length=4, description="fitted KTH zones")
+    zones: list[Zone] = Field(default_factory=_default_zones, min_length=1, max_length=4,
+                              description="fitted KTH zones")
     bounds: list[tuple[float, float]] | None = Field(default=None, description=(
         "(lower, upper) per fitted zone; default seed 000's ranges"))
     start: tuple[float, float, float, float] | None = Field(default=None, description=(

@@ -28,7 +28,7 @@ import threading
 from collections import OrderedDict
 from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, TypeAlias, TypedDict, TypeVar
 
 import numpy as np
 import orjson
@@ -57,7 +57,7 @@ from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
 REGIONS = ("flange", "tread")
 #: Deserialised models kept in process (a model's state is ~100 kB of JSON).
 MODEL_CACHE_SIZE = 32
-AnyModel = hybrid.HybridModel | ExtendedModel
+AnyModel: TypeAlias = hybrid.HybridModel | ExtendedModel
 _models: wear_table_store.LruCache[AnyModel] = wear_table_store.LruCache(MODEL_CACHE_SIZE)
 
 
@@ -149,9 +149,11 @@ def model_inputs(session: Session, model_id: int) -> ModelInputs:
 
     def deserialise() -> AnyModel:
         state = session.scalar(select(db.Model.state).where(db.Model.id == model_id))
+        if state is None:
+            raise NotFound("model_id", f"no model with id {model_id}")
         return model_from_state(state)
 
-    model = _models.get_or_create((str(session.get_bind().url), model_id, created_at),
+    model = _models.get_or_create((str(session.get_bind().engine.url), model_id, created_at),
                                   deserialise)
     table = wear_table_store.cached_compiled_table(session, table_id, sha256, n_rows)
     return ModelInputs(model, table, (sha256, n_rows))
@@ -404,7 +406,7 @@ def load_inputs(session: Session, model_id: int, route_id: int | str | None,
                 route: Any = None) -> tuple[ModelInputs, RouteInputs]:
     """:func:`cached_inputs` read from the database (404/422 naming the field), and kept in
     process for the next requests."""
-    url = str(session.get_bind().url)
+    url = str(session.get_bind().engine.url)
     inputs = model_inputs(session, model_id)
     _hot_models.put((url, model_id), inputs)
     if route_id is None:
@@ -415,8 +417,7 @@ def load_inputs(session: Session, model_id: int, route_id: int | str | None,
     stored = RouteInputs(route_store.to_domain(row), row.name, dict(row.attributes or {}))
     # a string of digits that named a route (no route had that id) may name another route
     # once a route with that id exists: only lookups that cannot change are kept
-    by_id = isinstance(route_id, int) or (route_id.isdigit() and row.id == int(route_id))
-    if by_id or not route_id.isdigit():
+    if isinstance(route_id, int) or not route_id.isdigit() or row.id == int(route_id):
         _hot_routes.put((url, *_route_ref(route_id)), stored)
     return inputs, stored
 
@@ -578,11 +579,20 @@ def wheel_start(session: Session | None, body: ReprofilingIn) -> WheelStart:
          "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}, covariates)
 
 
+class _Position(TypedDict):
+    """A wheel's position, passed on as keyword arguments."""
+
+    bogie_type: str
+    axle: int
+    side: str
+
+
 def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
                         body: ReprofilingIn, start: WheelStart) -> dict[str, Any]:
     """The :class:`ReprofilingOut` fields (plain floats; None where not finite)."""
     limits = body.limits.model_dump(exclude_none=True) if body.limits else None
-    position = {"bogie_type": start.bogie_type, "axle": start.axle, "side": start.side}
+    position: _Position = {"bogie_type": start.bogie_type, "axle": start.axle,
+                           "side": start.side}
     try:
         measures = weighted_measures(inputs, route.route, **position)
         model = inputs.model

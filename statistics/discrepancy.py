@@ -33,7 +33,7 @@ import io
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -275,7 +275,9 @@ def _pvalue(before: NDArray[np.float64], after: NDArray[np.float64], wheel: NDAr
     one.
     """
     uniq, inv = np.unique(wheel, return_inverse=True)
-    d = np.bincount(inv, weights=before - after, minlength=uniq.size)
+    # a weighted bincount is float64 (the stubs type every bincount as intp)
+    d = cast(NDArray[np.float64],
+             np.bincount(inv, weights=before - after, minlength=uniq.size))
     if uniq.size < 2 or np.std(d) == 0:
         return 1.0, "no variation"
     deff, g = 1.0, 0

@@ -261,7 +261,7 @@ def alt_wear_curve(y: Array, tread_mm2: float, flange_mm2: float, tread_centre: 
 
 # --- generator --------------------------------------------------------------------------------
 
-def _daily_km(unit: AltUnit, days: Array) -> Array:
+def _daily_km(unit: AltUnit, days: NDArray[np.integer[Any]]) -> Array:
     weekday = (days + 3) % 7          # 1970-01-01 was a Thursday -> 0 = Monday
     return unit.km_per_day * np.where(weekday >= 5, 0.6, 1.16)
 
@@ -274,7 +274,7 @@ def generate_alt_fleet(config: AltConfig | None = None) -> AltFleet:
     routes, attrs = alt_routes()
     table = alt_wear_table()
     midx = MEASURES.index(cfg.measure)
-    wheels = []
+    wheels: list[dict[str, Any]] = []
     for unit in cfg.units:
         for v, (car, route_name) in enumerate(zip(unit.cars, unit.routes, strict=True), 1):
             vehicle = f"{unit.unit_id}-{v}"
@@ -326,7 +326,7 @@ def generate_alt_fleet(config: AltConfig | None = None) -> AltFleet:
     y_nom = np.arange(-68.0, 58.0, cfg.profile_step_mm)
     prof_rows, meas_rows, curves = [], [], []
     for w in wheels:
-        unit: AltUnit = w["unit"]
+        unit = w["unit"]
         start = np.datetime64(unit.start_date, "D").astype(np.int64)
         n_days = int(unit.max_mileage_km / unit.km_per_day * 1.05) + 1
         days = start + np.arange(n_days)

@@ -159,8 +159,9 @@ def _first_crossings(model: HybridModel, start: Mapping[str, float],
         if not any_crossed[q]:
             out[q] = LimitCrossing(math.inf, None, nan, nan, nan, bool(extra[q].any()))
         elif j == 0:
+            sd_mm, sh_mm, qr_mm = (float(v) for v in params[q, 0])
             out[q] = LimitCrossing(0.0, LIMIT_NAMES[int(np.argmin(margins[q, 0]))],
-                                   *(float(v) for v in params[q, 0]), bool(extra[q, 0]))
+                                   sd_mm, sh_mm, qr_mm, bool(extra[q, 0]))
         else:
             brackets[q] = _Bracket(float(grid[j - 1]), float(grid[j]), margins[q, j - 1],
                                    margins[q, j], bool(extra[q, j - 1]), bool(extra[q, j]))
@@ -231,8 +232,11 @@ def _crossings_in(model: HybridModel, start: Mapping[str, float],
         p_root, _, e_root = _evaluate(model, start, _subset(rates, again), limits, roots)
         for a, q in enumerate(again):
             found[q] = (found[q][0], found[q][1], p_root[a, 0], bool(e_root[a, 0]))
-    return {q: LimitCrossing(root, LIMIT_NAMES[limit], *(float(v) for v in params), extra)
-            for q, (root, limit, params, extra) in found.items()}
+    out: dict[int, LimitCrossing] = {}
+    for q, (root, limit, params, extra) in found.items():
+        sd_mm, sh_mm, qr_mm = (float(v) for v in params)
+        out[q] = LimitCrossing(root, LIMIT_NAMES[limit], sd_mm, sh_mm, qr_mm, extra)
+    return out
 
 
 @dataclass(frozen=True)
