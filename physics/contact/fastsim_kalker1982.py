@@ -95,8 +95,8 @@ def kalker_strips(ux: float, uy: float, fix: float, fiy: float, my: int, tol: fl
         # digits, where my equal strips (the C++ port's reading) miss Ty by 1.5e-3.
         n = 2 * (int(my) // 2 + 1)
         dy = 2.0 / n
-        centres = -1.0 + dy * (np.arange(n) + 0.5)
-        return centres, np.full(n, dy), False
+        centres = -1.0 + dy * (np.arange(n, dtype=np.float64) + 0.5)
+        return centres, np.full(n, dy, dtype=np.float64), False
     ys: list[float] = []
     ws: list[float] = []
     for s in (1.0, -1.0):
