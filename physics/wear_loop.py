@@ -504,6 +504,19 @@ def _grid(spec: tuple[float, float, float]) -> NDArray[np.float64]:
     return np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
 
 
+def _contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, side: str,
+                 unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
+                 fastsim_grid: int, y_mm: NDArray) -> Any:
+    """Everything a contact update depends on besides the profile heights (hashable)."""
+    key = (vehicle, tuple(classes), axle, side, float(unbalanced_acceleration_m_s2),
+           float(tangent_speed_kmh), int(fastsim_grid), y_mm.tobytes())
+    try:
+        hash(key)
+    except TypeError:  # a vehicle with unhashable fields: fall back to its full repr
+        key = (repr(vehicle),) + key[1:]
+    return key
+
+
 def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                   law: WearLaw | str = "archard_kth", application: str = "global",
                   steps: WearSteps | None = None, axle: int = 1, side: str = "right",
@@ -511,7 +524,8 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                   initial_profile: tuple[NDArray, NDArray] | None = None,
                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
                   fastsim_grid: int = 20, rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
-                  n_rail_steps: int = 5, progress: Progress | None = None) -> WearSimulation:
+                  n_rail_steps: int = 5, progress: Progress | None = None,
+                  contact_cache: dict | None = None) -> WearSimulation:
     """Simulate the wear of one wheel over a route described by curve classes.
 
     Parameters
@@ -531,6 +545,12 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     fastsim_grid : FASTSIM grid n for the local application
     rail_step_depth_mm, n_rail_steps : rail thresholds D_step^r and number of rail steps
     progress : callback(done_steps, n_steps, mileage_km)
+    contact_cache : optional dict shared by several runs (e.g. the iterations of a calibration)
+        that stores each contact update's solution keyed by everything it depends on (vehicle,
+        classes, tracked wheel, operating-point options and the exact bytes of the profile);
+        an update whose profile is bit-identical to a stored one reuses it, so results are
+        identical with and without the cache (only solutions without fallbacks are stored,
+        the others depend on the previous update)
 
     Returns
     -------
@@ -562,6 +582,9 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     fallbacks = updates = 0
     since_update = np.inf
     rail_rates = []
+    cache_key = None if contact_cache is None else _contact_key(
+        veh, classes, axle, side, unbalanced_acceleration_m_s2, tangent_speed_kmh, fastsim_grid,
+        y)
     linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)
     eps = 1e-3
     for i in range(st.n_steps):
@@ -571,11 +594,18 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         taken = 0.0
         while True:
             if contacts is None or since_update >= st.contact_update_depth_mm:
-                contacts, fb = class_contacts(
-                    veh, classes, y, z, axle=axle, side=side,
-                    unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
-                    tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
-                    previous=contacts)
+                key = None if contact_cache is None else (cache_key, z.tobytes())
+                hit = None if key is None else contact_cache.get(key)
+                if hit is not None:
+                    contacts, fb = hit, 0
+                else:
+                    contacts, fb = class_contacts(
+                        veh, classes, y, z, axle=axle, side=side,
+                        unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+                        tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+                        previous=contacts)
+                    if key is not None and fb == 0:
+                        contact_cache[key] = contacts
                 fallbacks += fb
                 updates += 1
                 since_update = 0.0

@@ -84,6 +84,43 @@ def test_exact_has_the_lowest_rmse_on_noisy_data(twin):
     assert exact.rmse_mm == pytest.approx(0.005, rel=0.1)
 
 
+def test_reported_fit_is_a_fresh_full_run(twin, exact_fit):
+    # The contact cache reuses solutions only for bit-identical profiles, and the predictor
+    # run only supplies the start of the fixed-point iteration: the simulation behind the
+    # reported RMSE equals a fresh, uncached loop run at the final coefficients.
+    fresh = run_model(_problem(twin), exact_fit.coefficients)
+    assert np.array_equal(exact_fit.simulation.profiles_mm, fresh.profiles_mm)
+    assert np.array_equal(exact_fit.simulation.step_basis_mm, fresh.step_basis_mm)
+    y = twin.y_mm
+    assert rmse_mm(np.interp(y, fresh.y_mm, fresh.wear_mm[-1]), twin.wear_fit_mm) == (
+        exact_fit.rmse_mm)
+
+
+def test_contact_cache_hits_only_identical_profiles(twin):
+    cache: dict = {}
+    k = np.array(TRUE_K)
+    first = run_model(_problem(twin), k, contact_cache=cache)
+    n_first = len(cache)
+    assert n_first == first.contact_updates  # every update stored (no fallbacks here)
+    again = run_model(_problem(twin), k, contact_cache=cache)
+    assert len(cache) == n_first  # all hits
+    assert np.array_equal(again.profiles_mm, first.profiles_mm)
+    other = run_model(_problem(twin), k * 1.02, contact_cache=cache)
+    # Only the initial profile is shared with the other coefficients.
+    assert len(cache) == n_first + other.contact_updates - 1
+
+
+def test_predictor_reaches_the_same_fixed_point(twin, exact_fit):
+    # Seed 000 problem, noise-free: with and without the no-feedback predictor run the outer
+    # iteration converges to the same coefficients (to its 1e-2 convergence test).
+    plain = calibrate(_problem(twin), "exact", rtol=1e-2, predictor=False)
+    fast = calibrate(_problem(twin), "exact", rtol=1e-2)
+    for fit in (plain, fast):
+        assert fit.coefficients[[0, 3]] == pytest.approx(exact_fit.coefficients[[0, 3]],
+                                                         rel=1e-3)
+    assert fast.rmse_mm < 1e-3 * twin.wear_fit_mm.max()
+
+
 def test_rmse_and_bad_input():
     assert rmse_mm([0.0, 0.0], [3.0, 4.0]) == pytest.approx(np.sqrt(12.5))
     with pytest.raises(ValueError, match="bound"):
