@@ -300,6 +300,13 @@ class HybridModel:
         once per model: the joined state curves there, the reference heights and grid."""
         return ParameterKernel.build(self)
 
+    @cached_property
+    def parameter_surface(self) -> ParameterSurface:
+        """Sd/Sh/qR on a grid of (flange, tread) areas, computed once per model, for a
+        cheap bilinear first guess of where a wear path crosses a limit
+        (:class:`ParameterSurface`)."""
+        return ParameterSurface.build(self)
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "measure": self.measure,
@@ -420,6 +427,69 @@ class ParameterKernel:
         z -= self.tread.offset_mm[i_t]
         z -= tread_area_mm2[:, None] * self.tread.slope_mm[i_t]
         return z, ef | et
+
+
+#: Undefined parameters on the surface (Sd, Sh, qR) [mm]: far beyond any limit, so that
+#: the interpolated margins count as crossed (an undefined parameter counts as crossed).
+_SURFACE_UNDEFINED_MM = np.array([-1e3, 1e3, -1e3])
+
+
+@dataclass(frozen=True)
+class ParameterSurface:
+    """Sd, Sh, qR [mm] of the worn profiles on a grid of region areas (no request data).
+
+    The axes hold 0, every state area and ``n_points`` even steps up to ``extent`` times
+    the last state area of the region [mm²]; ``params_mm`` (n_f, n_t, 3) are the exact
+    :func:`parameters_at_areas` values at the nodes (undefined ones replaced by
+    ``_SURFACE_UNDEFINED_MM``). With state areas on the axes every cell lies within one
+    piece of both state interpolants, so the bilinear interpolant of :meth:`at` is close to
+    the exact parameters; it is an estimate only, to be checked with the exact evaluation.
+    """
+
+    flange_mm2: NDArray
+    tread_mm2: NDArray
+    params_mm: NDArray
+    #: per cell (flattened (i, j) -> i (n_t - 1) + j): c0, c1, c2, c3 (.., 4, 3) of the
+    #: bilinear form c0 + u c1 + v (c2 + u c3), u and v the cell's local coordinates
+    _cells: NDArray = field(repr=False)
+    _inv_step_f: NDArray = field(repr=False)
+    _inv_step_t: NDArray = field(repr=False)
+
+    @classmethod
+    def build(cls, model: HybridModel, n_points: int = 96, extent: float = 4.0
+              ) -> ParameterSurface:
+        axes = []
+        for region in REGIONS:
+            knots = np.concatenate([[0.0], model.states.region(region).areas_mm2])
+            top = max(extent * float(knots[-1]), 1.0)
+            axes.append(np.unique(np.concatenate([knots, np.linspace(0.0, top, n_points)])))
+        fa, ta = np.meshgrid(axes[0], axes[1], indexing="ij")
+        params, _ = parameters_at_areas(model, fa.ravel(), ta.ravel())
+        params = np.where(np.isfinite(params), params, _SURFACE_UNDEFINED_MM)
+        p = params.reshape(axes[0].size, axes[1].size, 3)
+        p00, p01, p10, p11 = p[:-1, :-1], p[:-1, 1:], p[1:, :-1], p[1:, 1:]
+        cells = np.stack([p00, p10 - p00, p01 - p00, p11 - p10 - p01 + p00], axis=2)
+        cells = np.ascontiguousarray(cells.reshape(-1, 4, 3))
+        inv = [1.0 / np.diff(ax) for ax in axes]
+        for arr in (*axes, p, cells, *inv):
+            arr.setflags(write=False)
+        return cls(axes[0], axes[1], p, cells, inv[0], inv[1])
+
+    def at(self, flange_area_mm2: NDArray, tread_area_mm2: NDArray
+           ) -> tuple[NDArray, NDArray]:
+        """Bilinearly interpolated Sd, Sh, qR (M, 3) [mm] and whether each point lies on
+        the surface (M,) for areas (M,) [mm²] >= 0 (off it: extrapolated from the edge
+        cell, not to be used)."""
+        f_ax, t_ax = self.flange_mm2, self.tread_mm2
+        i = np.searchsorted(f_ax, flange_area_mm2, side="right") - 1
+        np.minimum(i, f_ax.size - 2, out=i)  # i >= 0: areas >= 0 = axis[0]
+        j = np.searchsorted(t_ax, tread_area_mm2, side="right") - 1
+        np.minimum(j, t_ax.size - 2, out=j)
+        u = ((flange_area_mm2 - f_ax[i]) * self._inv_step_f[i])[:, None]
+        v = ((tread_area_mm2 - t_ax[j]) * self._inv_step_t[j])[:, None]
+        c = self._cells[i * (t_ax.size - 1) + j]
+        params = c[:, 0] + u * c[:, 1] + v * (c[:, 2] + u * c[:, 3])
+        return params, (flange_area_mm2 <= f_ax[-1]) & (tread_area_mm2 <= t_ax[-1])
 
 
 def _route_lookup(route_by_wheel: Route | Mapping[Any, Route], row_route: Any,

@@ -25,7 +25,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from wearcast.statistics.hybrid import HybridModel, parameters_at_areas, region_rates
+from wearcast.statistics.hybrid import (
+    HybridModel,
+    parameters_at_areas,
+    region_rates,
+)
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import REGIONS, WearTable
@@ -124,52 +128,139 @@ class _Bracket:
     e_hi: bool
 
 
+#: First-guess search on the model's parameter surface: points of its geometric grid.
+SURFACE_GRID_POINTS = 96
+#: Half-width of the exact bracket around a surface estimate, relative to the estimate.
+SURFACE_BRACKET_RTOL = 0.0075
+
+
+def _surface_estimates(model: HybridModel, start: Mapping[str, float],
+                       rates: Mapping[str, np.ndarray], limits: WheelLimits,
+                       horizon_km: float) -> np.ndarray:
+    """First-crossing mileage estimates (Q,) [km] from the bilinear parameter surface
+    (:attr:`HybridModel.parameter_surface`); NaN where the surface gives none inside the
+    horizon (no crossing, crossed at the start, or the path leaves the surface first).
+
+    The smallest interpolated margin on the geometric grid 0, horizon/1e5 ... horizon
+    (``SURFACE_GRID_POINTS`` points) brackets its first crossing, which is interpolated
+    linearly. Pure numpy on the surface: no profile is evaluated.
+    """
+    n_q = rates["flange"].size
+    grid = _search_grid(float(horizon_km), SURFACE_GRID_POINTS)
+    fa = (start["flange"] + rates["flange"][:, None] * grid).reshape(-1)
+    ta = (start["tread"] + rates["tread"][:, None] * grid).reshape(-1)
+    params, inside = model.parameter_surface.at(fa, ta)
+    worst = (params * _SIGNS + _margin_offsets(limits)).min(axis=1).reshape(n_q, -1)
+    crossed = worst < 0
+    j = crossed.argmax(axis=1)
+    rows = np.arange(n_q)
+    # a crossing after the start, on the surface (areas grow: then so is all before it)
+    ok = crossed[rows, j] & (j > 0) & inside.reshape(n_q, -1)[rows, j]
+    j = np.maximum(j, 1)
+    m0, m1 = worst[rows, j - 1], worst[rows, j]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frac = np.clip(m0 / (m0 - m1), 0.0, 1.0)
+    s0, s1 = grid[j - 1], grid[j]
+    return np.where(ok, s0 + frac * (s1 - s0), np.nan)
+
+
+def _grid_outcome(q: int, s_row: np.ndarray, params: np.ndarray, margins: np.ndarray,
+                  extra: np.ndarray, any_crossed: bool, j: int,
+                  out: list[LimitCrossing | None], brackets: dict[int, _Bracket]) -> None:
+    """Row q of mileages ``s_row`` [km] whose first crossed point is j (``any_crossed``):
+    no crossing, crossed at the first point (0 km on a grid from 0), or a bracket."""
+    nan = float("nan")
+    if not any_crossed:
+        out[q] = LimitCrossing(math.inf, None, nan, nan, nan, bool(extra.any()))
+    elif j == 0:
+        sd_mm, sh_mm, qr_mm = (float(v) for v in params[0])
+        out[q] = LimitCrossing(0.0, LIMIT_NAMES[int(np.argmin(margins[0]))],
+                               sd_mm, sh_mm, qr_mm, bool(extra[0]))
+    else:
+        brackets[q] = _Bracket(float(s_row[j - 1]), float(s_row[j]), margins[j - 1],
+                               margins[j], bool(extra[j - 1]), bool(extra[j]))
+
+
 def _first_crossings(model: HybridModel, start: Mapping[str, float],
                      rates: Mapping[str, np.ndarray], limits: WheelLimits, horizon_km: float,
                      n_grid: int = 32, n_refine: int = 24, rtol: float = MILEAGE_RTOL,
-                     atol_km: float = MILEAGE_ATOL_KM) -> list[LimitCrossing]:
+                     atol_km: float = MILEAGE_ATOL_KM, use_surface: bool = True
+                     ) -> list[LimitCrossing]:
     """First limit crossing for each of Q rate sets, all evaluated together.
 
+    0. (``use_surface``) Each rate set's crossing is estimated on the model's bilinear
+       parameter surface (:func:`_surface_estimates`, no profile evaluated); a set with an
+       estimate s_e gets ``n_grid`` + 1 evenly spaced exact points on
+       s_e (1 ± ``SURFACE_BRACKET_RTOL``) instead of the geometric grid of step 1, in the
+       same batch. If the exact margins there do not change sign (all >= 0, or some < 0 at
+       its first point) the set is searched again from step 1; so every crossing found is
+       one of exact margins, bracketed as below.
     1. Worn-profile parameters for every rate set on the geometric mileage grid 0,
        horizon/1e5 ... horizon (``n_grid`` points) in one batch; the first grid point where
        any margin is negative brackets the crossing.
     2. The brackets are refined together, ``n_refine`` evenly spaced points per level and
-       one batch per level, until each is no wider than max(``rtol`` · mileage, ``atol_km``).
+       one batch per level, until each is no wider than max(``rtol`` · mileage, ``atol_km``)
+       (with the surface estimate the exact points are usually that close already).
     3. Within the final bracket each crossed limit's margin is interpolated linearly in
        mileage and the earliest crossing taken (its limit governs); the parameters there are
        interpolated the same way (evaluated anew only where a bracket end has an undefined
        parameter or the extrapolation flag changes inside the bracket).
 
-    The result lies in a bracket no wider than the tolerance around the first sign change
-    of the smallest margin on the grid; on smooth margins the interpolation makes it far
-    closer (about 1e-7 relative to a Brent root on the test models).
+    The result lies in a bracket no wider than the tolerance around a sign change of the
+    smallest exact margin; on smooth margins the interpolation makes it far closer (about
+    1e-7 relative to a Brent root on the test models).
     """
     n_q = rates["flange"].size
     grid = _search_grid(float(horizon_km), int(n_grid))
-    params, margins, extra = _evaluate(model, start, rates, limits,
-                                       np.broadcast_to(grid, (n_q, grid.size)))
+    est = (_surface_estimates(model, start, rates, limits, horizon_km) if use_surface
+           else np.full(n_q, np.nan))
+    near = np.isfinite(est)
+    if near.all():  # points no further apart than the tolerance: usually no refinement
+        s_km = est[:, None] * (1.0 + _bracket_offsets(SURFACE_BRACKET_RTOL, rtol))
+    else:
+        s_km = np.array(np.broadcast_to(grid, (n_q, grid.size)))
+        if near.any():
+            t = np.linspace(-SURFACE_BRACKET_RTOL, SURFACE_BRACKET_RTOL, grid.size)
+            s_km[near] = est[near, None] * (1.0 + t)
+    np.minimum(s_km, horizon_km, out=s_km)
+    params, margins, extra = _evaluate(model, start, rates, limits, s_km)
     crossed = margins.min(axis=2) < 0
     any_crossed = crossed.any(axis=1).tolist()
     first = crossed.argmax(axis=1).tolist()
     out: list[LimitCrossing | None] = [None] * n_q
     brackets: dict[int, _Bracket] = {}
-    nan = float("nan")
+    again: list[int] = []
+    near_rows = near.tolist()
     for q in range(n_q):
         j = first[q]
-        if not any_crossed[q]:
-            out[q] = LimitCrossing(math.inf, None, nan, nan, nan, bool(extra[q].any()))
-        elif j == 0:
-            sd_mm, sh_mm, qr_mm = (float(v) for v in params[q, 0])
-            out[q] = LimitCrossing(0.0, LIMIT_NAMES[int(np.argmin(margins[q, 0]))],
-                                   sd_mm, sh_mm, qr_mm, bool(extra[q, 0]))
+        if near_rows[q] and j == 0:  # nothing crossed near the estimate, or before it
+            again.append(q)
         else:
-            brackets[q] = _Bracket(float(grid[j - 1]), float(grid[j]), margins[q, j - 1],
-                                   margins[q, j], bool(extra[q, j - 1]), bool(extra[q, j]))
+            _grid_outcome(q, s_km[q], params[q], margins[q], extra[q], any_crossed[q], j, out,
+                          brackets)
+    if again:
+        params, margins, extra = _evaluate(model, start, _subset(rates, again), limits,
+                                           np.broadcast_to(grid, (len(again), grid.size)))
+        crossed = margins.min(axis=2) < 0
+        for a, q in enumerate(again):
+            _grid_outcome(q, grid, params[a], margins[a], extra[a], bool(crossed[a].any()),
+                          int(crossed[a].argmax()), out, brackets)
     if brackets:
         _refine(model, start, rates, limits, brackets, n_refine, rtol, atol_km)
         for q, crossing in _crossings_in(model, start, rates, limits, brackets).items():
             out[q] = crossing
     return [o for o in out if o is not None]
+
+
+@lru_cache(maxsize=8)
+def _bracket_offsets(half_width: float, rtol: float) -> np.ndarray:
+    """Relative offsets -half_width ... half_width of the exact points around a surface
+    estimate, evenly spaced and no further apart than ``rtol`` times the lowest point
+    (so that a bracket between two of them needs no refinement), read-only."""
+    n = math.ceil(2 * half_width / (rtol * (1 - half_width))) + 1
+    t = np.linspace(-half_width, half_width, n)
+    t.setflags(write=False)
+    return t
 
 
 def _subset(rates: Mapping[str, np.ndarray], rows: list[int]) -> dict[str, np.ndarray]:
@@ -207,7 +298,7 @@ def _crossings_in(model: HybridModel, start: Mapping[str, float],
                   rates: Mapping[str, np.ndarray], limits: WheelLimits,
                   brackets: dict[int, _Bracket]) -> dict[int, LimitCrossing]:
     """The first crossing inside each final bracket (step 3 of :func:`_first_crossings`)."""
-    found: dict[int, tuple[float, int, np.ndarray, bool]] = {}
+    found: dict[int, tuple[float, int, Any, bool]] = {}
     again: list[int] = []
     for q, b in brackets.items():
         m_lo, m_hi = b.m_lo.tolist(), b.m_hi.tolist()
@@ -222,10 +313,13 @@ def _crossings_in(model: HybridModel, start: Mapping[str, float],
         limit = s_limit.index(min(s_limit))
         root = s_limit[limit]
         w = (root - b.lo) / (b.hi - b.lo) if b.hi > b.lo else 1.0
-        with np.errstate(invalid="ignore"):
-            params = _params_from_margins(b.m_lo + w * (b.m_hi - b.m_lo), limits)
+        m_root = [lo_i + w * (hi_i - lo_i) for lo_i, hi_i in zip(m_lo, m_hi, strict=True)]
+        params = [m_root[0] + limits.sd_min_mm, limits.sh_max_mm - m_root[1],
+                  m_root[2] + limits.qr_min_mm]  # as _params_from_margins, on floats
+        params = [v if math.isfinite(m) else math.nan
+                  for v, m in zip(params, m_root, strict=True)]
         found[q] = (root, limit, params, b.e_hi)
-        if (b.e_lo != b.e_hi or not (np.isfinite(b.m_lo).all() and np.isfinite(b.m_hi).all())):
+        if b.e_lo != b.e_hi or not all(map(math.isfinite, m_lo + m_hi)):
             again.append(q)
     if again:
         roots = np.array([[found[q][0]] for q in again])
