@@ -1,6 +1,6 @@
 """Reproduce the wear-loop claims of seeds 002, 003 and 004; pictures in docs/img/wear_loop_*.png.
 
-Run: .venv/bin/python benchmarks/reproduce_seeds.py [--skip-003]
+Run: .venv/bin/python benchmarks/reproduce_seeds.py [--skip-003] [--only 002|003|004]
 * Seed 002 (Table 2, §3): local (FASTSIM grid) vs global (semi-elliptic) worn volume on the same
   route and wheel (seed: 47.0 vs 56.3 mm^3, ratio 0.835) and the global/local speed ratio of the
   wear computation (seed: 1.58). Route: seed 002 Table 1 (four curves, both directions; the
@@ -52,6 +52,9 @@ Y = np.linspace(-70.0, 60.0, 651)
 REFERENCE = Path("/work/shared/reference/published")
 
 
+FLANGE_TREAD_SPLIT_MM = -30.0  # DESIGN.md regions: flange y < -30 mm, tread y >= -30 mm
+
+
 def seed_002() -> None:
     veh = vehicle_preset("manchester").with_(friction=0.4)
     curves = [(1000.0, 150.0, 120.0), (800.0, 150.0, 100.0), (600.0, 160.0, 90.0),
@@ -62,6 +65,10 @@ def seed_002() -> None:
     contacts, _ = class_contacts(veh, classes, Y, s1002_height_mm(Y), axle=1, side="right")
     law = WearLaw("archard_kth")
     k = law_coefficients(law)
+    h = Y[1] - Y[0]
+    to_mm3 = h * 2 * np.pi * 460.0  # per grid cell: depth [mm] -> volume [mm^3]
+    flange = Y < FLANGE_TREAD_SPLIT_MM
+    smooth = Smoothing()  # the loop's default per-step smoothing (3 mm moving average)
     out = {}
     for app in ("global", "local"):
         reps, t0 = 20, time.perf_counter()
@@ -69,24 +76,72 @@ def seed_002() -> None:
             basis = wheel_depth_basis(contacts, law, Y, app, 40, veh.friction)
         dt = (time.perf_counter() - t0) / reps
         depth = np.einsum("c,cbn,b->n", shares, basis, k) * 3770.0  # 3.77 km, normal depth
-        vol = float(np.sum(depth) * (Y[1] - Y[0]) * 2 * np.pi * 460.0)
-        out[app] = (depth, vol, dt)
-        zone_vol = np.einsum("c,cbn,b->b", shares, basis, k) * 3770.0 * (Y[1] - Y[0]) \
-            * 2 * np.pi * 460.0
+        out[app] = {"depth": depth, "vol": float(np.sum(depth) * to_mm3), "dt": dt,
+                    "tread": float(np.sum(depth[~flange]) * to_mm3),
+                    "flange": float(np.sum(depth[flange]) * to_mm3),
+                    "peak_flange": float(depth[flange].max()),
+                    "y_peak_flange": float(Y[flange][np.argmax(depth[flange])]),
+                    "peak_tread": float(depth[~flange].max()),
+                    "peak_flange_smoothed": float(smooth.apply(depth, Y)[flange].max())}
+        # Same contacts with ONE coefficient for every KTH zone (k1): isolates the adhesion /
+        # slip-area effect of the local application from its zone shifts.
+        unit = np.einsum("c,cbn->n", shares, basis) * k[0] * 3770.0
+        out[app]["tread_k1"] = float(np.sum(unit[~flange]) * to_mm3)
+        out[app]["flange_k1"] = float(np.sum(unit[flange]) * to_mm3)
+        zone_vol = np.einsum("c,cbn,b->b", shares, basis, k) * 3770.0 * to_mm3
         print(f"seed 002: {app} worn volume per KTH zone 1-4 [mm^3]: "
               + ", ".join(f"{v:.3g}" for v in zone_vol))
-    ratio = out["local"][1] / out["global"][1]
-    speed = out["local"][2] / out["global"][2]
-    print(f"seed 002: worn volume over 3.77 km, global {out['global'][1]:.3g} mm^3, local "
-          f"{out['local'][1]:.3g} mm^3: local/global = {ratio:.3f} (seed 47.0/56.3 = 0.835); "
+    g, loc = out["global"], out["local"]
+    ratio = loc["vol"] / g["vol"]
+    speed = loc["dt"] / g["dt"]
+    print(f"seed 002: worn volume over 3.77 km, global {g['vol']:.3g} mm^3, local "
+          f"{loc['vol']:.3g} mm^3: local/global = {ratio:.3f} (seed 47.0/56.3 = 0.835); "
           f"global is {speed:.2f}x faster (seed 1.58; FASTSIM 40x40 per patch)")
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for app, (depth, vol, _) in out.items():
-        ax.plot(Y, depth * 1e3, label=f"{app}: {vol:.3g} mm³")
-    ax.set_xlabel("y [mm] (flange at left)")
-    ax.set_ylabel("normal wear depth [µm] / 3.77 km")
-    ax.set_title("Seed 002: local vs global application (Archard/KTH)")
-    ax.legend()
+    print(f"seed 002: (a) TREAD (y >= {FLANGE_TREAD_SPLIT_MM:.0f} mm) worn volume: global "
+          f"{g['tread']:.3g} mm^3, local {loc['tread']:.3g} mm^3, local/global = "
+          f"{loc['tread'] / g['tread']:.3f} (seed: local lower on the tread)")
+    print(f"seed 002: (b) FLANGE (y < {FLANGE_TREAD_SPLIT_MM:.0f} mm) worn volume: global "
+          f"{g['flange']:.3g} mm^3, local {loc['flange']:.3g} mm^3, local/global = "
+          f"{loc['flange'] / g['flange']:.3f}")
+    print(f"seed 002: (c) max normal depth near the flange (y < {FLANGE_TREAD_SPLIT_MM:.0f} mm): "
+          f"global {g['peak_flange'] * 1e3:.3g} um at y = {g['y_peak_flange']:.1f} mm, local "
+          f"{loc['peak_flange'] * 1e3:.3g} um at y = {loc['y_peak_flange']:.1f} mm, local/global "
+          f"= {loc['peak_flange'] / g['peak_flange']:.3f}; after the loop's 3 mm moving average "
+          f"{loc['peak_flange_smoothed'] / g['peak_flange_smoothed']:.3f} (seed: local peaks "
+          f"higher); tread max: global {g['peak_tread'] * 1e3:.3g} um, local "
+          f"{loc['peak_tread'] * 1e3:.3g} um")
+    print(f"seed 002: same contacts, one coefficient k1 in all KTH zones (adhesion effect "
+          f"only): tread local/global = {loc['tread_k1'] / g['tread_k1']:.3f}, flange "
+          f"local/global = {loc['flange_k1'] / g['flange_k1']:.3f}")
+    verdict = {
+        "tread volume local < global": loc["tread"] < g["tread"],
+        "flange peak local > global": loc["peak_flange"] > g["peak_flange"],
+        "total volume local < global": loc["vol"] < g["vol"],
+        "global faster than local": speed > 1.0,
+    }
+    print("seed 002: (d) claims: " + "; ".join(
+        f"{name}: {'REPRODUCED' if ok else 'NOT reproduced'}" for name, ok in verdict.items()))
+    # As seed 002 Fig. 4: (a) whole profile, (b) flange zoom, (c) tread zoom.
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    views = [("(a) whole profile", (-70.0, 60.0)), ("(b) flange zone", (-40.0, -25.0)),
+             ("(c) tread zone", (-30.0, 40.0))]
+    for ax, (title, (lo, hi)) in zip(axes, views, strict=True):
+        inside = (Y >= lo) & (Y <= hi)
+        for app, style in (("local", "-"), ("global", "--")):
+            r = out[app]
+            ax.plot(Y[inside], r["depth"][inside] * 1e3, style,
+                    label=f"{app}: {r['vol']:.3g} mm³ (tread {r['tread']:.3g}, flange "
+                    f"{r['flange']:.3g})")
+        ax.axvline(FLANGE_TREAD_SPLIT_MM, color="k", ls=":", lw=0.8)
+        top = ax.get_ylim()[1]
+        ax.text(FLANGE_TREAD_SPLIT_MM - 0.5, 0.97 * top, "flange", ha="right", va="top")
+        ax.text(FLANGE_TREAD_SPLIT_MM + 0.5, 0.97 * top, "tread", ha="left", va="top")
+        ax.set_xlabel("y [mm] (flange at left)")
+        ax.set_title(title)
+    axes[0].set_ylabel("normal wear depth [µm] / 3.77 km")
+    axes[0].legend(fontsize=7, loc="center right")
+    fig.suptitle("Seed 002: local (FASTSIM grid) vs global (semi-elliptic) application, "
+                 "Archard/KTH; split y = -30 mm")
     fig.tight_layout()
     fig.savefig(IMG / "wear_loop_seed002_local_global.png", dpi=110)
     plt.close(fig)
@@ -203,11 +258,15 @@ def seed_003() -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--skip-003", action="store_true", help="skip the long seed 003 runs")
+    parser.add_argument("--only", choices=("002", "003", "004"),
+                        help="run only this seed's part")
     args = parser.parse_args()
     IMG.mkdir(parents=True, exist_ok=True)
-    seed_002()
-    seed_004()
-    if not args.skip_003:
+    if args.only in (None, "002"):
+        seed_002()
+    if args.only in (None, "004"):
+        seed_004()
+    if args.only == "003" or (args.only is None and not args.skip_003):
         seed_003()
 
 
