@@ -207,44 +207,37 @@ def problem_from_spec(spec: dict[str, Any]):
 
 def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
     """Validate a request completely and store it as a queued job."""
-    from wearcast.service.simulation_store import resolve_classes
+    from wearcast.service.simulation_store import queue_job, resolve_classes
 
-    if body.step_km * 200 < (body.mileage_km or 0.0) or (
-            body.predict is not None and body.step_km * 200 < body.predict.mileage_km):
+    y, w, mileage = _measured_wear(session, body)
+    furthest_km = max(mileage, body.predict.mileage_km if body.predict is not None else 0.0)
+    if body.step_km * 200 < furthest_km:
         raise Unprocessable("step_km", "more than 200 loop steps to reach the mileage; "
                             "use a larger step_km")
-    y, w, mileage = _measured_wear(session, body)
     spec = body.model_dump(mode="json")
     spec["kind"] = KIND
     spec["resolved_classes"] = resolve_classes(session, body)  # type: ignore[arg-type]
     spec["resolved_wear"] = {"y_mm": y, "wear_mm": w, "mileage_km": mileage}
-    if body.step_km * 200 < mileage:
-        raise Unprocessable("step_km", "more than 200 loop steps to reach the mileage; "
-                            "use a larger step_km")
     try:
         problem_from_spec(spec)
     except ValueError as exc:
         raise from_value_error(exc) from exc
-    row = db.Simulation(name=body.name, spec=spec, status="queued", progress=0.0,
-                        message="queued")
-    session.add(row)
-    session.commit()
-    return row
+    return queue_job(session, body.name, spec)
 
 
 def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, Any],
                         on_progress: Any = None) -> None:
     """Run a queued fit to the end; status, progress (per method) and result in its row."""
-    from wearcast.service.simulation_store import _finite, _now, _set
+    from wearcast.service.simulation_store import finite_json, now_utc, set_job
     from wearcast.statistics.coefficient_fit import compare_methods
 
     methods = list(spec["methods"])
-    _set(factory, job_id, status="running", started_at=_now(), progress=0.0,
+    set_job(factory, job_id, status="running", started_at=now_utc(), progress=0.0,
          message=f"fitting with {methods[0]}")
 
     def progress(done: int, total: int, method: str) -> None:
         nxt = f", next {methods[done]}" if done < total else ""
-        _set(factory, job_id, progress=min(1.0, done / total),
+        set_job(factory, job_id, progress=min(1.0, done / total),
              message=f"{done}/{total} methods done ({method}{nxt})")
         if on_progress is not None:
             on_progress(done, total, method)
@@ -260,13 +253,13 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
             problem, methods, predict_mileage_km=predict.get("mileage_km"),
             predict_wear_mm=pw_on_y, seed=int(spec.get("seed", 0)),
             max_runs=int(spec.get("max_runs", 5)), rtol=float(spec.get("rtol", 1e-3)))
-        payload = _finite(result_payload(problem, table, fits))
+        payload = finite_json(result_payload(problem, table, fits))
     except Exception as exc:  # the job reports any failure; it never kills the worker
         log.warning("coefficient fit %s failed: %s", job_id, traceback.format_exc())
-        _set(factory, job_id, status="failed", finished_at=_now(),
+        set_job(factory, job_id, status="failed", finished_at=now_utc(),
              error=f"{type(exc).__name__}: {exc}", message="failed")
         return
-    _set(factory, job_id, status="done", progress=1.0, finished_at=_now(), result=payload,
+    set_job(factory, job_id, status="done", progress=1.0, finished_at=now_utc(), result=payload,
          message="done")
 
 

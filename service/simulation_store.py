@@ -32,7 +32,7 @@ log = logging.getLogger(__name__)
 RESTART_REASON = "the service restarted while this simulation was running; submit it again"
 
 
-def _now() -> dt.datetime:
+def now_utc() -> dt.datetime:
     return dt.datetime.now(dt.UTC)
 
 
@@ -95,14 +95,18 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
         simulation_arguments(spec)
     except ValueError as exc:
         raise from_value_error(exc) from exc
-    row = db.Simulation(name=body.name, spec=spec, status="queued", progress=0.0,
-                        message="queued")
+    return queue_job(session, body.name, spec)
+
+
+def queue_job(session: Session, name: str | None, spec: dict[str, Any]) -> db.Simulation:
+    """Store a validated job (simulation or coefficient fit, told apart by its spec) as queued."""
+    row = db.Simulation(name=name, spec=spec, status="queued", progress=0.0, message="queued")
     session.add(row)
     session.commit()
     return row
 
 
-def _set(factory: SessionFactory, sim_id: int, **values: Any) -> None:
+def set_job(factory: SessionFactory, sim_id: int, **values: Any) -> None:
     with transaction(factory) as session:
         session.execute(update(db.Simulation).where(db.Simulation.id == sim_id).values(**values))
 
@@ -126,34 +130,34 @@ def run_simulation(factory: SessionFactory, sim_id: int,
 
         run_coefficient_fit(factory, sim_id, spec, on_progress)
         return
-    _set(factory, sim_id, status="running", started_at=_now(), progress=0.0,
+    set_job(factory, sim_id, status="running", started_at=now_utc(), progress=0.0,
          message="solving contacts")
 
     def progress(done: int, total: int, mileage_km: float) -> None:
         fraction = min(1.0, done / max(total, 1))
-        _set(factory, sim_id, progress=fraction,
+        set_job(factory, sim_id, progress=fraction,
              message=f"step {done}/{total}, {mileage_km:,.0f} km")
         if on_progress is not None:
             on_progress(done, total, mileage_km)
 
     try:
         result = simulate_wear(**simulation_arguments(spec), progress=progress)
-        payload = _finite(result.to_dict())
+        payload = finite_json(result.to_dict())
     except Exception as exc:  # the job reports any failure; it never kills the worker
         log.warning("simulation %s failed: %s", sim_id, traceback.format_exc())
-        _set(factory, sim_id, status="failed", finished_at=_now(),
+        set_job(factory, sim_id, status="failed", finished_at=now_utc(),
              error=f"{type(exc).__name__}: {exc}", message="failed")
         return
-    _set(factory, sim_id, status="done", progress=1.0, finished_at=_now(), result=payload,
+    set_job(factory, sim_id, status="done", progress=1.0, finished_at=now_utc(), result=payload,
          message="done")
 
 
-def _finite(value: Any) -> Any:
+def finite_json(value: Any) -> Any:
     """JSON-safe copy: non-finite floats become None."""
     if isinstance(value, dict):
-        return {str(k): _finite(v) for k, v in value.items()}
+        return {str(k): finite_json(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_finite(v) for v in value]
+        return [finite_json(v) for v in value]
     if hasattr(value, "item") and not isinstance(value, str):
         value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
@@ -199,7 +203,7 @@ class SimulationRunner:
         with transaction(self.factory) as session:
             session.execute(update(db.Simulation).where(db.Simulation.status == "running")
                             .values(status="failed", error=RESTART_REASON,
-                                    message="failed", finished_at=_now()))
+                                    message="failed", finished_at=now_utc()))
             queued = list(session.scalars(select(db.Simulation.id)
                                           .where(db.Simulation.status == "queued")
                                           .order_by(db.Simulation.id)))
