@@ -294,15 +294,20 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
         console.print(f"wrote {report}")
 
 
+# Options shared by the wear-loop jobs (simulate, fit-coefficients).
+VehicleOption = Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
+                                            "minuetto)")]
+JobRouteOption = Annotated[str | None, typer.Option("--route", help=(
+    "stored route id or name (its curve classes)"))]
+JobClassOption = Annotated[list[str] | None, typer.Option("--class", help=(
+    "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:left|right] (repeatable; RADIUS 'tangent')"))]
+
+
 @app.command()
 def simulate(
-        vehicle: Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
-                                             "minuetto)")],
-        route_id: Annotated[str | None, typer.Option("--route", help=(
-            "stored route id or name (its curve classes)"))] = None,
-        curve: Annotated[list[str] | None, typer.Option("--class", help=(
-            "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:left|right] (repeatable; RADIUS 'tangent')"))]
-        = None,
+        vehicle: VehicleOption,
+        route_id: JobRouteOption = None,
+        curve: JobClassOption = None,
         law: Annotated[str, typer.Option(help="archard_kth, krause_poll, usfd or tau_max")]
         = "archard_kth",
         application: Annotated[str, typer.Option(help="global or local")] = "global",
@@ -359,13 +364,9 @@ def simulate(
 
 @app.command("fit-coefficients")
 def fit_coefficients(
-        vehicle: Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
-                                             "minuetto)")],
-        route_id: Annotated[str | None, typer.Option("--route", help=(
-            "stored route id or name (its curve classes)"))] = None,
-        curve: Annotated[list[str] | None, typer.Option("--class", help=(
-            "RADIUS_M:CANT_MM:SPEED_KMH:SHARE[:left|right] (repeatable; RADIUS 'tangent')"))]
-        = None,
+        vehicle: VehicleOption,
+        route_id: JobRouteOption = None,
+        curve: JobClassOption = None,
         wear_csv: Annotated[Path | None, typer.Option(help=(
             "measured wear curve: CSV with columns y_mm, wear_mm"))] = None,
         measurement_id: Annotated[int | None, typer.Option(
