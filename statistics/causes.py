@@ -28,7 +28,7 @@ closed form; the exact floored log residual is what is scored.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -465,6 +465,23 @@ class FlangeLubrication(LogLinearCause):
         return f"flanges on lubricated routes wear {m:.2f} x the dry rate"
 
 
+def coordinate_grid_search(data: FinderData, train: Mask, start: Mapping[str, float],
+                           predict: Callable[[Mapping[str, float]], Array], *, sweeps: int
+                           ) -> tuple[dict[str, float], Array]:
+    """Fit one share in [0, 1] per key by grid search, one key at a time, ``sweeps`` times.
+
+    Returns the fitted shares and the region log-scales of the last search.
+    """
+    theta = dict(start)
+    b = np.zeros(2)
+    for _ in range(sweeps):
+        for key in theta:
+            def pred(value: float, key: str = key) -> Array:
+                return predict({**theta, key: value})
+            theta[key], b = grid_search(data, train, pred, GRID_01)
+    return theta, b
+
+
 class RunningDirection(Cause):
     code = "running_direction"
     needs = ("axle", "running_mode")
@@ -491,13 +508,9 @@ class RunningDirection(Cause):
         return data.c_s[None, :] * p_ * data.mileage_km[:, None]
 
     def fit(self, data: FinderData, train: Mask) -> Fit:
-        shares = {g: (1.0 if g == "lead" else 0.5) for g in self._groups(data)}
-        b = np.zeros(2)
-        for _ in range(2):
-            for g in shares:
-                def pred(p: float, g: str = g) -> Array:
-                    return self._pred(data, {**shares, g: p})
-                shares[g], b = grid_search(data, train, pred, GRID_01)
+        start = {g: (1.0 if g == "lead" else 0.5) for g in self._groups(data)}
+        shares, b = coordinate_grid_search(data, train, start,
+                                           lambda theta: self._pred(data, theta), sweeps=2)
         return Fit({f"axle1_leading_share_{g}": v for g, v in shares.items()}, b, dict(shares))
 
     def predict(self, data: FinderData, fit: Fit) -> Array:
@@ -540,13 +553,9 @@ class CurveAsymmetry(Cause):
     def fit(self, data: FinderData, train: Mask) -> Fit:
         routes = self._routes(data)
         left, right = data.left_right[:, 0], data.left_right[:, 1]
-        q = {r: float((left / (left + right))[data.route == r][0]) for r in routes}
-        b = np.zeros(2)
-        for _ in range(2 if len(q) > 1 else 1):
-            for r in list(q):
-                def pred(v: float, r: str = r) -> Array:
-                    return self._pred(data, {**q, r: v})
-                q[r], b = grid_search(data, train, pred, GRID_01)
+        start = {r: float((left / (left + right))[data.route == r][0]) for r in routes}
+        q, b = coordinate_grid_search(data, train, start, lambda theta: self._pred(data, theta),
+                                      sweeps=2 if len(start) > 1 else 1)
         return Fit({f"left_curve_share_{r}": v for r, v in q.items()}, b, dict(q))
 
     def predict(self, data: FinderData, fit: Fit) -> Array:
