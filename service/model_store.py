@@ -24,11 +24,9 @@ caches a response) and serialise it with orjson straight from the numpy arrays.
 from __future__ import annotations
 
 import math
-import threading
-from collections import OrderedDict
-from collections.abc import Hashable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Generic, TypeAlias, TypedDict, TypeVar
+from typing import Any, TypeAlias, TypedDict
 
 import numpy as np
 import orjson
@@ -37,6 +35,7 @@ from sqlalchemy.orm import Session, defer
 
 from wearcast.service import measurement_store, route_store, wear_table_store
 from wearcast.service import models_db as db
+from wearcast.service.cache import LruCache
 from wearcast.service.errors import ApiError, NotFound, Unprocessable, from_value_error
 from wearcast.service.schemas import (
     ModelIn,
@@ -58,7 +57,7 @@ REGIONS = ("flange", "tread")
 #: Deserialised models kept in process (a model's state is ~100 kB of JSON).
 MODEL_CACHE_SIZE = 32
 AnyModel: TypeAlias = hybrid.HybridModel | ExtendedModel
-_models: wear_table_store.LruCache[AnyModel] = wear_table_store.LruCache(MODEL_CACHE_SIZE)
+_models: LruCache[AnyModel] = LruCache(MODEL_CACHE_SIZE)
 
 
 def model_from_state(state: dict[str, Any]) -> AnyModel:
@@ -92,7 +91,7 @@ def get_model_row(session: Session, model_id: int) -> db.Model:
 
 #: Weighted wear measures P_s kept in process (a few floats each).
 MEASURE_CACHE_SIZE = 1024
-_measures: wear_table_store.LruCache[dict[str, float]] = wear_table_store.LruCache(
+_measures: LruCache[dict[str, float]] = LruCache(
     MEASURE_CACHE_SIZE)
 
 
@@ -316,49 +315,11 @@ def run_prediction(loaded: LoadedModel | ModelInputs, route: Route, *, bogie_typ
 
 # --- the hot path: inputs served from process memory -----------------------------------------
 
-V = TypeVar("V")
 
 #: Models and stored routes the hot path keeps in process, per database.
 HOT_CACHE_SIZE = 256
 
 
-class _HotCache(Generic[V]):
-    """A bounded thread-safe LRU map with a plain ``get`` (None on a miss) and ``put``.
-
-    Only for values that never change under their key (see the module docstring).
-    """
-
-    def __init__(self, maxsize: int) -> None:
-        self.maxsize = maxsize
-        self._data: OrderedDict[Hashable, V] = OrderedDict()
-        self._lock = threading.Lock()
-        self.hits = 0
-        self.misses = 0
-
-    def get(self, key: Hashable) -> V | None:
-        with self._lock:
-            value = self._data.get(key)
-            if value is None:
-                self.misses += 1
-                return None
-            self._data.move_to_end(key)
-            self.hits += 1
-            return value
-
-    def put(self, key: Hashable, value: V) -> None:
-        with self._lock:
-            self._data[key] = value
-            self._data.move_to_end(key)
-            while len(self._data) > self.maxsize:
-                self._data.popitem(last=False)
-
-    def clear(self) -> None:
-        with self._lock:
-            self._data.clear()
-            self.hits = self.misses = 0
-
-    def __len__(self) -> int:
-        return len(self._data)
 
 
 @dataclass(frozen=True)
@@ -371,8 +332,8 @@ class RouteInputs:
     attributes: Mapping[str, Any]
 
 
-_hot_models: _HotCache[ModelInputs] = _HotCache(HOT_CACHE_SIZE)
-_hot_routes: _HotCache[RouteInputs] = _HotCache(HOT_CACHE_SIZE)
+_hot_models: LruCache[ModelInputs] = LruCache(HOT_CACHE_SIZE)
+_hot_routes: LruCache[RouteInputs] = LruCache(HOT_CACHE_SIZE)
 
 
 def _route_ref(route_id: int | str) -> tuple[str, int | str]:
@@ -452,7 +413,7 @@ def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: P
                         option=orjson.OPT_SERIALIZE_NUMPY)
 
 
-_reference_cache: wear_table_store.LruCache[np.ndarray] = wear_table_store.LruCache(8)
+_reference_cache: LruCache[np.ndarray] = LruCache(8)
 
 
 def _reference_array(grid_y_mm: np.ndarray) -> np.ndarray:

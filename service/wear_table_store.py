@@ -14,17 +14,15 @@ import hashlib
 import io
 import json
 import math
-import threading
-from collections import OrderedDict
-from collections.abc import Callable, Hashable
 from dataclasses import dataclass
-from typing import Any, Generic, TypeVar
+from typing import Any
 
 import pandas as pd
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
+from wearcast.service.cache import LruCache
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.schemas import (
     VehiclePairIn,
@@ -39,49 +37,8 @@ MAX_TABLE_BYTES = 20 * 1024 * 1024
 #: Compiled tables kept in process (each is a few hundred rows: well under 1 MB).
 COMPILED_TABLE_CACHE_SIZE = 16
 
-V = TypeVar("V")
 
 
-class LruCache(Generic[V]):
-    """A small thread-safe least-recently-used cache for immutable values.
-
-    Only for values that can never change under their key (content hashes, or ids of rows
-    that are never updated together with their creation time). ``get_or_create`` builds a
-    missing value outside the lock, so two threads may build the same value once each; the
-    first one stored wins and both get an equal value.
-    """
-
-    def __init__(self, maxsize: int) -> None:
-        if maxsize < 1:
-            raise ValueError("maxsize: must be >= 1")
-        self.maxsize = maxsize
-        self._data: OrderedDict[Hashable, V] = OrderedDict()
-        self._lock = threading.Lock()
-        self.hits = 0
-        self.misses = 0
-
-    def get_or_create(self, key: Hashable, create: Callable[[], V]) -> V:
-        with self._lock:
-            if key in self._data:
-                self._data.move_to_end(key)
-                self.hits += 1
-                return self._data[key]
-            self.misses += 1
-        value = create()
-        with self._lock:
-            stored = self._data.setdefault(key, value)
-            self._data.move_to_end(key)
-            while len(self._data) > self.maxsize:
-                self._data.popitem(last=False)
-        return stored
-
-    def clear(self) -> None:
-        with self._lock:
-            self._data.clear()
-            self.hits = self.misses = 0
-
-    def __len__(self) -> int:
-        return len(self._data)
 
 
 _compiled_tables: LruCache[wear_tables.WearTable] = LruCache(COMPILED_TABLE_CACHE_SIZE)

@@ -23,12 +23,12 @@ with warnings.catch_warnings():
 from wearcast.service import model_store, route_store, wear_table_store
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
+from wearcast.service.cache import LruCache
 from wearcast.service.cli import app as cli_app
 from wearcast.service.cli import serve_app
 from wearcast.service.demo import load_example_fleet
 from wearcast.service.schemas import PredictIn, PredictionOut, ReprofilingIn, ReprofilingOut
 from wearcast.service.settings import Settings
-from wearcast.service.wear_table_store import LruCache
 from wearcast.statistics import hybrid, reprofiling
 from wearcast.statistics.wear_tables import compile_wear_table
 
