@@ -38,7 +38,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 from numpy.typing import NDArray
@@ -70,6 +70,7 @@ from wearcast.physics.wear_laws import (
     usfd_rate,
 )
 from wearcast.physics.wear_measures import rigid_sliding_velocity_m_s
+from wearcast.physics.wear_tables import CurveClass
 
 #: Default lateral grid of the wheel profile [mm] (what the contact table searches, +-1 mm).
 WHEEL_GRID_MM = (-70.0, 60.0, 0.2)
@@ -84,32 +85,8 @@ SEED_003_RAIL_D_STEP_MM = 0.8
 Progress = Callable[[int, int, float], None]
 
 
-@dataclass(frozen=True)
-class LoopClass:
-    """A curve class of a route: radius [m] (None = tangent), cant [mm], speed [km/h] (None:
-    from the unbalanced lateral acceleration), direction (``left``/``right``), share [-]."""
-
-    radius_m: float | None
-    cant_mm: float = 0.0
-    speed_kmh: float | None = None
-    direction: str = "left"
-    share: float = 1.0
-
-    def __post_init__(self) -> None:
-        if self.radius_m is not None and not self.radius_m > 0:
-            raise ValueError(f"radius_m must be positive or None, got {self.radius_m}")
-        if self.cant_mm < 0:
-            raise ValueError(f"cant_mm must be >= 0, got {self.cant_mm}")
-        if self.speed_kmh is not None and not self.speed_kmh > 0:
-            raise ValueError(f"speed_kmh must be positive, got {self.speed_kmh}")
-        if self.direction not in ("left", "right"):
-            raise ValueError(f"direction must be 'left' or 'right', got {self.direction!r}")
-        if not self.share >= 0:
-            raise ValueError(f"share must be >= 0, got {self.share}")
-
-    @property
-    def is_tangent(self) -> bool:
-        return self.radius_m is None or not np.isfinite(self.radius_m)
+#: A curve class of a route; the same class the curve-radius tables use.
+LoopClass: TypeAlias = CurveClass
 
 
 def as_loop_classes(route_classes: Any) -> list[LoopClass]:
@@ -118,7 +95,7 @@ def as_loop_classes(route_classes: Any) -> list[LoopClass]:
     items = getattr(route_classes, "classes", route_classes)
     out = []
     for item in items:
-        if isinstance(item, LoopClass):
+        if isinstance(item, CurveClass):  # type: ignore[misc]  # mypy sees wearcast.* as Any
             out.append(item)
             continue
         get = item.get if isinstance(item, Mapping) else (lambda k, d=None, i=item:
@@ -595,7 +572,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         while True:
             if contacts is None or since_update >= st.contact_update_depth_mm:
                 key = None if contact_cache is None else (cache_key, z.tobytes())
-                hit = None if key is None else contact_cache.get(key)
+                hit = None if key is None or contact_cache is None else contact_cache.get(key)
                 if hit is not None:
                     contacts, fb = hit, 0
                 else:
@@ -604,7 +581,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                         unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
                         tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
                         previous=contacts)
-                    if key is not None and fb == 0:
+                    if key is not None and contact_cache is not None and fb == 0:
                         contact_cache[key] = contacts
                 fallbacks += fb
                 updates += 1

@@ -73,7 +73,7 @@ class CurveClass:
             raise ValueError(f"speed_kmh must be positive, got {self.speed_kmh}")
         if self.direction not in ("left", "right"):
             raise ValueError(f"direction must be 'left' or 'right', got {self.direction!r}")
-        if self.share < 0:
+        if not self.share >= 0:
             raise ValueError(f"share must be >= 0, got {self.share}")
 
     @property
