@@ -20,6 +20,15 @@ that no cited source gives):
 * ``minuetto`` -- a DMU like the ALn 501 Minuetto of seed 003 (masses from seed 003 Table 1,
   S1002 on UIC60 (60E1) inclined 1:20, mu = 0.28 from seed 003 §5.1); geometry and stiffnesses
   are ASSUMED.
+* ``aln663`` -- the FIAT ALn 663 diesel railcar of seed 002 (S1002 on UIC60, mu = 0.4 from
+  seed 002 §2.1). Published data sheet (rficalabria.altervista.org/aln-663, FS data):
+  mass in service 40 t, bogie wheelbase 2,450 mm, bogie pivot distance 15,940 mm, wheel
+  diameter 920 mm, axle arrangement (1A)(A1). The split of the 40 t over body, bogies and
+  wheelsets and every stiffness are ASSUMED. Seed 002 §2.1 describes the suspension: primary
+  flexicoil springs plus a rubber joint on each axle-box control arm, bolsters free to rotate
+  under the body (so no secondary yaw stiffness). The primary longitudinal stiffness decides
+  whether the tread patches of seed 002's curves are in partial slip or saturated, so
+  ``benchmarks/reproduce_seeds.py --only 002`` prints the seed 002 comparison over a range of it.
 
 Each preset offers a ``motor`` and a ``trailer`` variant (:func:`vehicle_preset`).
 """
@@ -214,7 +223,39 @@ _MINUETTO_MOTOR = replace(
     primary_longitudinal_stiffness_n_per_m=1.5 * 10.0e6,  # ASSUMED: stiffer primary yaw
 )
 
+# --- FIAT ALn 663 railcar, seed 002 ----------------------------------------------------------
+# Published (data sheet, see the module docstring): 40 t in service, bogie wheelbase 2.45 m,
+# pivots 15.94 m apart, wheels 920 mm. Each bogie carries 20 t; the leading (outer) axle of each
+# (1A) bogie is the non-powered one whose right wheel seed 002 tracks.
+_ALN663_TRAILER = BogieVehicle(
+    name="aln663",
+    bogie_type="trailer",
+    wheelbase_m=2.45,
+    wheel_radius_m=0.920 / 2,
+    wheelset_mass_kg=1300.0,  # ASSUMED
+    bogie_mass_kg=2500.0,  # ASSUMED
+    body_mass_kg=40_000.0 / 2 - 2500.0 - 2 * 1300.0,  # the rest of a bogie's 20 t
+    primary_longitudinal_stiffness_n_per_m=2.0e6,  # ASSUMED: rubber joint of the control arm
+    primary_lateral_stiffness_n_per_m=0.7e6,  # ASSUMED: flexicoil shear stiffness
+    primary_semi_spacing_m=1.0,  # ASSUMED
+    secondary_lateral_stiffness_n_per_m=2 * 0.15e6,  # ASSUMED: secondary flexicoils
+    secondary_yaw_stiffness_nm_per_rad=0.0,  # seed 002 §2.1: bolster rotation free
+    bogie_centre_distance_m=15.94,
+    cog_height_m=1.3,  # ASSUMED
+    rail_profile="60E1",  # seed 002: UIC60
+    # ASSUMED: seed 002 does not print it. With 1:40 its route gives a global worn volume of
+    # 86 mm^3 against the seed's 56.3 (Table 2); with 1:20 (RFI practice, seed 003) 432 mm^3.
+    rail_inclination=1.0 / 40.0,
+    friction=0.4,  # seed 002 §2.1
+)
+_ALN663_MOTOR = replace(
+    _ALN663_TRAILER,
+    bogie_type="motor",
+    wheelset_mass_kg=1300.0 + 400.0,  # ASSUMED: final drive share on the powered axle
+)
+
 PRESETS: dict[str, dict[str, BogieVehicle]] = {
+    "aln663": {"motor": _ALN663_MOTOR, "trailer": _ALN663_TRAILER},
     "manchester": {"motor": _MANCHESTER_MOTOR, "trailer": _MANCHESTER_TRAILER},
     "metro_b": {"motor": _METRO_B_MOTOR, "trailer": _METRO_B_TRAILER},
     "minuetto": {"motor": _MINUETTO_MOTOR, "trailer": _MINUETTO_TRAILER},
@@ -232,7 +273,7 @@ def vehicle_preset(name: str, bogie_type: str = "trailer",
 
     Parameters
     ----------
-    name : ``manchester``, ``metro_b`` or ``minuetto``
+    name : ``aln663``, ``manchester``, ``metro_b`` or ``minuetto``
     bogie_type : ``motor`` or ``trailer``
     traction_torque_nm : optional driving (+) / braking (-) torque per axle [N m]; only a motor
         bogie can drive (a trailer accepts a negative, braking torque)
