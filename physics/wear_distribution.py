@@ -90,6 +90,39 @@ def semi_elliptic_depth(y_grid_mm: ArrayLike, centre_y_mm: ArrayLike, b_mm: Arra
     return area * weight / h * cos_d
 
 
+def _box_deposit(y_grid_mm: NDArray[np.float64], step_mm: float, centre_mm: NDArray[np.float64],
+                 width_mm: NDArray[np.float64], area: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Deposit boxes [c - w/2, c + w/2] onto the cells [y_i - h/2, y_i + h/2] of a uniform grid.
+
+    centre_mm, width_mm : (P, m) box centres and widths [mm] (widths > 0)
+    area : (P, k, m) quantity carried by each box (k channels)
+
+    Returns (P, k, n): per cell, the sum of area * overlap / w. The end cells reach to
+    infinity, so every box is deposited in full (sum over cells = sum of area exactly) and
+    boxes beyond the grid land in the end cells, as before. Each box touches at most
+    ceil(w / h) + 1 cells; those few cells are visited in a loop, vectorised over all boxes.
+    """
+    n = y_grid_mm.size
+    start = centre_mm - 0.5 * width_mm
+    stop = centre_mm + 0.5 * width_mm
+    first = np.clip(np.floor((start - y_grid_mm[0]) / step_mm + 0.5).astype(int), 0, n - 1)
+    # ceil(w / h) + 1 cells suffice; one more guards the floor() at a cell edge.
+    span = int(np.ceil(np.max(width_mm) / step_mm)) + 2 if width_mm.size else 0
+    rows = np.arange(area.shape[0])[:, None, None]
+    channels = np.arange(area.shape[1])[None, :, None]
+    out = np.zeros((area.shape[0], area.shape[1], n))
+    for k in range(span):
+        cell = first + k
+        inside = cell < n
+        cell = np.minimum(cell, n - 1)
+        lo = np.where(cell == 0, -np.inf, y_grid_mm[cell] - 0.5 * step_mm)
+        hi = np.where(cell == n - 1, np.inf, y_grid_mm[cell] + 0.5 * step_mm)
+        overlap = np.clip(np.minimum(hi, stop) - np.maximum(lo, start), 0.0, None)
+        share = np.where(inside, overlap / width_mm, 0.0)
+        np.add.at(out, (rows, channels, cell[:, None, :]), area * share[:, None, :])
+    return out
+
+
 def local_archard_depth(result: FastsimResult, rolling_speed_m_s: ArrayLike,
                         centre_y_mm: ArrayLike, rolling_radius_mm: ArrayLike,
                         contact_angle_rad: ArrayLike, y_grid_mm: ArrayLike,
@@ -111,15 +144,16 @@ def local_archard_depth(result: FastsimResult, rolling_speed_m_s: ArrayLike,
     normal depth per metre rolled PER UNIT zone coefficient [mm/m], shape (P, 4, n); multiply
     by the zone coefficients (``basis @``-style over axis 1) for the depth per metre rolled.
     Element depth k p s_el / H with s_el = |slip| dx [mm] and the element's zone from its
-    sliding speed |slip| V and pressure p; strips at y_prof = y_c + y_el cos(delta) are
-    deposited on the grid linearly (area-conserving).
+    sliding speed |slip| V and pressure p. The strip at y_prof = y_c + y_el cos(delta) covers
+    [y_prof - w/2, y_prof + w/2], w = dy_el cos(delta), and goes to the grid cells
+    [y_i - h/2, y_i + h/2] in proportion to the overlap (box deposition: area-conserving, and
+    free of the comb that point deposition leaves on grids finer than the strips).
     """
     y = np.asarray(y_grid_mm, dtype=float)
     h = _grid_step(y)
     shape = np.shape(result.fx_n)
     if len(shape) != 1:
         raise ValueError("local_archard_depth expects a 1-D batch of patches")
-    p_count = shape[0]
     v = np.broadcast_to(np.asarray(rolling_speed_m_s, dtype=float), shape)
     yc, r, d = (np.broadcast_to(np.asarray(a, dtype=float), shape)
                 for a in (centre_y_mm, rolling_radius_mm, contact_angle_rad))
@@ -135,14 +169,8 @@ def local_archard_depth(result: FastsimResult, rolling_speed_m_s: ArrayLike,
     cos_d = np.cos(d)
     y_strip = yc[:, None] + np.asarray(result.y_mm, dtype=float) * cos_d[:, None]  # (P, ny)
     area = strips * dy_el[:, None, None]                        # arc-measure area [mm^2/m]
-    pos = (y_strip - y[0]) / h
-    i0 = np.clip(np.floor(pos).astype(int), 0, y.size - 2)
-    frac = np.clip(pos - i0, 0.0, 1.0)
-    out = np.zeros((p_count, 4, y.size))
-    rows = np.arange(p_count)[:, None, None]
-    zones = np.arange(4)[None, :, None]
-    np.add.at(out, (rows, zones, i0[:, None, :]), area * (1.0 - frac)[:, None, :])
-    np.add.at(out, (rows, zones, i0[:, None, :] + 1), area * frac[:, None, :])
+    width = np.broadcast_to(np.maximum(dy_el * cos_d, 1e-9 * h)[:, None], y_strip.shape)
+    out = _box_deposit(y, h, y_strip, width, area)              # [mm^2/m] per cell
     return out * (cos_d / h)[:, None, None]
 
 

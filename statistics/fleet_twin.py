@@ -613,7 +613,7 @@ def lateral_scale_error(instrument_id: str, scale: float) -> ProfileEffect:
 # Generator
 # --------------------------------------------------------------------------------------------
 
-def _arc_length_samples(n_points: int) -> Array:
+def arc_length_samples(n_points: int) -> Array:
     """y positions [mm] evenly spaced in arc length along S1002 from y = -70 to +60."""
     z = s1002_height_mm(_FINE_Y_MM)
     s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(_FINE_Y_MM), np.diff(z)))])
@@ -675,7 +675,7 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
     table = synthetic_wear_table() if wear_table is None else wear_table
     rng = np.random.default_rng(config.seed)
     wheels = _wheels(config, table, rng)
-    y_nominal = _arc_length_samples(config.points_per_profile)
+    y_nominal = arc_length_samples(config.points_per_profile)
     for wheel in wheels:
         unit = _unit_of(config, wheel)
         history = _history(config, unit, wheel, rng)
@@ -689,13 +689,13 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
             a_flange = float(history.flange_area_mm2[i])
             z_true = worn_profile_mm(y_nominal, a_tread, a_flange, tread_shift, flange_centre,
                                      config.split_y_mm)
-            y, z = _measure(config, y_nominal, z_true, rng)
+            y, z = measure_profile(config, y_nominal, z_true, rng)
             for profile_effect in config.profile_effects:
                 y, z = profile_effect(wheel, float(mileage), y, z)
             frames.append(pd.DataFrame({
                 "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
                 "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-                "mileage_km": _number(mileage), "y_mm": np.round(y, config.decimals),
+                "mileage_km": csv_number(mileage), "y_mm": np.round(y, config.decimals),
                 "z_mm": np.round(z, config.decimals),
                 "measured_on": str(history.measured_on[i]), "route_id": wheel.route.name,
                 "running_mode": wheel.running_mode, "instrument_id": wheel.instrument_id,
@@ -717,14 +717,15 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
         yield wheel, pd.concat(frames, ignore_index=True), pd.DataFrame(truth)
 
 
-def _number(value: float) -> float | int:
+def csv_number(value: float) -> float | int:
     """Whole numbers as int (shorter CSV), others unchanged."""
     return int(value) if float(value).is_integer() else float(value)
 
 
-def _measure(config: FleetConfig, y: Array, z: Array,
-             rng: np.random.Generator) -> tuple[Array, Array]:
-    """Rigid misalignment about the tape-circle point plus noise normal to the surface."""
+def measure_profile(config: FleetConfig, y: Array, z: Array,
+                    rng: np.random.Generator) -> tuple[Array, Array]:
+    """Measured points (y, z) [mm] of a true profile y, z [mm]: rigid misalignment about the
+    tape-circle point plus noise normal to the surface (``config`` noise and misalignment)."""
     dy = np.gradient(y)
     dz = np.gradient(z)
     length = np.hypot(dy, dz)

@@ -18,8 +18,8 @@ the truth by the contact-mechanics route the seeds use:
 3. Region areas (tread y >= split, flange y < split) of that curve form the wear history;
    ``FleetConfig.wear_effects`` act on it, and each region of the curve is rescaled to the
    effected area (shape kept), with the per-measurement area scatter.
-4. Worn profile = S1002 - w on MiniProf-like arc-length samples; the twin's ``_measure`` and
-   ``profile_effects`` make the measured points.
+4. Worn profile = S1002 - w on MiniProf-like arc-length samples; the twin's
+   ``measure_profile`` and ``profile_effects`` make the measured points.
 
 ``mileage_scale`` exists because the quasi-static contact with the KTH map wears sharp-curve
 flanges much faster than measured wheels do (see ``benchmarks/reproduce_seeds.py`` and the
@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.physics.profile_measures import flange_parameters
+from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
 from wearcast.physics.wear_laws import WearLaw
@@ -48,9 +48,9 @@ from wearcast.statistics.fleet_twin import (
     TwinRoute,
     WearHistory,
     WheelSpec,
-    _arc_length_samples,
-    _measure,
-    _number,
+    arc_length_samples,
+    csv_number,
+    measure_profile,
 )
 
 Array = NDArray[np.float64]
@@ -134,7 +134,7 @@ def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
                                       axle=axle, side=side, **dict(truth.loop))
         return sims[key]
 
-    y_nominal = _arc_length_samples(config.points_per_profile)
+    y_nominal = arc_length_samples(config.points_per_profile)
     profiles, truths, wheels = [], [], []
     for unit in config.units:
         for v in range(1, unit.vehicles + 1):
@@ -188,15 +188,15 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
         scale = np.where(areas[i] > 0, target / np.where(areas[i] > 0, areas[i], 1.0), 0.0)
         w = curves[i] * np.where(tread_mask, scale[0], scale[1])
         z_true_loop = s1002_height_mm(y_loop) - w
-        params = flange_parameters(y_loop, z_true_loop)
+        params = nominal_frame_flange_parameters(y_loop, z_true_loop)
         z_true = s1002_height_mm(y_nominal) - np.interp(y_nominal, y_loop, w)
-        y, z = _measure(config, y_nominal, z_true, rng)
+        y, z = measure_profile(config, y_nominal, z_true, rng)
         for profile_effect in config.profile_effects:
             y, z = profile_effect(wheel, float(km), y, z)
         frames.append(pd.DataFrame({
             "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
             "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-            "mileage_km": _number(km), "y_mm": np.round(y, config.decimals),
+            "mileage_km": csv_number(km), "y_mm": np.round(y, config.decimals),
             "z_mm": np.round(z, config.decimals), "measured_on": str(history.measured_on[i]),
             "route_id": wheel.route.name, "running_mode": wheel.running_mode,
             "instrument_id": wheel.instrument_id, "load_t": wheel.load_t, **wheel.covariates}))

@@ -7,9 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wearcast.physics.profiles.parameters import flange_parameters, flange_parameters_batch
 from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
-from wearcast.statistics.profile_parameters import flange_parameters, flange_parameters_batch
-from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
+
+# The hybrid model's lateral grid (statistics.wear_curves.DEFAULT_GRID_Y_MM) [mm].
+DEFAULT_GRID_Y_MM = np.linspace(-58.0, 50.0, 217)
 
 
 def _worn_profiles(y: np.ndarray, n: int, seed: int) -> np.ndarray:
