@@ -23,7 +23,9 @@ Four laws, each a pure function of contact quantities, vectorised over any batch
   Mass to volume with the steel density 7.85 g/cm^3 = 7850 ug/mm^3.
 * tau_max law (the hypothesis of seed 001: wear grows with the maximum surface shear traction
   of the FASTSIM solution, ``wear_measures.tau_max``): Delta V / Delta s = c_tau
-  (tau_max - tau_0)_+ A, c_tau [mm/(m MPa)], threshold tau_0 [MPa]; c_tau must be calibrated.
+  (tau_max - tau_0)_+ A, c_tau [mm/(m MPa)], threshold tau_0 [MPa]. No paper publishes c_tau:
+  fit it to measured wear with ``statistics.coefficient_fit.calibrate`` (``law="tau_max"``;
+  ``POST /v1/coefficient-fits`` with ``law: "tau_max"``); the default is a placeholder.
 
 All laws return the worn volume per metre rolled [mm^3/m]; the caller multiplies by the
 distance. Velocities in m/s, forces N, pressures MPa (N/mm^2), lengths mm.
@@ -59,6 +61,9 @@ USFD_BOUNDS_N_PER_MM2 = (10.4, 77.2)
 USFD_MILD_SLOPE = 5.3
 USFD_SEVERE_VALUE = 55.1
 USFD_CATASTROPHIC = (61.9, -4778.7)
+#: PLACEHOLDER c_tau of the tau_max law [mm/(m MPa)]: of the order of Archard's mild regime on a
+#: tread patch, published nowhere. Replace it by a fitted value (``statistics.coefficient_fit``).
+TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA = 1e-6
 
 UsfdJump = Literal["continuous", "as_printed"]
 LawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
@@ -188,13 +193,15 @@ def usfd_rate(t_gamma_n: ArrayLike, contact_area_mm2: ArrayLike, jump: UsfdJump 
 
 
 def tau_max_rate(tau_max_mpa: ArrayLike, contact_area_mm2: ArrayLike,
-                 coefficient_mm_per_m_mpa: float = 1e-6, threshold_mpa: float = 0.0
+                 coefficient_mm_per_m_mpa: float = TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA,
+                 threshold_mpa: float = 0.0
                  ) -> NDArray[np.float64]:
     """tau_max law: worn volume per metre rolled c (tau_max - tau_0)_+ A [mm^3/m].
 
     tau_max [MPa] is the FASTSIM maximum shear traction (``wear_measures.tau_max``); A [mm^2];
-    c [mm/(m MPa)] must be calibrated (the default 1e-6 is of the order of Archard's mild
-    regime on a tread patch and only a placeholder for calibration).
+    c [mm/(m MPa)] must be calibrated (the default is
+    ``TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA``, a placeholder; fit c with
+    ``statistics.coefficient_fit.calibrate(..., law="tau_max")``).
     """
     if coefficient_mm_per_m_mpa < 0 or threshold_mpa < 0:
         raise ValueError("coefficient and threshold must be >= 0")
@@ -209,13 +216,19 @@ class WearLaw:
     name : ``archard_kth`` | ``krause_poll`` | ``usfd`` | ``tau_max``
     archard : map and coefficients for ``archard_kth``
     usfd_jump : treatment of the USFD jump at 77.2 N/mm^2
-    tau_coefficient_mm_per_m_mpa, tau_threshold_mpa : parameters of the tau_max law
+    tau_coefficient_mm_per_m_mpa, tau_threshold_mpa : parameters of the tau_max law, c_tau
+        [mm/(m MPa)] and tau_0 [MPa]. The default c_tau (1e-6,
+        ``TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA``) is a PLACEHOLDER, published nowhere: take
+        c_tau from the calibration of ``statistics.coefficient_fit`` (``CalibrationProblem(...,
+        law="tau_max", tau_threshold_mpa=tau_0)`` then ``calibrate``; or ``POST
+        /v1/coefficient-fits`` / ``wearcast fit-coefficients --law tau_max``), which fits c_tau
+        to measured wear for the given tau_0 (the result's ``c_tau_mm_per_m_mpa``).
     """
 
     name: str = "archard_kth"
     archard: ArchardKTH = field(default_factory=ArchardKTH)
     usfd_jump: str = "continuous"
-    tau_coefficient_mm_per_m_mpa: float = 1e-6
+    tau_coefficient_mm_per_m_mpa: float = TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA
     tau_threshold_mpa: float = 0.0
 
     def __post_init__(self) -> None:

@@ -198,7 +198,7 @@ def wear_table(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
 def wear_table_compute(
         name: Annotated[str, typer.Option(help="table name")],
         vehicle: Annotated[str, typer.Option(help=(
-            "vehicle preset (manchester, metro_b, minuetto) or MOTOR,TRAILER presets"))],
+            "vehicle preset (aln663, manchester, metro_b, minuetto) or MOTOR,TRAILER presets"))],
         route_id: Annotated[str | None, typer.Option("--route", help=(
             "stored route id or name whose curve classes give the radii"))] = None,
         radius: Annotated[list[str] | None, typer.Option(help=(
@@ -295,7 +295,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
 
 
 # Options shared by the wear-loop jobs (simulate, fit-coefficients).
-VehicleOption = Annotated[str, typer.Option(help="vehicle preset (manchester, metro_b, "
+VehicleOption = Annotated[str, typer.Option(help="vehicle preset (aln663, manchester, metro_b, "
                                             "minuetto)")]
 JobRouteOption = Annotated[str | None, typer.Option("--route", help=(
     "stored route id or name (its curve classes)"))]
@@ -375,8 +375,14 @@ def fit_coefficients(
             "mileage of the measured wear [km] (default: the measurement's)"))] = None,
         method: Annotated[list[str] | None, typer.Option(help=(
             "exact, GA, PSO, TS, SA or DE (repeatable; default exact)"))] = None,
+        law: Annotated[str, typer.Option(help=(
+            "fitted law: archard_kth (KTH zones) or tau_max (c_tau)"))] = "archard_kth",
         zone: Annotated[list[int] | None, typer.Option(help=(
-            "fitted KTH zone 1-4 (repeatable; default 1 2 3, seed 000)"))] = None,
+            "archard_kth: fitted KTH zone 1-4 (repeatable; default 1 2 3, seed 000)"))] = None,
+        tau_threshold_mpa: Annotated[float | None, typer.Option(help=(
+            "tau_max: threshold tau_0 [MPa] (default 0)"))] = None,
+        tau_coefficient_bounds: Annotated[tuple[float, float] | None, typer.Option(help=(
+            "tau_max: LOWER UPPER of c_tau [mm/(m MPa)] (default 1e-8 1e-4)"))] = None,
         step_km: Annotated[float, typer.Option(help="loop step [km] (seed 000: 5000)")] = 5000.0,
         contact_update_depth_mm: Annotated[float, typer.Option(help=(
             "re-solve the contact after this much wear [mm] (0 = every step)"))] = 0.0,
@@ -387,7 +393,8 @@ def fit_coefficients(
         side: Annotated[str, typer.Option(help="tracked wheel's side")] = "right",
         out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None
         ) -> None:
-    """Fit the KTH wear coefficients to measured wear (seed 000); stored like an API job."""
+    """Fit a wear law's coefficients to measured wear (seed 000): the KTH zones, or c_tau of
+    the tau_max law; stored like an API job."""
     import pandas as pd
 
     from wearcast.service import coefficient_fit_store as store
@@ -404,10 +411,15 @@ def fit_coefficients(
         "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
         "classes": None if not curve else [_loop_class(c) for c in curve], "wear": wear,
         "measurement_id": measurement_id, "mileage_km": mileage_km,
-        "methods": method or ["exact"], "zones": zone or [1, 2, 3], "step_km": step_km,
+        "methods": method or ["exact"], "law": law, "step_km": step_km,
         "contact_update_depth_mm": contact_update_depth_mm, "bogie_type": bogie_type,
         "axle": axle, "side": side,
         "predict": None if predict_km is None else {"mileage_km": predict_km}}
+    # Only the options given: the API refuses fields of another law than the chosen one.
+    for key, value in (("zones", zone), ("tau_threshold_mpa", tau_threshold_mpa),
+                       ("tau_coefficient_bounds", tau_coefficient_bounds)):
+        if value is not None:
+            data[key] = value
     body = _validated(store.CoefficientFitIn, data)
     from wearcast.service import simulation_store
 
@@ -421,10 +433,12 @@ def fit_coefficients(
         err.print(f"[red]coefficient fit {row.id} failed[/red]: {result.error}")
         raise typer.Exit(1)
     res = result.result or {}
-    table = Table(title=f"coefficient fit {row.id} (seed 000 Table 2): best "
-                  f"{res.get('best_method')}, identifiable zones {res.get('identifiable_zones')}")
-    columns = ["method", "rmse_mm", "max_depth_mm", "re_max_depth_pct", "time_s", "k1", "k2",
-               "k3", "k4"] + (["max_depth_predict_mm"] if predict_km is not None else [])
+    table = Table(title=f"coefficient fit {row.id} (seed 000 Table 2), {res.get('law')}: best "
+                  f"{res.get('best_method')}, identifiable "
+                  f"{res.get('identifiable_coefficients')}")
+    names = (["c_tau_mm_per_m_mpa"] if res.get("law") == "tau_max" else ["k1", "k2", "k3", "k4"])
+    columns = (["method", "rmse_mm", "max_depth_mm", "re_max_depth_pct", "time_s"] + names
+               + (["max_depth_predict_mm"] if predict_km is not None else []))
     for column in columns:
         table.add_column(column, justify="right")
     for r in res.get("table", []):

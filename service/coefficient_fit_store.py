@@ -2,11 +2,13 @@
 
 A coefficient fit takes the measured wear of one wheel at one mileage (a wear curve given as
 points, or a stored measurement whose profile is cleaned, aligned and reduced to its wear curve
-against S1002), the vehicle and route of that wheel, and fits the Archard/KTH zone
-coefficients with each requested method of :mod:`wearcast.statistics.coefficient_fit` (exact
-bounded least squares, GA, PSO, TS, SA, DE). The answer is seed 000's Table 2 for those
-methods (RMSE, maximum depth and its relative error, time, loop runs), the coefficients, which
-zones the data identifies, and the fitted wear curve of the best method.
+against S1002), the vehicle and route of that wheel, and fits the coefficients of a wear law
+with each requested method of :mod:`wearcast.statistics.coefficient_fit` (exact bounded least
+squares, GA, PSO, TS, SA, DE): the Archard/KTH zone coefficients (``law = "archard_kth"``, the
+default) or the tau_max law's c_tau with a given threshold tau_0 (``law = "tau_max"``). The
+answer is seed 000's Table 2 for those methods (RMSE, maximum depth and its relative error, time,
+loop runs), the law, the coefficients, which of them the data identifies, and the fitted wear
+curve of the best method.
 
 Storage reuses the ``simulations`` table (no migration): the job's spec carries
 ``kind = "coefficient_fit"``; :mod:`wearcast.service.simulation_store` hands such rows to
@@ -21,7 +23,7 @@ import traceback
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -44,6 +46,11 @@ MethodName = Literal["exact", "GA", "PSO", "TS", "SA", "DE"]
 Zone = Literal[1, 2, 3, 4]
 #: Default search box per zone (seed 000 §V for zones 1-3; zone 4 around the map mean 350e-4).
 DEFAULT_BOUNDS = {1: (1e-4, 10e-4), 2: (30e-4, 40e-4), 3: (1e-4, 10e-4), 4: (300e-4, 400e-4)}
+#: Laws whose coefficients can be fitted (``statistics.coefficient_fit.FIT_LAWS``).
+FIT_LAWS = ("archard_kth", "tau_max")
+#: Fields that belong to one law only (a request for another law that sets them is refused).
+ARCHARD_FIELDS = ("zones", "bounds", "start")
+TAU_MAX_FIELDS = ("tau_threshold_mpa", "tau_coefficient_bounds", "tau_coefficient_start")
 
 
 def _default_methods() -> list[MethodName]:
@@ -79,7 +86,12 @@ class PredictIn(Strict):
 
 
 class CoefficientFitIn(Strict):
-    """``POST /v1/coefficient-fits``: fit the KTH zone coefficients to one measured wear."""
+    """``POST /v1/coefficient-fits``: fit a wear law's coefficients to one measured wear.
+
+    ``archard_kth`` (default): the KTH zone coefficients in ``zones`` within ``bounds`` from
+    ``start``. ``tau_max``: c_tau [mm/(m MPa)] within ``tau_coefficient_bounds`` from
+    ``tau_coefficient_start``, threshold ``tau_threshold_mpa`` fixed.
+    """
 
     name: str | None = Field(default=None, max_length=200)
     vehicle: str = Field(min_length=1, max_length=50, description="vehicle preset")
@@ -90,6 +102,8 @@ class CoefficientFitIn(Strict):
     measurement_id: int | None = None
     mileage_km: float | None = Field(default=None, gt=0, le=1e7, description=(
         "mileage of the measured wear [km]; default the measurement's"))
+    law: str = Field(default="archard_kth", description=(
+        "wear law whose coefficients are fitted: archard_kth (KTH zones) or tau_max (c_tau)"))
     methods: list[MethodName] = Field(default_factory=_default_methods, min_length=1,
                                       max_length=6)
     zones: list[Zone] = Field(default_factory=_default_zones, min_length=1, max_length=4,
@@ -98,6 +112,13 @@ class CoefficientFitIn(Strict):
         "(lower, upper) per fitted zone; default seed 000's ranges"))
     start: tuple[float, float, float, float] | None = Field(default=None, description=(
         "k1..k4 start and value of the zones not fitted; default seed 000's map means"))
+    tau_threshold_mpa: float | None = Field(default=None, ge=0, le=1e4, description=(
+        "tau_max only: threshold tau_0 [MPa], fixed (default 0)"))
+    tau_coefficient_bounds: tuple[float, float] | None = Field(default=None, description=(
+        "tau_max only: (lower, upper) of c_tau [mm/(m MPa)], 0 < lower < upper; "
+        "default (1e-8, 1e-4)"))
+    tau_coefficient_start: float | None = Field(default=None, gt=0, le=1.0, description=(
+        "tau_max only: start of c_tau [mm/(m MPa)]; default the placeholder 1e-6"))
     step_km: float = Field(default=5000.0, gt=0, le=1e6)
     application: Literal["global", "local"] = "global"
     axle: Axle = 1
@@ -108,6 +129,25 @@ class CoefficientFitIn(Strict):
     rtol: float = Field(default=1e-3, gt=0, lt=1)
     seed: int = 0
     predict: PredictIn | None = None
+
+    @field_validator("law")
+    @classmethod
+    def _fittable_law(cls, law: str) -> str:
+        from wearcast.physics.wear_laws import LAW_NAMES
+
+        if law not in LAW_NAMES:
+            raise ValueError(f"unknown wear law {law!r}; known: {', '.join(LAW_NAMES)}")
+        if law not in FIT_LAWS:
+            raise ValueError(f"{law} has no coefficient to fit; fitted laws: "
+                             f"{', '.join(FIT_LAWS)}")
+        return law
+
+    @field_validator("tau_coefficient_bounds")
+    @classmethod
+    def _positive_box(cls, box: tuple[float, float] | None) -> tuple[float, float] | None:
+        if box is not None and not 0 < box[0] < box[1]:
+            raise ValueError("c_tau bounds must satisfy 0 < lower < upper [mm/(m MPa)]")
+        return box
 
     @model_validator(mode="after")
     def _consistent(self) -> CoefficientFitIn:
@@ -121,7 +161,8 @@ class CoefficientFitIn(Strict):
             raise ValueError("methods must not repeat")
         if len(set(self.zones)) != len(self.zones):
             raise ValueError("zones must not repeat")
-        if self.bounds is not None and len(self.bounds) != len(self.zones):
+        if (self.law == "archard_kth" and self.bounds is not None
+                and len(self.bounds) != len(self.zones)):
             raise ValueError("bounds must give one (lower, upper) per zone")
         return self
 
@@ -135,6 +176,36 @@ class CoefficientFitOut(BaseModel):
     error: str | None = None
     spec: dict[str, Any]
     result: dict[str, Any] | None = None
+
+
+def _check_law_fields(body: CoefficientFitIn) -> None:
+    """Refuse fields of another law than the requested one (422 naming the field)."""
+    if body.law == "tau_max":
+        for name in ARCHARD_FIELDS:
+            if name in body.model_fields_set:
+                raise Unprocessable(name, f"{name} belongs to law archard_kth (KTH zones); "
+                                    "tau_max fits its one coefficient c_tau (use "
+                                    "tau_coefficient_bounds, tau_coefficient_start)")
+        if body.application != "global":
+            raise Unprocessable("application", "the local application is defined for "
+                                "archard_kth only (seed 002); use global with tau_max")
+        return
+    for name in TAU_MAX_FIELDS:
+        if getattr(body, name) is not None:
+            raise Unprocessable(name, f"{name} applies to law tau_max only, not {body.law}")
+
+
+def _law_spec(body: CoefficientFitIn, spec: dict[str, Any]) -> None:
+    """Keep in the stored spec only the chosen law's fields, with their defaults resolved."""
+    from wearcast.statistics.coefficient_fit import TAU_MAX_BOUNDS, TAU_MAX_START
+
+    drop = ARCHARD_FIELDS if body.law == "tau_max" else TAU_MAX_FIELDS
+    for name in drop:
+        spec.pop(name, None)
+    if body.law == "tau_max":
+        spec["tau_threshold_mpa"] = float(body.tau_threshold_mpa or 0.0)
+        spec["tau_coefficient_bounds"] = list(body.tau_coefficient_bounds or TAU_MAX_BOUNDS[0])
+        spec["tau_coefficient_start"] = float(body.tau_coefficient_start or TAU_MAX_START[0])
 
 
 def _measured_wear(session: Session, body: CoefficientFitIn) -> tuple[list, list, float]:
@@ -178,8 +249,18 @@ def problem_from_spec(spec: dict[str, Any]):
         classes = as_loop_classes(spec["resolved_classes"])
     except ValueError as exc:
         raise ValueError(f"classes: {exc}") from exc
-    zones = [int(z) for z in spec["zones"]]
-    bounds = spec.get("bounds") or [DEFAULT_BOUNDS[z] for z in zones]
+    law = spec.get("law", "archard_kth")
+    if law == "tau_max":
+        free: tuple[int, ...] = (0,)
+        bounds = [spec["tau_coefficient_bounds"]]
+        start: tuple[float, ...] = (float(spec["tau_coefficient_start"]),)
+        bounds_field = "tau_coefficient_bounds"
+    else:
+        zones = [int(z) for z in spec["zones"]]
+        free = tuple(z - 1 for z in zones)
+        bounds = spec.get("bounds") or [DEFAULT_BOUNDS[z] for z in zones]
+        start = tuple(spec.get("start") or SEED_000_MEAN_K)
+        bounds_field = "bounds"
     smoothing = Smoothing()
     if spec.get("smoothing"):
         try:
@@ -194,14 +275,13 @@ def problem_from_spec(spec: dict[str, Any]):
             classes=classes, y_mm=np.asarray(measured["y_mm"], dtype=float),
             wear_mm=np.asarray(measured["wear_mm"], dtype=float),
             mileage_km=float(measured["mileage_km"]), step_km=float(spec["step_km"]),
-            free=tuple(z - 1 for z in zones),
-            bounds=tuple((float(lo), float(hi)) for lo, hi in bounds),
-            start=tuple(spec.get("start") or SEED_000_MEAN_K),  # type: ignore[arg-type]
+            free=free, bounds=tuple((float(lo), float(hi)) for lo, hi in bounds), start=start,
             application=spec["application"], smoothing=smoothing, axle=int(spec["axle"]),
-            side=spec["side"], contact_update_depth_mm=float(spec["contact_update_depth_mm"]))
+            side=spec["side"], contact_update_depth_mm=float(spec["contact_update_depth_mm"]),
+            law=law, tau_threshold_mpa=float(spec.get("tau_threshold_mpa") or 0.0))
     except ValueError as exc:
         text = str(exc)
-        field = "bounds" if "bound" in text else "body"
+        field = bounds_field if "bound" in text else "body"
         raise ValueError(f"{field}: {text}") from exc
 
 
@@ -209,6 +289,7 @@ def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
     """Validate a request completely and store it as a queued job."""
     from wearcast.service.simulation_store import queue_job, resolve_classes
 
+    _check_law_fields(body)
     y, w, mileage = _measured_wear(session, body)
     furthest_km = max(mileage, body.predict.mileage_km if body.predict is not None else 0.0)
     if body.step_km * 200 < furthest_km:
@@ -216,6 +297,7 @@ def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
                             "use a larger step_km")
     spec = body.model_dump(mode="json")
     spec["kind"] = KIND
+    _law_spec(body, spec)
     spec["resolved_classes"] = resolve_classes(session, body)  # type: ignore[arg-type]
     spec["resolved_wear"] = {"y_mm": y, "wear_mm": w, "mileage_km": mileage}
     try:
@@ -264,18 +346,32 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
 
 
 def result_payload(problem: Any, table: Any, fits: dict[str, Any]) -> dict[str, Any]:
-    """JSON result: comparison table rows, best method, per-method coefficients, identifiable
-    zones and the best fit's wear curve on the measured y."""
+    """JSON result: the law, comparison table rows, best method, per-method coefficient vectors,
+    the best method's fitted coefficients by name (``k1``.. or ``c_tau_mm_per_m_mpa``), which of
+    them the data identifies, and the best fit's wear curve on the measured y. Archard/KTH also
+    names its fitted and identifiable zones; tau_max its threshold tau_0 [MPa]."""
     best = min(fits, key=lambda m: fits[m].rmse_mm)
     fit = fits[best]
-    zones = [i + 1 for i in problem.free]
+    names = [problem.coefficient_names[i] for i in problem.free]
     y = np.asarray(problem.y_mm, dtype=float)
-    return {
+    out: dict[str, Any] = {
+        "law": problem.law,
         "table": table.to_dict(orient="records"),
         "best_method": best,
         "coefficients": {m: f.coefficients.tolist() for m, f in fits.items()},
-        "fitted_zones": zones,
-        "identifiable_zones": [z for z, ok in zip(zones, fit.identifiable, strict=True) if ok],
+        "fitted_coefficients": {n: float(fit.coefficients[i])
+                                for n, i in zip(names, problem.free, strict=True)},
+        "identifiable_coefficients": [n for n, ok in zip(names, fit.identifiable, strict=True)
+                                      if ok],
+    }
+    if problem.law == "archard_kth":
+        zones = [i + 1 for i in problem.free]
+        out["fitted_zones"] = zones
+        out["identifiable_zones"] = [z for z, ok in zip(zones, fit.identifiable, strict=True)
+                                     if ok]
+    else:
+        out["tau_threshold_mpa"] = problem.tau_threshold_mpa
+    return out | {
         "mileage_km": problem.mileage_km,
         "y_mm": y.tolist(),
         "measured_wear_mm": np.asarray(problem.wear_mm, dtype=float).tolist(),

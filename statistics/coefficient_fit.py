@@ -1,4 +1,4 @@
-"""Data-driven calibration of the Archard/KTH zone coefficients (seed 000), exact and heuristic.
+"""Data-driven calibration of wear-law coefficients (seed 000), exact and heuristic.
 
 Seed 000 fits the Jendel wear coefficients k1, k2, k3 (zones by sliding speed) so that the
 simulated wear at one mileage matches the measured wear in the least-squares sense (its eq. 16
@@ -34,6 +34,14 @@ that of a full loop run at its final k, against the measurements (seed 000 eq. 1
 
 Coefficients whose zone never occurs in the simulation are not identifiable; they keep their
 starting value and are reported as such.
+
+The same method fits the one coefficient of the tau_max law (seed 001's hypothesis,
+``physics.wear_laws.tau_max_rate``: rate = c_tau (tau_max - tau_0)_+ A [mm^3/m]) with the
+threshold tau_0 given: the loop's basis for a single-coefficient law is the depth at the law's
+own coefficient (its coefficient vector is [1]), so the depth per unit c_tau is that basis
+divided by the c_tau it ran with; the inner problem has one column (bounded least squares in
+closed form, which ``lsq_linear`` returns). The metaheuristics solve the same one-column problem.
+Krause-Poll and USFD have no coefficient in ``WearLaw`` to scale, so they are not fitted here.
 """
 
 from __future__ import annotations
@@ -50,7 +58,11 @@ from scipy.optimize import differential_evolution, dual_annealing, lsq_linear
 
 from wearcast.physics.vehicles import BogieVehicle
 from wearcast.physics.wear_distribution import Smoothing
-from wearcast.physics.wear_laws import ArchardKTH, WearLaw
+from wearcast.physics.wear_laws import (
+    TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA,
+    ArchardKTH,
+    WearLaw,
+)
 from wearcast.physics.wear_loop import WearSimulation, WearSteps, simulate_wear
 
 #: Seed 000 §V: bounds of k1, k2, k3 used by its optimisers (zone 4 not fitted) [-].
@@ -58,6 +70,32 @@ SEED_000_BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4))
 #: Seed 000 §VI "traditional" method: the means of the ranges [-].
 SEED_000_MEAN_K = (5e-4, 35e-4, 5e-4, 350e-4)
 METHODS = ("exact", "GA", "PSO", "TS", "SA", "DE")
+#: Laws whose coefficients :func:`calibrate` fits.
+FIT_LAWS = ("archard_kth", "tau_max")
+#: Default search box of the tau_max coefficient c_tau [mm/(m MPa)]: two decades either side of
+#: the placeholder 1e-6 of ``WearLaw`` (no paper publishes c_tau; seed 001 only ranks tau_max).
+TAU_MAX_BOUNDS = ((1e-8, 1e-4),)
+#: Default start of c_tau [mm/(m MPa)]: ``WearLaw``'s placeholder.
+TAU_MAX_START = (TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA,)
+#: Names of each law's coefficient vector (table columns, service results).
+COEFFICIENT_NAMES = {"archard_kth": ("k1", "k2", "k3", "k4"),
+                     "tau_max": ("c_tau_mm_per_m_mpa",)}
+_DEFAULTS = {"archard_kth": ((0, 1, 2), SEED_000_BOUNDS, SEED_000_MEAN_K),
+             "tau_max": ((0,), TAU_MAX_BOUNDS, TAU_MAX_START)}
+
+
+def fit_law(law: str, coefficients: ArrayLike, tau_threshold_mpa: float = 0.0) -> WearLaw:
+    """The ``WearLaw`` of a coefficient vector: KTH zones k1..k4 [-] for ``archard_kth``, (c_tau,)
+    [mm/(m MPa)] with threshold tau_0 [MPa] for ``tau_max``."""
+    k = np.asarray(coefficients, dtype=float).ravel()
+    if law == "archard_kth":
+        return WearLaw("archard_kth", ArchardKTH().with_coefficients(k))
+    if law == "tau_max":
+        if k.size != 1:
+            raise ValueError("tau_max has one coefficient (c_tau)")
+        return WearLaw("tau_max", tau_coefficient_mm_per_m_mpa=float(k[0]),
+                       tau_threshold_mpa=float(tau_threshold_mpa))
+    raise ValueError(f"law: cannot fit {law!r}; fitted laws: {', '.join(FIT_LAWS)}")
 
 
 @dataclass(frozen=True)
@@ -68,10 +106,15 @@ class CalibrationProblem:
     y_mm, wear_mm : measured vertical wear w(y) [mm] at ``mileage_km``
     mileage_km : mileage of the measurement [km]
     step_km : fixed step of the loop [km] (seed 000: 5,000 km; the last step is shortened)
-    free : indices of the fitted zone coefficients (0-based zones; seed 000 fits 0, 1, 2)
-    bounds : (lower, upper) per free coefficient
-    start : full coefficient vector (4,) used as start and for the coefficients not fitted
+    free : indices of the fitted coefficients (Archard/KTH: 0-based zones, seed 000 fits 0, 1, 2;
+        tau_max: (0,), c_tau); () (default): the law's default
+    bounds : (lower, upper) per free coefficient, 0 < lower < upper; (): the law's default
+        (seed 000's ranges; c_tau in ``TAU_MAX_BOUNDS`` [mm/(m MPa)])
+    start : full coefficient vector used as start and for the coefficients not fitted ((4,) k
+        for Archard/KTH, (c_tau,) for tau_max); (): seed 000's map means, or c_tau = 1e-6
     application, smoothing, axle, side, contact_update_depth_mm : loop options
+    law : ``archard_kth`` (default) or ``tau_max`` (``FIT_LAWS``)
+    tau_threshold_mpa : tau_0 of the tau_max law [MPa], fixed (not fitted)
     """
 
     vehicle: BogieVehicle | str
@@ -80,32 +123,65 @@ class CalibrationProblem:
     wear_mm: NDArray
     mileage_km: float
     step_km: float = 5000.0
-    free: tuple[int, ...] = (0, 1, 2)
-    bounds: tuple[tuple[float, float], ...] = SEED_000_BOUNDS
-    start: tuple[float, float, float, float] = SEED_000_MEAN_K
+    free: tuple[int, ...] = ()
+    bounds: tuple[tuple[float, float], ...] = ()
+    start: tuple[float, ...] = ()
     application: str = "global"
     smoothing: Smoothing = field(default_factory=Smoothing)
     axle: int = 1
     side: str = "right"
     contact_update_depth_mm: float = 0.0
+    law: str = "archard_kth"
+    tau_threshold_mpa: float = 0.0
 
     def __post_init__(self) -> None:
+        if self.law not in FIT_LAWS:
+            raise ValueError(f"law: cannot fit {self.law!r}; fitted laws: {', '.join(FIT_LAWS)}")
+        free, bounds, start = _DEFAULTS[self.law]
+        for name, default in (("free", free), ("bounds", bounds), ("start", start)):
+            if len(getattr(self, name)) == 0:  # () means the law's default
+                object.__setattr__(self, name, tuple(default))
+        n = self.n_coefficients
         if len(self.free) != len(self.bounds):
             raise ValueError("free and bounds must have the same length")
-        if any(not 0 <= i < 4 for i in self.free):
-            raise ValueError("free zone indices must be in 0..3")
+        if len(set(self.free)) != len(self.free):
+            raise ValueError("free must name each coefficient once")
+        if any(not 0 <= i < n for i in self.free):
+            raise ValueError(f"free coefficient indices must be in 0..{n - 1} for {self.law}")
         if any(not 0 < lo < hi for lo, hi in self.bounds):
             raise ValueError("each bound must satisfy 0 < lower < upper")
+        if len(self.start) != n or any(not v >= 0 for v in self.start):
+            raise ValueError(f"start must hold {n} non-negative coefficients for {self.law}")
+        if not self.tau_threshold_mpa >= 0:
+            raise ValueError("tau_threshold_mpa must be >= 0")
+        if self.law != "tau_max" and self.tau_threshold_mpa != 0:
+            raise ValueError("tau_threshold_mpa applies to the tau_max law only")
+        if self.law != "archard_kth" and self.application != "global":
+            raise ValueError("the local application is defined for Archard/KTH only (seed 002)")
         if np.shape(self.y_mm) != np.shape(self.wear_mm) or np.ndim(self.y_mm) != 1:
             raise ValueError("y_mm and wear_mm must be 1-D arrays of the same length")
         if not self.mileage_km > 0 or not self.step_km > 0:
             raise ValueError("mileage_km and step_km must be positive")
 
+    @property
+    def n_coefficients(self) -> int:
+        """Length of the law's coefficient vector (4 KTH zones, or 1 for tau_max)."""
+        return len(COEFFICIENT_NAMES[self.law])
+
+    @property
+    def coefficient_names(self) -> tuple[str, ...]:
+        """Names of the coefficient vector's entries (``k1``..``k4`` or ``c_tau_mm_per_m_mpa``)."""
+        return COEFFICIENT_NAMES[self.law]
+
     def coefficients(self, free_values: ArrayLike) -> NDArray[np.float64]:
-        """Full (4,) coefficient vector with the free ones replaced."""
+        """Full coefficient vector ((4,) or (1,)) with the free ones replaced."""
         k = np.asarray(self.start, dtype=float).copy()
         k[list(self.free)] = np.asarray(free_values, dtype=float)
         return k
+
+    def wear_law(self, coefficients: ArrayLike) -> WearLaw:
+        """The loop's ``WearLaw`` at a full coefficient vector."""
+        return fit_law(self.law, coefficients, self.tau_threshold_mpa)
 
 
 def run_model(problem: CalibrationProblem, coefficients: ArrayLike,
@@ -120,7 +196,7 @@ def run_model(problem: CalibrationProblem, coefficients: ArrayLike,
     """
     target = problem.mileage_km if mileage_km is None else mileage_km
     n = max(1, int(np.ceil(target / problem.step_km - 1e-9)))
-    law = WearLaw("archard_kth", ArchardKTH().with_coefficients(coefficients))
+    law = problem.wear_law(coefficients)
     steps = WearSteps(mode="fixed", n_steps=n, step_km=target / n,
                       contact_update_depth_mm=problem.contact_update_depth_mm if feedback
                       else float("inf"))
@@ -134,6 +210,17 @@ def _at(sim: WearSimulation, values: NDArray, y_mm: NDArray) -> NDArray:
     return np.stack([np.interp(y_mm, sim.y_mm, v) for v in np.atleast_2d(values)])
 
 
+def _depth_per_coefficient(problem: CalibrationProblem, sim: WearSimulation,
+                           coefficients: NDArray, y_mm: NDArray) -> NDArray[np.float64]:
+    """Linearised depth at the measured positions per unit coefficient [mm per unit], shape
+    (n_coefficients, n_meas): the loop's summed step basis, which for a single-coefficient law
+    is per unit multiplier of the law AS RUN, i.e. divided by its coefficient (c_tau > 0)."""
+    basis = _at(sim, sim.step_basis_mm.sum(axis=0), y_mm)
+    if problem.law == "archard_kth":
+        return basis
+    return basis / coefficients[0]
+
+
 def rmse_mm(model_mm: ArrayLike, measured_mm: ArrayLike) -> float:
     """Seed 000 eq. (16): sqrt(mean((measured - simulated)^2)) [mm]."""
     d = np.asarray(measured_mm, dtype=float) - np.asarray(model_mm, dtype=float)
@@ -144,10 +231,10 @@ def rmse_mm(model_mm: ArrayLike, measured_mm: ArrayLike) -> float:
 class FitResult:
     """Outcome of one calibration method.
 
-    method, coefficients (4,), rmse_mm (full loop at the final k vs the measurement),
-    max_depth_mm (model), re_max_depth_pct (relative error of the maximum depth vs measured),
-    time_s, model_runs (loop runs), evaluations (inner objective calls), identifiable (bool per
-    free coefficient), simulation (the final loop run)
+    method, coefficients (full vector: (4,) KTH zones or (1,) c_tau), rmse_mm (full loop at the
+    final k vs the measurement), max_depth_mm (model), re_max_depth_pct (relative error of the
+    maximum depth vs measured), time_s, model_runs (loop runs), evaluations (inner objective
+    calls), identifiable (bool per free coefficient), simulation (the final loop run)
     """
 
     method: str
@@ -273,7 +360,7 @@ _SOLVERS: dict[str, InnerSolver] = {"exact": _solve_exact, "GA": _solve_ga, "PSO
 
 def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: int = 5,
               rtol: float = 1e-4, seed: int = 0, predictor: bool = True) -> FitResult:
-    """Fit the free zone coefficients to the measured wear.
+    """Fit the free coefficients (KTH zones, or c_tau of tau_max) to the measured wear.
 
     Parameters
     ----------
@@ -313,14 +400,14 @@ def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: i
                     contact_cache=cache)
     runs += 1
     for _ in range(max_runs - 1):
-        basis = _at(sim, sim.step_basis_mm.sum(axis=0), y_meas)            # (4, n_meas)
         k_full = problem.coefficients(x)
+        basis = _depth_per_coefficient(problem, sim, k_full, y_meas)      # (n_coef, n_meas)
         model = _at(sim, sim.wear_mm[-1], y_meas)[0]
         remainder = model - basis.T @ k_full
-        fixed = [i for i in range(4) if i not in free]
+        fixed = [i for i in range(problem.n_coefficients) if i not in free]
         rhs = w_meas - remainder - basis[fixed].T @ k_full[fixed]
         a = basis[free].T
-        identifiable = np.linalg.norm(a, axis=0) > 1e-12 * max(np.linalg.norm(a), 1e-300)
+        identifiable = np.linalg.norm(a, axis=0) > 1e-12 * max(float(np.linalg.norm(a)), 1e-300)
         x_new = x.copy()
         if np.any(identifiable):
             sub, n_eval = solver(a[:, identifiable], rhs, lo[identifiable], hi[identifiable],
@@ -348,8 +435,9 @@ def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: i
 class TwinData:
     """Synthetic measurements made by the loop with known coefficients.
 
-    true_coefficients (4,), y_mm, wear_fit_mm at ``mileage_fit_km``, wear_predict_mm at
-    ``mileage_predict_km`` (noise added to both), noise_mm, simulation (noise-free truth)
+    true_coefficients ((4,) KTH zones or (1,) c_tau), y_mm, wear_fit_mm at ``mileage_fit_km``,
+    wear_predict_mm at ``mileage_predict_km`` (noise added to both), noise_mm, simulation
+    (noise-free truth)
     """
 
     true_coefficients: NDArray
@@ -365,19 +453,21 @@ class TwinData:
 def make_twin(vehicle: BogieVehicle | str, classes: Any, true_coefficients: Sequence[float],
               mileage_fit_km: float = 50_000.0, mileage_predict_km: float = 80_000.0,
               step_km: float = 5000.0, noise_mm: float = 0.0, seed: int = 0,
-              y_mm: ArrayLike | None = None, **loop: Any) -> TwinData:
+              y_mm: ArrayLike | None = None, law: str = "archard_kth",
+              tau_threshold_mpa: float = 0.0, **loop: Any) -> TwinData:
     """Twin measurements (seed 000's lines: fit at 50,000 km, predict at 80,000 km).
 
     The truth runs with fixed steps of ``step_km`` to ``mileage_predict_km``; the wear at
     ``mileage_fit_km`` must be a step boundary. Gaussian noise of ``noise_mm`` is added.
+    ``law`` and ``tau_threshold_mpa`` as in :class:`CalibrationProblem` (for ``tau_max``,
+    ``true_coefficients`` is (c_tau,) [mm/(m MPa)]).
     """
     k = np.asarray(true_coefficients, dtype=float)
     n = int(round(mileage_predict_km / step_km))
     if not np.isclose(n * step_km, mileage_predict_km) or not np.isclose(
             round(mileage_fit_km / step_km) * step_km, mileage_fit_km):
         raise ValueError("both mileages must be multiples of step_km")
-    law = WearLaw("archard_kth", ArchardKTH().with_coefficients(k))
-    sim = simulate_wear(vehicle, classes, law=law,
+    sim = simulate_wear(vehicle, classes, law=fit_law(law, k, tau_threshold_mpa),
                         steps=WearSteps(mode="fixed", n_steps=n, step_km=step_km,
                                         contact_update_depth_mm=loop.pop(
                                             "contact_update_depth_mm", 0.0)), **loop)
@@ -400,7 +490,8 @@ def compare_methods(problem: CalibrationProblem, methods: Sequence[str] = METHOD
     """Seed 000 Table 2 for our methods and the fits behind it.
 
     Returns (table, fits): the table has RMSE [mm], maximum depth [mm] and its relative error
-    [%], time [s], loop runs, objective evaluations, k1..k4, and (optionally) the same at a
+    [%], time [s], loop runs, objective evaluations, the coefficients (k1..k4, or
+    c_tau_mm_per_m_mpa for tau_max), and (optionally) the same at a
     prediction mileage; a ``traditional_mean_k`` row evaluates the start coefficients (seed 000
     §VI). ``progress(done, total, method)`` is called after each method.
     """
@@ -415,7 +506,7 @@ def compare_methods(problem: CalibrationProblem, methods: Sequence[str] = METHOD
     def row(name, k, rmse, max_d, re, t, runs, evals):
         r = {"method": name, "rmse_mm": rmse, "max_depth_mm": max_d, "re_max_depth_pct": re,
              "time_s": t, "model_runs": runs, "evaluations": evals}
-        r.update({f"k{i + 1}": float(v) for i, v in enumerate(k)})
+        r.update({name: float(v) for name, v in zip(problem.coefficient_names, k, strict=True)})
         if predict_mileage_km is not None:
             sim = run_model(problem, k, predict_mileage_km)
             model = np.interp(y, sim.y_mm, sim.wear_mm[-1])

@@ -118,3 +118,113 @@ def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
     bad = CliRunner().invoke(app, ["fit-coefficients", "--vehicle", "metro_b", "--class",
                                    "tangent:0:70:1", "--mileage-km", "200"])
     assert bad.exit_code == 2
+
+
+# --- the tau_max law's coefficient c_tau -------------------------------------------------------
+
+TRUE_C_TAU = 3e-6   # mm/(m MPa); no paper publishes c_tau: a twin made by the loop
+TAU_0_MPA = 100.0
+
+
+@pytest.fixture(scope="module")
+def tau_twin():
+    classes = [LoopClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
+                         c["share"]) for c in CLASSES]
+    return make_twin("metro_b", classes, (TRUE_C_TAU,), 200.0, 400.0, 100.0, law="tau_max",
+                     tau_threshold_mpa=TAU_0_MPA)
+
+
+def _tau_body(twin, **change):
+    body = {"name": "tau twin", "vehicle": "metro_b", "classes": CLASSES, "law": "tau_max",
+            "tau_threshold_mpa": TAU_0_MPA, "tau_coefficient_bounds": [1e-7, 1e-5],
+            "wear": {"y_mm": twin.y_mm[::5].tolist(), "wear_mm": twin.wear_fit_mm[::5].tolist()},
+            "mileage_km": 200.0, "step_km": 100.0, "methods": ["exact"], "max_runs": 10,
+            "rtol": 1e-7,
+            "predict": {"mileage_km": 400.0,
+                        "wear": {"y_mm": twin.y_mm.tolist(),
+                                 "wear_mm": twin.wear_predict_mm.tolist()}}}
+    body.update(change)
+    return body
+
+
+def test_tau_max_fit_recovers_c_tau_and_names_the_law(tmp_path, tau_twin):
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin))
+    assert r.status_code == 202, r.text
+    spec = r.json()["spec"]
+    # Only the chosen law's fields are stored, defaults resolved.
+    assert spec["law"] == "tau_max" and "zones" not in spec and "bounds" not in spec
+    assert spec["tau_coefficient_start"] == 1e-6
+    body = _wait(client, r.json()["id"])
+    assert body["status"] == "done", body
+    res = body["result"]
+    assert res["law"] == "tau_max" and res["tau_threshold_mpa"] == TAU_0_MPA
+    # Noise-free twin, 10 loop runs with rtol 1e-7 (the outer iteration gains ~20x per run):
+    # the exact method returns the true c_tau to 1e-6.
+    assert res["fitted_coefficients"]["c_tau_mm_per_m_mpa"] == pytest.approx(TRUE_C_TAU,
+                                                                              rel=1e-6)
+    assert res["identifiable_coefficients"] == ["c_tau_mm_per_m_mpa"]
+    assert "fitted_zones" not in res
+    rows = {row["method"]: row for row in res["table"]}
+    assert rows["exact"]["c_tau_mm_per_m_mpa"] == res["coefficients"]["exact"][0]
+    # the start (the 1e-6 placeholder) is the "traditional" row; the fit predicts 400 km
+    assert rows["traditional_mean_k"]["c_tau_mm_per_m_mpa"] == 1e-6
+    assert rows["exact"]["rmse_predict_mm"] < 1e-4 * tau_twin.wear_predict_mm.max()
+
+
+def test_archard_fit_result_names_its_law(tmp_path, twin):
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/coefficient-fits", json=_body(twin, methods=["exact"], predict=None))
+    assert r.status_code == 202, r.text
+    assert "tau_threshold_mpa" not in r.json()["spec"]
+    res = _wait(client, r.json()["id"])["result"]
+    assert res["law"] == "archard_kth" and res["fitted_zones"] == [1]
+    assert res["fitted_coefficients"]["k1"] == pytest.approx(TRUE_K1, rel=1e-3)
+
+
+@pytest.mark.parametrize(("change", "field", "reason"), [
+    ({"law": "wizard"}, "law", "unknown wear law"),
+    ({"law": "usfd"}, "law", "no coefficient to fit"),
+    ({"zones": [1]}, "zones", "archard_kth"),
+    ({"bounds": [[1e-7, 1e-5]]}, "bounds", "tau_coefficient_bounds"),
+    ({"start": [5e-4, 35e-4, 5e-4, 350e-4]}, "start", "archard_kth"),
+    ({"application": "local"}, "application", "archard_kth only"),
+    ({"tau_coefficient_bounds": [-1e-6, 1e-5]}, "tau_coefficient_bounds", "0 < lower < upper"),
+    ({"tau_coefficient_bounds": [1e-5, 1e-7]}, "tau_coefficient_bounds", "0 < lower < upper"),
+    ({"tau_threshold_mpa": -5.0}, "tau_threshold_mpa", "greater than or equal to 0"),
+    ({"tau_coefficient_start": 0.0}, "tau_coefficient_start", "greater than 0"),
+    ({"law": "archard_kth"}, "tau_threshold_mpa", "tau_max only"),
+    ({"law": "archard_kth", "tau_threshold_mpa": None}, "tau_coefficient_bounds",
+     "tau_max only"),
+])
+def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, reason):
+    client = TestClient(create_app(_settings(tmp_path)))
+    r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin, **change))
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"][0]
+    assert detail["field"] == field and reason in detail["reason"], detail
+    assert client.get("/v1/coefficient-fits").json() == []
+
+
+def test_cli_fit_tau_max(tmp_path, tau_twin, monkeypatch):
+    from wearcast.service.cli import app
+
+    monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
+    monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
+    csv = tmp_path / "wear.csv"
+    csv.write_text("y_mm,wear_mm\n" + "\n".join(
+        f"{y},{w}" for y, w in zip(tau_twin.y_mm, tau_twin.wear_fit_mm, strict=True)))
+    common = ["fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
+              "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
+              "--step-km", "100", "--law", "tau_max"]
+    result = CliRunner().invoke(app, common + [
+        "--tau-threshold-mpa", "100", "--tau-coefficient-bounds", "1e-7", "1e-5",
+        "--out", str(tmp_path / "fit.json")])
+    assert result.exit_code == 0, result.output
+    assert "tau_max" in result.output and "c_tau_mm_per_m_mpa" in result.output
+    import json
+    fit = json.loads((tmp_path / "fit.json").read_text())["result"]["fitted_coefficients"]
+    # default max_runs 5 and rtol 1e-3 stop the outer iteration at ~1e-4 relative here
+    assert fit["c_tau_mm_per_m_mpa"] == pytest.approx(TRUE_C_TAU, rel=1e-3)
+    bad = CliRunner().invoke(app, common + ["--zone", "1"])
+    assert bad.exit_code == 2 and "zones" in bad.output
