@@ -669,13 +669,26 @@ def _newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
 
 def _scipy_polish(fun, q0, param, tol):
     """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton."""
+    # MINPACK may probe non-finite states on a badly worn profile; answer those (and any
+    # non-finite residual) with a large finite residual so it backs off instead of indexing the
+    # contact table with NaN.
+    big = np.full(np.shape(q0), 1e12)
+
     def f(z):
-        return fun(z[None, :], param[None, :])[0]
+        if not np.all(np.isfinite(z)):
+            return big
+        r = fun(z[None, :], param[None, :])[0]
+        return np.where(np.isfinite(r), r, 1e12)
 
     def jac(z):
-        return _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+        if not np.all(np.isfinite(z)):
+            return np.eye(len(z))
+        j = _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+        return np.where(np.isfinite(j), j, 0.0)
 
     sol = root(f, q0, jac=jac, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
+    if not np.all(np.isfinite(sol.x)):
+        return np.asarray(q0, dtype=float), float("inf"), False
     norm = float(np.linalg.norm(f(sol.x)))
     return sol.x, norm, norm < tol
 

@@ -81,6 +81,15 @@ SEED_003_D_STEP_MM = 0.2
 SEED_000_STEP_KM = 5000.0
 #: Seed 003 §6: rail threshold D_step^r = 0.8 mm.
 SEED_003_RAIL_D_STEP_MM = 0.8
+#: Largest wear depth a wheel can lose before the loop is declared diverged [mm]: the radial
+#: wear allowance of a wheel rim (e.g. 920 -> 840 mm diameter is 40 mm of radius). ASSUMED as
+#: a physical bound; a run that passes it has left any meaningful regime (typically a fixed
+#: step too long for a seizure-zone rate, whose worn profile feeds back into ever faster wear).
+MAX_WHEEL_WEAR_MM = 40.0
+
+
+class WearLoopDivergedError(RuntimeError):
+    """The wear loop produced a non-finite profile or more wear than a wheel rim allows."""
 
 Progress = Callable[[int, int, float], None]
 
@@ -617,6 +626,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                             for row in basis_km])
             step_basis = sub if step_basis is None else step_basis + sub
             since_update += float(np.max(z - z_new))
+            _check_diverged(z_new, profiles[0], i, mileage[-1] + taken + ds)
             z = z_new
             taken += ds
             if remaining is None:
@@ -646,6 +656,21 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         elapsed_s=time.perf_counter() - start, law=wl.name, application=application,
         n_classes=len(classes), rail_y_mm=rail_y, rail_depth_per_vehicle_mm=rail_rate,
         rail_steps=rail_steps, step_basis_mm=np.array(basis_steps), coefficients=coeffs)
+
+
+def _check_diverged(z_mm: NDArray, z_initial_mm: NDArray, step: int, mileage_km: float) -> None:
+    """Raise :class:`WearLoopDivergedError` on a non-finite profile or wear beyond
+    :data:`MAX_WHEEL_WEAR_MM` (a worn profile is never returned from a diverged run)."""
+    if not np.all(np.isfinite(z_mm)):
+        raise WearLoopDivergedError(
+            f"wear loop diverged in step {step + 1} near {mileage_km:.0f} km: non-finite "
+            "profile; use shorter steps (adaptive mode or a smaller step_km)")
+    depth = float(np.max(z_initial_mm - z_mm))
+    if depth > MAX_WHEEL_WEAR_MM:
+        raise WearLoopDivergedError(
+            f"wear loop diverged in step {step + 1} near {mileage_km:.0f} km: {depth:.3g} mm "
+            f"of wear exceeds a wheel rim's {MAX_WHEEL_WEAR_MM:.0f} mm; use shorter steps "
+            "(adaptive mode or a smaller step_km) or check the wear coefficients")
 
 
 def _rail_steps(rate: NDArray, depth_mm: float, n_steps: int, vehicle: BogieVehicle) -> tuple:

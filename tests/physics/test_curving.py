@@ -200,3 +200,22 @@ def test_contact_table_agrees_with_the_rigid_geometry_with_roll():
             assert theta == pytest.approx(ref.roll_rad, rel=roll_tol)
         if y_c > 6.0:
             assert ours["angle_rad"][k] > 0.75 and -patch.contact_angle_rad > 0.75
+
+
+def test_scipy_polish_survives_non_finite_probes():
+    # On badly worn profiles MINPACK may probe states where the contact table yields NaN, and a
+    # NaN state made the table lookup raise IndexError (a crashed wear loop). The polish must
+    # answer non-finite states with a large finite residual and report non-convergence.
+    table = np.linspace(-10.0, 10.0, 21)
+
+    def fun(q, p):  # like the contact table: indexes with the state, NaN residual far out
+        idx = np.floor(q).astype(int) + 10
+        out = table[np.clip(idx, 0, 20)] * 0.0 + np.arctan(q - p)
+        return np.where(np.abs(q) > 5.0, np.nan, out)
+
+    q, norm, ok = cv._scipy_polish(fun, np.array([0.2, -0.2]), np.array([0.5, -0.25]), 1e-9)
+    assert ok and np.allclose(q, [0.5, -0.25])
+    q, norm, ok = cv._scipy_polish(fun, np.array([np.nan, 0.0]), np.array([0.5, 0.0]), 1e-9)
+    assert not ok and norm == np.inf
+    q, norm, ok = cv._scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
+    assert np.all(np.isfinite(q)) and ok == (norm < 1e-9)

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from wearcast.physics.wear_distribution import Smoothing
-from wearcast.physics.wear_laws import WearLaw
+from wearcast.physics.wear_laws import ArchardKTH, WearLaw
 from wearcast.physics.wear_loop import (
+    MAX_WHEEL_WEAR_MM,
     LoopClass,
+    WearLoopDivergedError,
     WearSteps,
     class_wear_rates,
     contact_volume_basis,
@@ -74,6 +76,17 @@ def test_fixed_steps_of_seed_000():
     assert sharp.mileage_km == pytest.approx([0.0, 2.0])
     assert sharp.contact_updates >= 3
     assert sharp.step_max_depth_mm[0] > 0.25
+
+
+def test_a_runaway_fixed_step_raises_instead_of_returning_a_profile():
+    # Coefficients 1e4 x the KTH map: one 5,000 km step would remove metres of steel. The loop
+    # must refuse (a wheel rim allows ~40 mm) rather than hand back a nonsense profile.
+    law = WearLaw("archard_kth", ArchardKTH().with_coefficients(
+        np.array(ArchardKTH().effective_coefficients) * 1e4))
+    with pytest.raises(WearLoopDivergedError, match="exceeds a wheel rim"):
+        simulate_wear("metro_b", CLASSES[:1], law=law, steps=WearSteps(
+            mode="fixed", n_steps=1, step_km=5000.0, max_substeps=1))
+    assert MAX_WHEEL_WEAR_MM == 40.0
 
 
 def test_mirror_symmetry_left_curve_right_wheel_equals_right_curve_left_wheel():
