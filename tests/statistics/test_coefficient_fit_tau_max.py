@@ -12,6 +12,7 @@ from wearcast.physics.wear_loop import LoopClass
 from wearcast.statistics.coefficient_fit import (
     CalibrationProblem,
     calibrate,
+    calibrate_full_loop,
     make_twin,
     run_model,
 )
@@ -121,3 +122,28 @@ def test_threshold_above_every_contact_leaves_c_tau_unidentified():
 def test_bad_problems_are_refused(change, match):
     with pytest.raises(ValueError, match=match):
         _problem(np.zeros(3), np.arange(3.0), **change)
+
+
+@pytest.mark.slow
+def test_full_loop_metaheuristic_as_the_seed_ran_it(twin):
+    # Seed 000's set-up: every objective evaluation is a whole loop run. A small PSO (6 x 8 in
+    # log10(c) over 1e-8..1e-4) must land near the truth (measured: within 5 %) while the exact
+    # method needs a handful of runs for the lower RMSE. ~40 s: slow.
+    problem = _problem(twin.wear_fit_mm, twin.y_mm)
+    full = calibrate_full_loop(problem, "PSO", budget={"n_particles": 6, "n_iter": 8})
+    assert full.coefficients[0] == pytest.approx(TRUE_C_TAU, rel=0.05)
+    exact = calibrate(problem, "exact", rtol=1e-8, max_runs=10)
+    assert exact.model_runs < full.model_runs / 5
+    assert exact.rmse_mm <= full.rmse_mm * (1 + 1e-9)
+
+
+def test_full_loop_metaheuristic_runs_the_loop_per_evaluation(twin):
+    # The seed's accounting: one whole loop run per objective evaluation, plus the final run.
+    problem = _problem(twin.wear_fit_mm, twin.y_mm)
+    full = calibrate_full_loop(problem, "PSO", budget={"n_particles": 2, "n_iter": 1})
+    assert full.method == "PSO (full loop)"
+    assert full.evaluations == 2 * 2 and full.model_runs == full.evaluations + 1
+    assert full.rmse_mm == pytest.approx(np.sqrt(np.mean((np.interp(
+        twin.y_mm, full.simulation.y_mm, full.simulation.wear_mm[-1]) - twin.wear_fit_mm) ** 2)))
+    with pytest.raises(ValueError, match="full-loop method"):
+        calibrate_full_loop(problem, "exact")
