@@ -53,7 +53,7 @@ from scipy.optimize import root
 
 from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import fastsim
-from wearcast.physics.contact.hertz import hertz_contact
+from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.profiles.rails import rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
@@ -302,6 +302,78 @@ def _rail_envelope(rail: str, inclination: float) -> tuple[NDArray, NDArray, flo
     order = np.argsort(zg)
     y_gauge = float(np.interp(-14.0, zg[order], yg[order]))
     return y, z, GAUGE_MM / 2.0 - y_gauge
+
+
+#: Kik & Piotrowski (1996): the patch is where the undeformed interpenetration exceeds
+#: (1 - epsilon) of the approach, i.e. where the gap is below epsilon * approach; epsilon = 0.55.
+KIK_PIOTROWSKI_EPSILON = 0.55
+
+
+def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLike, rail: str,
+                            inclination: float, wheel_y_mm: ArrayLike, rail_y_mm: ArrayLike,
+                            normal_n: ArrayLike, a_mm: ArrayLike, b_mm: ArrayLike,
+                            search_mm: float = 12.0) -> NDArray[np.float64]:
+    """Lateral half-width of a patch from the UNSMOOTHED gap (Kik-Piotrowski's virtual
+    penetration), along the profile arc [mm], never below the Hertz ``b_mm``.
+
+    The curving model's Hertz patches take the curvature of a gap smoothed over 2 mm, which
+    turns a conformal pair (the S1002 flange root, concave R13, on the 60E1 gauge corner, convex
+    R13: relative curvature ~0) into a narrow ellipse (b < 1 mm, p0 of several GPa). Seed 002
+    §2.1 (Simpack) finds the patch by Kik-Piotrowski and replaces it by an equivalent ellipse;
+    so do we, for the patch width only: with the approach delta = 3 N / (4 E* sqrt(a b)) of the
+    Hertz patch (its circular equivalent, Johnson §4.2), the patch spans the connected range
+    around the contact point where the raw gap is within epsilon * delta of its minimum
+    (epsilon = 0.55, Kik & Piotrowski 1996). For a Hertzian pair this is about b; for a
+    conformal one it is the extent of the conformal arcs.
+
+    Parameters
+    ----------
+    wheel_y_grid_mm, wheel_z_grid_mm : the wheel profile z(y) in the wheel frame [mm]
+    rail, inclination : rail profile and inclination (as the vehicle's)
+    wheel_y_mm, rail_y_mm : contact points on the wheel and in the rail frame of the contact
+        table (``CurvingResult.wheel_y_mm`` / ``rail_y_mm``), shape S [mm]
+    normal_n, a_mm, b_mm : normal force [N] and Hertz semi-axes [mm], shape S
+    search_mm : half-range searched around the contact point [mm]
+
+    Returns
+    -------
+    half-width along the profile arc [mm], shape S (b_mm where not loaded)
+    """
+    yg = np.asarray(wheel_y_grid_mm, dtype=float)
+    zg = np.asarray(wheel_z_grid_mm, dtype=float)
+    yw, yr, n, a, b = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        wheel_y_mm, rail_y_mm, normal_n, a_mm, b_mm)))
+    ry, rz, _ = _rail_envelope(rail, inclination)
+    e_star = effective_modulus_mpa()
+    out = b.copy()
+    step = 0.05
+    local = np.arange(-search_mm, search_mm + 1e-9, step)
+    for idx in zip(*np.nonzero((n > 1.0) & (a > 0) & (b > 0)), strict=True):
+        y = yw[idx] + local
+        # rail_y is the rail-envelope coordinate of the contact (ContactTable.candidates:
+        # rail_y = y + offset + shift, the coordinate build_contact_table samples the rail at)
+        y_rail = y + (yr[idx] - yw[idx])
+        gap = -np.interp(y, yg, zg) - np.interp(y_rail, ry, rz, left=np.nan, right=np.nan)
+        gap = np.where(np.isfinite(gap), gap, np.inf)
+        centre = int(np.argmin(np.abs(local)))
+        lo_win = max(0, centre - int(round(1.0 / step)))
+        hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
+        g_min = float(np.min(gap[lo_win:hi_win]))
+        delta = 3.0 * n[idx] / (4.0 * e_star * np.sqrt(a[idx] * b[idx]))
+        inside = gap <= g_min + KIK_PIOTROWSKI_EPSILON * delta
+        # connected run through the contact point
+        j0 = lo_win + int(np.argmin(gap[lo_win:hi_win]))
+        left = j0
+        while left > 0 and inside[left - 1]:
+            left -= 1
+        right = j0
+        while right < local.size - 1 and inside[right + 1]:
+            right += 1
+        width_y = (right - left + 1) * step
+        slope = np.interp(yw[idx], yg, np.gradient(zg, yg))
+        half_arc = 0.5 * width_y * np.sqrt(1.0 + slope * slope)
+        out[idx] = max(b[idx], half_arc)
+    return out
 
 
 @lru_cache(maxsize=1)

@@ -49,6 +49,7 @@ from wearcast.physics.curving import (
     CurvingConvergenceError,
     CurvingResult,
     build_contact_table,
+    conformal_half_width_mm,
     curve_case,
     solve_curving_cases,
 )
@@ -81,6 +82,8 @@ SEED_003_D_STEP_MM = 0.2
 SEED_000_STEP_KM = 5000.0
 #: Seed 003 §6: rail threshold D_step^r = 0.8 mm.
 SEED_003_RAIL_D_STEP_MM = 0.8
+#: Patch-width models of :func:`class_contacts`.
+PATCH_WIDTHS = ("hertz", "kik_piotrowski")
 #: Largest wear depth a wheel can lose before the loop is declared diverged [mm]: the radial
 #: wear allowance of a wheel rim (e.g. 920 -> 840 mm diameter is 40 mm of radius). ASSUMED as
 #: a physical bound; a run that passes it has left any meaningful regime (typically a fixed
@@ -256,15 +259,23 @@ def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_gri
 def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: NDArray,
                    z_mm: NDArray, *, axle: int = 1, side: str = "right",
                    unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
-                   fastsim_grid: int = 20, previous: ClassContacts | None = None
-                   ) -> tuple[ClassContacts, int]:
+                   fastsim_grid: int = 20, previous: ClassContacts | None = None,
+                   patch_width: str = "hertz") -> tuple[ClassContacts, int]:
     """Quasi-static contacts of the tracked wheel per class for the wheel profile z(y).
+
+    patch_width : ``hertz`` (the curving model's ellipse, from the gap smoothed over 2 mm) or
+        ``kik_piotrowski`` (the lateral semi-axis widened to the extent of the unsmoothed gap
+        within 0.55 x the approach, ``curving.conformal_half_width_mm``: conformal flange-root
+        patches become wide and mild; the equilibrium and creepages are unchanged)
 
     Returns (contacts, number of classes that kept the previous contact). Raises
     CurvingConvergenceError when a class fails and there is no previous contact.
     """
     if axle not in (1, 2) or side not in ("left", "right"):
         raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
+    if patch_width not in PATCH_WIDTHS:
+        raise ValueError(f"patch_width must be one of {', '.join(PATCH_WIDTHS)}, "
+                         f"got {patch_width!r}")
     y = np.asarray(y_mm, dtype=float)
     z = np.asarray(z_mm, dtype=float)
     table = build_contact_table(lambda q: np.interp(q, y, z), vehicle.rail_profile,
@@ -315,6 +326,11 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
             rail[f][k, :, :m] = np.asarray(getattr(res, f))[:, si]
         speed[k] = res.speed_m_s
     loaded = data["in_contact"].astype(bool) & (data["normal_force_n"] > 1.0)
+    if patch_width == "kik_piotrowski":
+        data["b_mm"] = np.where(loaded, conformal_half_width_mm(
+            y, z, vehicle.rail_profile, vehicle.rail_inclination, data["wheel_y_mm"],
+            data["rail_y_mm"], np.where(loaded, data["normal_force_n"], 0.0), data["a_mm"],
+            data["b_mm"]), data["b_mm"])
     rail["in_contact"] = rail["in_contact"].astype(bool) & (rail["normal_force_n"] > 1.0)
     return ClassContacts(
         normal_n=data["normal_force_n"], wheel_y_mm=data["wheel_y_mm"],
@@ -492,10 +508,10 @@ def _grid(spec: tuple[float, float, float]) -> NDArray[np.float64]:
 
 def _contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, side: str,
                  unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
-                 fastsim_grid: int, y_mm: NDArray) -> Any:
+                 fastsim_grid: int, y_mm: NDArray, patch_width: str = "hertz") -> Any:
     """Everything a contact update depends on besides the profile heights (hashable)."""
     key = (vehicle, tuple(classes), axle, side, float(unbalanced_acceleration_m_s2),
-           float(tangent_speed_kmh), int(fastsim_grid), y_mm.tobytes())
+           float(tangent_speed_kmh), int(fastsim_grid), y_mm.tobytes(), patch_width)
     try:
         hash(key)
     except TypeError:  # a vehicle with unhashable fields: fall back to its full repr
@@ -511,7 +527,8 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
                   fastsim_grid: int = 20, rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
                   n_rail_steps: int = 5, progress: Progress | None = None,
-                  contact_cache: dict | None = None) -> WearSimulation:
+                  contact_cache: dict | None = None,
+                  patch_width: str = "hertz") -> WearSimulation:
     """Simulate the wear of one wheel over a route described by curve classes.
 
     Parameters
@@ -531,6 +548,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     fastsim_grid : FASTSIM grid n for the local application
     rail_step_depth_mm, n_rail_steps : rail thresholds D_step^r and number of rail steps
     progress : callback(done_steps, n_steps, mileage_km)
+    patch_width : ``hertz`` (default) or ``kik_piotrowski`` (:func:`class_contacts`)
     contact_cache : optional dict shared by several runs (e.g. the iterations of a calibration)
         that stores each contact update's solution keyed by everything it depends on (vehicle,
         classes, tracked wheel, operating-point options and the exact bytes of the profile);
@@ -570,7 +588,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     rail_rates = []
     cache_key = None if contact_cache is None else _contact_key(
         veh, classes, axle, side, unbalanced_acceleration_m_s2, tangent_speed_kmh, fastsim_grid,
-        y)
+        y, patch_width)
     linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)
     eps = 1e-3
     for i in range(st.n_steps):
@@ -589,7 +607,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                         veh, classes, y, z, axle=axle, side=side,
                         unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
                         tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
-                        previous=contacts)
+                        previous=contacts, patch_width=patch_width)
                     if key is not None and contact_cache is not None and fb == 0:
                         contact_cache[key] = contacts
                 fallbacks += fb

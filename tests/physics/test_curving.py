@@ -219,3 +219,35 @@ def test_scipy_polish_survives_non_finite_probes():
     assert not ok and norm == np.inf
     q, norm, ok = cv._scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
     assert np.all(np.isfinite(q)) and ok == (norm < 1e-9)
+
+
+def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
+    # Minuetto (S1002 on 60E1 1:20) in a 162 m curve: the leading outer wheel touches the rail
+    # in the flange root (S1002 section D, concave R13) on the gauge corner (convex R13), a
+    # conformal pair whose smoothed-gap Hertz ellipse is < 1 mm wide at p_mean > 3 GPa. The
+    # unsmoothed gap within 0.55 x the approach (Kik & Piotrowski 1996) spans several mm there;
+    # on the Hertzian tread patch of the tangent class it stays within 25 % of Hertz's b (KP with
+    # epsilon = 0.55 is ~5 % wider than Hertz for a circular patch, more for our circular
+    # estimate of the approach on elongated ellipses).
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+    from wearcast.physics.wear_loop import LoopClass, class_contacts
+
+    y = np.linspace(-70.0, 60.0, 651)
+    z = s1002_height_mm(y)
+    veh = vehicle_preset("minuetto")
+    classes = [LoopClass(162.0, 131.0, 60.0, "left", 0.5), LoopClass(None, share=0.5)]
+    hertz, _ = class_contacts(veh, classes, y, z, axle=1, side="right")
+    kp, _ = class_contacts(veh, classes, y, z, axle=1, side="right",
+                           patch_width="kik_piotrowski")
+    root = hertz.loaded[0] & (hertz.wheel_y_mm[0] < -30.0)
+    tread = hertz.loaded[1]
+    assert root.any() and tread.any()
+    assert np.all(hertz.b_mm[0][root] < 1.0)
+    assert np.all(kp.b_mm[0][root] > 3.0 * hertz.b_mm[0][root])
+    assert np.all(kp.b_mm[1][tread] >= hertz.b_mm[1][tread])
+    assert np.all(kp.b_mm[1][tread] < 1.25 * hertz.b_mm[1][tread])
+    # everything else (equilibrium, forces, creepages, a) is the curving model's
+    for name in ("normal_n", "a_mm", "xi", "eta", "wheel_y_mm"):
+        assert np.array_equal(getattr(kp, name), getattr(hertz, name))
+    with pytest.raises(ValueError, match="patch_width"):
+        class_contacts(veh, classes, y, z, patch_width="ellipse")
