@@ -311,6 +311,8 @@ def simulate(
         law: Annotated[str, typer.Option(help="archard_kth, krause_poll, usfd or tau_max")]
         = "archard_kth",
         application: Annotated[str, typer.Option(help="global or local")] = "global",
+        patch_width: Annotated[str, typer.Option(help=(
+            "hertz or kik_piotrowski (conformal flange-root patches widened)"))] = "hertz",
         steps: Annotated[int, typer.Option(help="number of wheel steps")] = 20,
         step_km: Annotated[float | None, typer.Option(help=(
             "fixed mileage per step [km] (default: adaptive steps by depth)"))] = None,
@@ -328,7 +330,8 @@ def simulate(
     body = _validated(SimulationIn, {
         "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
         "classes": None if not curve else [_loop_class(c) for c in curve], "law": law,
-        "application": application, "bogie_type": bogie_type, "axle": axle, "side": side,
+        "application": application, "patch_width": patch_width, "bogie_type": bogie_type,
+        "axle": axle, "side": side,
         "steps": {"mode": "fixed" if step_km is not None else "adaptive", "count": steps,
                   "step_km": step_km, "depth_per_step_mm": depth_per_step_mm}})
     with _session() as (database, session):

@@ -512,6 +512,9 @@ class SimulationIn(Strict):
                                                     max_length=200)
     law: WearLawName = "archard_kth"
     application: Literal["global", "local"] = "global"
+    patch_width: Literal["hertz", "kik_piotrowski"] = Field(default="hertz", description=(
+        "contact patch width: hertz (the curving model's ellipse) or kik_piotrowski (widened to "
+        "the unsmoothed gap: conformal flange-root patches become wide and mild)"))
     steps: StepsIn = Field(default_factory=StepsIn)
     axle: Axle = 1
     side: Side = "right"

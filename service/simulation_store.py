@@ -83,7 +83,8 @@ def simulation_arguments(spec: dict[str, Any]) -> dict[str, Any]:
             "application": spec["application"], "steps": steps, "axle": int(spec["axle"]),
             "side": spec["side"], "smoothing": smoothing,
             "unbalanced_acceleration_m_s2": float(spec["unbalanced_acceleration_m_s2"]),
-            "tangent_speed_kmh": float(spec["tangent_speed_kmh"])}
+            "tangent_speed_kmh": float(spec["tangent_speed_kmh"]),
+            "patch_width": spec.get("patch_width", "hertz")}
 
 
 def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:

@@ -81,10 +81,31 @@ def test_simulation_over_a_stored_route(tmp_path: Path) -> None:
     assert body["result"]["n_classes"] == len(metro["classes"])
 
 
+def test_kik_piotrowski_patch_width_is_passed_to_the_loop(tmp_path: Path) -> None:
+    # A 200 m curve puts the leading outer wheel on the conformal flange root, where the
+    # Kik-Piotrowski width spreads the same wear wider: a lower peak over the same mileage.
+    client = TestClient(create_app(_settings(tmp_path)))
+    sharp = {**TINY, "classes": [{"radius_m": 200, "cant_mm": 100, "speed_kmh": 50,
+                                  "direction": "left", "share": 1.0}],
+             "steps": {"mode": "fixed", "count": 1, "step_km": 50}}
+    done = {}
+    for patch in ("hertz", "kik_piotrowski"):
+        r = client.post("/v1/simulations", json={**sharp, "patch_width": patch})
+        assert r.status_code == 202, r.text
+        body = _wait(client, r.json()["id"], timeout_s=120.0)
+        assert body["status"] == "done", body
+        assert body["spec"]["patch_width"] == patch
+        done[patch] = body["result"]
+    peak = {p: max(a - b for a, b in zip(r["profiles_mm"][0], r["profiles_mm"][-1],
+                                        strict=True)) for p, r in done.items()}
+    assert peak["kik_piotrowski"] < 0.5 * peak["hertz"]
+
+
 @pytest.mark.parametrize(("change", "status", "field"), [
     ({"vehicle": "tgv"}, 422, "vehicle"),
     ({"law": "magic"}, 422, "law"),
     ({"application": "local", "law": "krause_poll"}, 422, "application"),
+    ({"patch_width": "ellipse"}, 422, "patch_width"),
     ({"steps": {"count": 0}}, 422, "steps.count"),
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
     ({"classes": [{"radius_m": -3}]}, 422, "classes[0].radius_m"),
