@@ -1,6 +1,6 @@
-"""Reproduce the wear-loop claims of seeds 002, 003 and 004; pictures in docs/img/wear_loop_*.png.
+"""Reproduce the wear-loop claims of seeds 002 and 004; pictures in docs/img/wear_loop_*.png.
 
-Run: .venv/bin/python benchmarks/reproduce_seeds.py [--skip-003] [--only 002|003|004]
+Run: .venv/bin/python benchmarks/reproduce_seeds.py [--only 002|004]
 * Seed 002 (Table 2, §3): local (FASTSIM grid) vs global (semi-elliptic) worn volume on the same
   route and wheel (seed: 47.0 vs 56.3 mm^3, ratio 0.835) and the global/local speed ratio of the
   wear computation (seed: 1.58). Route: seed 002 Table 1 (four curves, both directions; the
@@ -9,12 +9,7 @@ Run: .venv/bin/python benchmarks/reproduce_seeds.py [--skip-003] [--only 002|003
   leading wheelset, wear multiplied by the seed's 20 (75.4 km). A sensitivity table repeats it
   over the ASSUMED primary longitudinal stiffness, with rails at 1:20, and on the Manchester
   bogie, whose tread patches saturate and reverse the tread claim.
-* Seed 003 (Tables 5, 8): statistical track description with n_class = 4, 6, 8, 10 vs the
-  complete line: error of the mileage after 20 wheel steps of D_step = 0.2 mm (seed: about 24,
-  19, 12, 5 %) and the time. The complete line is synthesised from seed 003 Table 3 (classes'
-  bounds and shares, 31 km, 4 segments per class with radii and cants drawn inside the class).
-  metro_b stands in for the Minuetto (its preset now converges in the curving model; the
-  seed 003 figures have not been re-run with it yet).
+* Seed 003 (n_class convergence): moved to ``benchmarks/reproduce_seed003.py``.
 * Seed 004 (§3, Fig. 6): Archard/KTH vs Krause-Poll over curve radius 200-2000 m for the
   high-rail wheel, speeds from a_nc = 0.8 m/s^2, cant 150 mm, max 200 km/h (Manchester); wear
   peaks with big unsmoothed steps vs the step-depth limit and smoothing.
@@ -31,7 +26,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 
 from wearcast.physics.curving import curve_case  # noqa: E402
 from wearcast.physics.profiles.s1002 import s1002_height_mm  # noqa: E402
@@ -48,11 +42,9 @@ from wearcast.physics.wear_loop import (  # noqa: E402
     simulate_wear,
     wheel_depth_basis,
 )
-from wearcast.statistics.routes import route_from_segments  # noqa: E402
 
 IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
 Y = np.linspace(-70.0, 60.0, 651)
-REFERENCE = Path("/work/shared/reference/published")
 
 
 FLANGE_TREAD_SPLIT_MM = -30.0  # DESIGN.md regions: flange y < -30 mm, tread y >= -30 mm
@@ -234,75 +226,15 @@ def seed_004() -> None:
     plt.close(fig)
 
 
-def _segments(seed: int = 0) -> pd.DataFrame:
-    table = pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv", comment="#")
-    rng = np.random.default_rng(seed)
-    rows = []
-    for r in table.itertuples():
-        length = r.p_k_pct / 100.0 * 31_000.0
-        if not np.isfinite(r.R_c_m):
-            rows.append({"length_m": length, "radius_m": None, "direction": "left",
-                         "cant_mm": 0.0, "speed_kmh": float(r.V_kmh)})
-            continue
-        curv = rng.uniform(1.0 / r.R_max_m, 1.0 / r.R_min_m, 4)
-        for c in curv:
-            rows.append({"length_m": length / 4, "radius_m": float(1.0 / c),
-                         "direction": str(rng.choice(["left", "right"])),
-                         "cant_mm": float(rng.uniform(r.h_min_mm, r.h_max_mm)),
-                         "speed_kmh": float(r.V_kmh)})
-    return pd.DataFrame(rows)
-
-
-def seed_003() -> None:
-    seg = _segments()
-    total = seg.length_m.sum()
-    full = [LoopClass(None if r.radius_m is None or not np.isfinite(r.radius_m) else r.radius_m,
-                      r.cant_mm, r.speed_kmh, r.direction, r.length_m / total)
-            for r in seg.itertuples()]
-    steps = WearSteps(n_steps=20, depth_per_step_mm=0.2)
-    t0 = time.perf_counter()
-    ref = simulate_wear("metro_b", full, steps=steps)
-    t_full = time.perf_counter() - t0
-    print(f"seed 003: complete line ({len(full)} segments): {ref.mileage_km[-1]:.1f} km after "
-          f"20 steps, {t_full:.1f} s")
-    rows = [("complete", len(full), ref.mileage_km[-1], 0.0, t_full)]
-    sims = {"complete": ref}
-    for n in (4, 6, 8, 10):
-        route = route_from_segments(seg, n_class=n)
-        t0 = time.perf_counter()
-        sim = simulate_wear("metro_b", route, steps=steps)
-        dt = time.perf_counter() - t0
-        err = 100.0 * (sim.mileage_km[-1] - ref.mileage_km[-1]) / ref.mileage_km[-1]
-        rows.append((f"nclass{n}", len(route.classes), sim.mileage_km[-1], err, dt))
-        sims[f"nclass{n}"] = sim
-    print("description  classes  km_tot  error_%  time_s   (seed: 24, 19, 12, 5 % for 4..10)")
-    for name, nc, km, err, dt in rows:
-        print(f"{name:11s}  {nc:7d}  {km:6.1f}  {err:7.1f}  {dt:6.1f}")
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    for name, sim in sims.items():
-        ax.plot(sim.mileage_km, sim.sd_mm, label=name)
-    ax.set_xlabel("mileage [km]")
-    ax.set_ylabel("Sd (FT) [mm]")
-    ax.set_title("Seed 003: complete line vs statistical description")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(IMG / "wear_loop_seed003.png", dpi=110)
-    plt.close(fig)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--skip-003", action="store_true", help="skip the long seed 003 runs")
-    parser.add_argument("--only", choices=("002", "003", "004"),
-                        help="run only this seed's part")
+    parser.add_argument("--only", choices=("002", "004"), help="run only this seed's part")
     args = parser.parse_args()
     IMG.mkdir(parents=True, exist_ok=True)
     if args.only in (None, "002"):
         seed_002()
     if args.only in (None, "004"):
         seed_004()
-    if args.only == "003" or (args.only is None and not args.skip_003):
-        seed_003()
 
 
 if __name__ == "__main__":

@@ -19,8 +19,49 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from wearcast.physics.vehicles import GRAVITY_M_S2
+
 SHARE_TOLERANCE = 1e-3
 DIRECTIONS = ("left", "right")
+#: Speed rules of :func:`route_from_segments`: length-weighted mean of the segments' speeds, or
+#: the seed 003 §5.3 rule (speed from a non-compensated acceleration at the class's
+#: representative radius and cant, capped).
+SPEED_RULES = ("mean", "a_nc")
+#: Seed 003 §5.3: non-compensated lateral acceleration limit a_nc^lim [m/s^2].
+SEED_003_A_NC_M_S2 = 0.8
+#: Lateral base of the cant angle [mm] (rail-centre spacing, as ``physics.curving``).
+CANT_BASE_MM = 1500.0
+
+
+def speed_from_unbalanced_acceleration_kmh(radius_m: Any, cant_mm: Any,
+                                           unbalanced_acceleration_m_s2: float =
+                                           SEED_003_A_NC_M_S2,
+                                           max_speed_kmh: float | None = None,
+                                           cant_base_mm: float = CANT_BASE_MM) -> np.ndarray:
+    """Curve speed at which the non-compensated lateral acceleration equals a_nc.
+
+    V = sqrt(R (a_nc + g h / b)) [m/s], returned in km/h and capped at ``max_speed_kmh``.
+
+    Parameters
+    ----------
+    radius_m : curve radius R [m] (> 0); cant_mm : cant h [mm]
+    unbalanced_acceleration_m_s2 : a_nc [m/s^2] (seed 003 §5.3: 0.8)
+    max_speed_kmh : cap, the line speed [km/h] (None: no cap)
+    cant_base_mm : lateral base b of the cant angle [mm] (1500 mm rail-centre spacing as in
+        ``physics.curving``; 1435 mm, the gauge, reproduces seed 003 Table 3's speeds to the
+        printed km/h, see tests/statistics/test_routes.py)
+
+    Returns
+    -------
+    speed [km/h]
+
+    Seed 003 §5.3 (a_nc^lim = 0.8 m/s^2, its refs. [9], [5]).
+    """
+    r = np.asarray(radius_m, dtype=float)
+    h = np.asarray(cant_mm, dtype=float)
+    v_kmh = 3.6 * np.sqrt(np.clip(r * (unbalanced_acceleration_m_s2
+                                       + GRAVITY_M_S2 * h / cant_base_mm), 0.0, None))
+    return v_kmh if max_speed_kmh is None else np.minimum(v_kmh, max_speed_kmh)
 
 
 def _finite(value: Any, field: str) -> float:
@@ -238,6 +279,9 @@ def route_from_segments(
     name: str = "route",
     n_class: int = 7,
     tangent_min_radius_m: float | None = None,
+    speed_rule: str = "mean",
+    unbalanced_acceleration_m_s2: float = SEED_003_A_NC_M_S2,
+    max_speed_kmh: float | None = None,
 ) -> Route:
     """Bin a full route (its segments) into curve classes like seed 003 §5.3.
 
@@ -249,6 +293,13 @@ def route_from_segments(
     n_class : number of radius classes and of cant subclasses per radius class (seed 003)
     tangent_min_radius_m : radii >= this count as tangent track (default: only explicit
         tangents)
+    speed_rule : speed of a curve class: ``'mean'`` (default) the length-weighted mean of its
+        segments' speeds; ``'a_nc'`` the seed 003 §5.3 rule, V = min(max_speed_kmh,
+        sqrt(R_c (a_nc + g H / 1500 mm))) at the class's representative radius R_c and cant H
+        (:func:`speed_from_unbalanced_acceleration_kmh`). Tangent track keeps the mean speed
+        of its segments either way (seed 003: the tangent speed comes from the track data).
+    unbalanced_acceleration_m_s2 : a_nc of the ``'a_nc'`` rule [m/s^2] (seed 003: 0.8)
+    max_speed_kmh : cap of the ``'a_nc'`` rule, the line speed [km/h] (None: no cap)
 
     Returns
     -------
@@ -256,12 +307,16 @@ def route_from_segments(
     smallest and largest curve radius (seed 003 Table 3), each split by direction and into
     ``n_class`` cant subclasses equally spaced from 0 (or the smallest cant, if negative) to
     the largest cant; the representative radius and cant are length-weighted means over the
-    segments of the (sub)class (seed 003 §5.3), the speed is length-weighted too, and the
+    segments of the (sub)class (seed 003 §5.3), the speed follows ``speed_rule``, and the
     share is the class length over the route length. Classes are also split by curve
     direction (seed 003 does not, its vehicle being symmetric), sharing the representative
     radius of their radius class. Tangent track forms one class. Empty
     classes are left out.
     """
+    if speed_rule not in SPEED_RULES:
+        raise ValueError(f"speed_rule: must be one of {SPEED_RULES}, got {speed_rule!r}")
+    if max_speed_kmh is not None and not max_speed_kmh > 0:
+        raise ValueError(f"max_speed_kmh: must be > 0, got {max_speed_kmh}")
     frame = _segments_frame(segments)
     if tangent_min_radius_m is not None:
         frame.loc[frame["radius_m"] >= tangent_min_radius_m, "radius_m"] = np.inf
@@ -304,12 +359,18 @@ def route_from_segments(
             rep_radius = rep[int(ri)]
             for _, sub in by_radius.groupby("c_idx", sort=True):
                 w = sub["length_m"].to_numpy()
+                rep_cant = float(np.average(sub["cant_mm"], weights=w))
+                if speed_rule == "a_nc":
+                    speed = float(speed_from_unbalanced_acceleration_kmh(
+                        rep_radius, rep_cant, unbalanced_acceleration_m_s2, max_speed_kmh))
+                else:
+                    speed = float(np.average(sub["speed_kmh"], weights=w))
                 classes.append(
                     RouteClass(
                         radius_m=rep_radius,
                         direction=str(direction),
-                        cant_mm=float(np.average(sub["cant_mm"], weights=w)),
-                        speed_kmh=float(np.average(sub["speed_kmh"], weights=w)),
+                        cant_mm=rep_cant,
+                        speed_kmh=speed,
                         share=float(w.sum() / total),
                     )
                 )

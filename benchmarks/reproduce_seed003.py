@@ -1,0 +1,303 @@
+"""Seed 003 §5.3 / §6.5: does a statistical track description converge to the complete line?
+
+Run: .venv/bin/python benchmarks/reproduce_seed003.py [--steps 20] [--nclass 2 3 4 ...]
+     [--vehicle minuetto]
+
+Seed 003 (Tables 5, 8) replaces the Aosta - Pre Saint Didier line (about 31 km) by N_c curve
+classes: n_class radius intervals equally spaced in curvature x n_class cant subclasses;
+representative radius and cant are length-weighted means; the class speed is min(line speed,
+speed at a non-compensated acceleration a_nc = 0.8 m/s^2); tangent at 130 km/h. The mileage to
+20 wheel steps of D_step = 0.2 mm is overestimated by coarse descriptions: 3775, 3620, 3431,
+3219 km for n_class = 4, 6, 8, 10 against 3047 km for the complete line (errors 23.9, 18.8,
+12.6, 5.6 %; reference/published/aosta_full_vs_statistical_mileage.csv, rail step 0).
+
+We have no RFI track register, so a complete line is SYNTHESISED once from seed 003 Table 3
+(reference/published/aosta_statistical_track_nclass7.csv). Assumptions, chosen before any run
+and not tuned afterwards:
+
+* Length 31 km (seed 003 §5.1), tangent share 50.65 % at 130 km/h (Table 3).
+* Every Table 3 class box (R_min..R_max x h_min..h_max, share p_k) is filled with individual
+  curves whose developed length (transition + circular arc + transition) adds up to
+  p_k x 31 km: n = max(1, round(p_k 31 km / 250 m)) curves per box, lengths proportional to
+  weights drawn uniformly in [0.5, 1.5] (mean developed length 250 m: ASSUMED, a mountain line).
+* Radius of a curve: uniform in curvature 1/R within the box (the radius classes themselves
+  are equally spaced in curvature, Table 3); cant: uniform in [h_min, h_max] mm; direction:
+  left or right with probability 1/2.
+* Transition curves (clothoids): curvature and cant ramp linearly from 0 to the arc's values.
+  Length L_t = max(20 m, h / 1.5 mm/m) (a cant ramp of 1.5 mm/m, below the 2.25 mm/m normal
+  limit of EN 13803-1; ASSUMED), at most 30 % of the developed length each. Each transition is
+  cut into 3 segments of equal length with the curvature and cant at their mid-points
+  (1/6, 1/2, 5/6 of the arc's).
+* Speed of a curve (arc and both transitions): the line speed in curves, 60 km/h (Table 3),
+  limited by the curve's admissible speed at a_nc^lim = 0.8 m/s^2 (seed 003 §5.3, its refs.
+  [9], [5]): V = min(60 km/h, sqrt(R (a_nc + g h / 1500 mm))) at the arc's radius R and cant h
+  (``statistics.routes.speed_from_unbalanced_acceleration_kmh``; 1500 mm as in the curving
+  model). Speeds are not rounded to the 5 km/h steps of real speed boards.
+* Transition segments whose radius is >= 8400 m (the tangent bound of Table 3) are simulated
+  as what they are in the complete line (nearly straight, at the curve's speed) but count as
+  tangent track in the descriptions (``tangent_min_radius_m = 8400``).
+* RNG: numpy default_rng(3).
+
+The complete line is simulated segment by segment (each segment a class with its own radius,
+cant, speed and length share). The descriptions bin the same segments with
+``statistics.routes.route_from_segments``, two ways:
+
+(a) ``seed003``: length-weighted mean radius and cant, speed by the a_nc = 0.8 m/s^2 rule at
+    the representative radius and cant, capped at 60 km/h (``speed_rule="a_nc"``);
+(b) ``mean``: wearcast's default, the same radius and cant, the length-weighted mean speed.
+
+Both then run ``physics.wear_loop.simulate_wear`` (adaptive steps of 0.2 mm, Archard/KTH,
+global application, right wheel of the leading axle). The output is a table of mileage after
+the steps, error against the complete line and time, and docs/img/wear_loop_seed003.png.
+
+Result of the first run (Minuetto preset, 20 steps; complete line 78.5 km in ~850 s, the
+descriptions 5-90 s): errors -5.6, -3.1, +4.8, +1.2, -1.1, +1.8, +2.9, -0.6, -1.1, +0.9 % for
+n_class = 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, the two speed rules within 0.4 % of each other. The
+seed's monotone over-estimate (24 -> 5 %) is NOT reproduced: errors stay within about +-6 % and
+change sign. In this model the wear rate is a step in radius (flange contact below about
+400 m, ~70x less wear above), so the error follows whether the class that straddles 400 m gets
+a representative radius above or below it, not n_class; the mean-radius bias (Jensen) is small
+beside it. Contact fallbacks (non-converged curving solves that keep the previous contact) are
+printed per run; they add noise of the order of the smaller errors.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from wearcast.physics.wear_loop import LoopClass, WearSimulation, WearSteps, simulate_wear  # noqa: E402
+from wearcast.statistics.routes import (  # noqa: E402
+    route_from_segments,
+    speed_from_unbalanced_acceleration_kmh,
+)
+
+IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
+REFERENCE = Path("/work/shared/reference/published")
+
+LINE_LENGTH_M = 31_000.0  # seed 003 §5.1: l_track ~ 31 km
+TANGENT_SPEED_KMH = 130.0  # seed 003 §5.3 / Table 3
+CURVE_LINE_SPEED_KMH = 60.0  # seed 003 Table 3: line speed on the curves
+A_NC_M_S2 = 0.8  # seed 003 §5.3: a_nc^lim
+TANGENT_MIN_RADIUS_M = 8400.0  # seed 003 Table 3: the tangent class starts at 8400 m
+MEAN_CURVE_LENGTH_M = 250.0  # ASSUMED: mean developed curve length
+CANT_RAMP_MM_PER_M = 1.5  # ASSUMED: cant gradient of the transitions
+MIN_TRANSITION_M = 20.0  # ASSUMED
+MAX_TRANSITION_FRACTION = 0.3  # ASSUMED: a transition is at most 30 % of the curve
+TRANSITION_PIECES = 3
+RNG_SEED = 3
+
+
+@dataclass(frozen=True)
+class Run:
+    """One simulated description: name, n_class, number of classes (with directions),
+    distinct operating points, simulation, time [s]."""
+
+    name: str
+    n_class: int
+    n_classes: int
+    n_points: int
+    sim: WearSimulation
+    time_s: float
+
+
+def _curve_segments(radius_m: float, cant_mm: float, length_m: float, direction: str,
+                    speed_kmh: float) -> list[dict]:
+    """Segments of one curve: entry transition, circular arc, exit transition."""
+    lt = min(max(MIN_TRANSITION_M, cant_mm / CANT_RAMP_MM_PER_M),
+             MAX_TRANSITION_FRACTION * length_m)
+    frac = (np.arange(TRANSITION_PIECES) + 0.5) / TRANSITION_PIECES
+    ramp = [{"length_m": lt / TRANSITION_PIECES, "radius_m": radius_m / f,
+             "cant_mm": cant_mm * f, "direction": direction, "speed_kmh": speed_kmh}
+            for f in frac]
+    arc = {"length_m": length_m - 2.0 * lt, "radius_m": radius_m, "cant_mm": cant_mm,
+           "direction": direction, "speed_kmh": speed_kmh}
+    return ramp + [arc] + ramp[::-1]
+
+
+def synthetic_line(seed: int = RNG_SEED) -> pd.DataFrame:
+    """Segments of a synthetic Aosta-type line from seed 003 Table 3 (module docstring)."""
+    table = pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv", comment="#")
+    rng = np.random.default_rng(seed)
+    rows = []
+    for box in table.itertuples():
+        box_length = box.p_k_pct / 100.0 * LINE_LENGTH_M
+        if not np.isfinite(box.R_c_m):
+            rows.append({"length_m": box_length, "radius_m": None, "cant_mm": 0.0,
+                         "direction": None, "speed_kmh": TANGENT_SPEED_KMH, "curve": -1})
+            continue
+        n = max(1, round(box_length / MEAN_CURVE_LENGTH_M))
+        weights = rng.uniform(0.5, 1.5, n)
+        lengths = box_length * weights / weights.sum()
+        curvature = rng.uniform(1.0 / box.R_max_m, 1.0 / box.R_min_m, n)
+        cants = rng.uniform(box.h_min_mm, box.h_max_mm, n)
+        directions = rng.choice(["left", "right"], n)
+        for length, k, h, d in zip(lengths, curvature, cants, directions, strict=True):
+            radius = 1.0 / k
+            speed = float(speed_from_unbalanced_acceleration_kmh(radius, h, A_NC_M_S2,
+                                                                 CURVE_LINE_SPEED_KMH))
+            curve_id = 1 + max([r["curve"] for r in rows], default=0)
+            for seg in _curve_segments(radius, h, length, str(d), speed):
+                rows.append({**seg, "curve": curve_id})
+    return pd.DataFrame(rows)
+
+
+def complete_classes(segments: pd.DataFrame) -> list[LoopClass]:
+    """Every segment as its own class (the complete line)."""
+    total = segments.length_m.sum()
+    out = []
+    for r in segments.itertuples():
+        tangent = pd.isna(r.radius_m) or not np.isfinite(r.radius_m)
+        out.append(LoopClass(None if tangent else float(r.radius_m), float(r.cant_mm),
+                             float(r.speed_kmh), "left" if tangent else str(r.direction),
+                             r.length_m / total))
+    return out
+
+
+def _n_points(classes) -> int:
+    """Distinct operating points (radius, cant, speed): the curving solves per contact update
+    (a right curve is the mirror image of a left one and shares its solution)."""
+    return len({(c.radius_m, c.cant_mm, c.speed_kmh) for c in classes})
+
+
+def _simulate(vehicle: str, classes, steps: WearSteps) -> tuple[WearSimulation, float]:
+    t0 = time.perf_counter()
+    sim = simulate_wear(vehicle, classes, steps=steps)
+    return sim, time.perf_counter() - t0
+
+
+def seed_reference() -> dict[int, float]:
+    """Seed 003 Tables 5/8, rail step 0: km_tot per n_class (0 = complete line)."""
+    ref = pd.read_csv(REFERENCE / "aosta_full_vs_statistical_mileage.csv", comment="#")
+    ref = ref[ref.rail_step == 0]
+    out = {}
+    for r in ref.itertuples():
+        out[0 if r.description == "complete" else int(r.description.removeprefix("nclass"))] = \
+            float(r.km_tot)
+    return out
+
+
+def describe_line(segments: pd.DataFrame) -> None:
+    curves = segments[segments.curve >= 0]
+    arcs = curves.groupby("curve").length_m.sum()
+    straight = segments.radius_m.isna() | (segments.radius_m >= TANGENT_MIN_RADIUS_M)
+    total = segments.length_m.sum()
+    print(f"synthetic line: {total / 1000:.2f} km, {len(arcs)} curves "
+          f"(developed length {arcs.min():.0f}..{arcs.max():.0f} m), {len(segments)} segments; "
+          f"tangent share {100 * segments[segments.curve < 0].length_m.sum() / total:.2f} % "
+          f"(+ transition pieces with R >= 8400 m: "
+          f"{100 * segments[straight].length_m.sum() / total:.2f} %)")
+    speed = curves.groupby("curve").speed_kmh.first()
+    print(f"curve speeds {speed.min():.1f}..{speed.max():.1f} km/h, "
+          f"{(speed < CURVE_LINE_SPEED_KMH - 1e-9).sum()} curves below the 60 km/h line speed")
+
+
+def sweep(vehicle: str, n_classes: list[int], steps: WearSteps) -> tuple[Run, list[Run]]:
+    segments = synthetic_line()
+    describe_line(segments)
+    full = complete_classes(segments)
+    n_points = _n_points(full)
+    print(f"complete line: {len(full)} classes, {n_points} distinct operating points; "
+          "running ...", flush=True)
+    sim, dt = _simulate(vehicle, full, steps)
+    complete = Run("complete", 0, len(full), n_points, sim, dt)
+    print(f"complete line: {sim.mileage_km[-1]:.1f} km after {steps.n_steps} steps, "
+          f"{dt:.1f} s, contact fallbacks {sim.contact_fallbacks}", flush=True)
+    runs = []
+    for n in n_classes:
+        for method, kwargs in (("seed003", {"speed_rule": "a_nc",
+                                            "max_speed_kmh": CURVE_LINE_SPEED_KMH,
+                                            "unbalanced_acceleration_m_s2": A_NC_M_S2}),
+                               ("mean", {})):
+            route = route_from_segments(segments, name=f"{method}{n}", n_class=n,
+                                        tangent_min_radius_m=TANGENT_MIN_RADIUS_M, **kwargs)
+            sim, dt = _simulate(vehicle, route, steps)
+            run = Run(method, n, len(route.classes), _n_points(route.classes), sim, dt)
+            runs.append(run)
+            err = 100.0 * (sim.mileage_km[-1] / complete.sim.mileage_km[-1] - 1.0)
+            print(f"  n_class {n:2d} {method:7s}: {len(route.classes):3d} classes, "
+                  f"{sim.mileage_km[-1]:8.1f} km, error {err:+6.1f} %, {dt:6.1f} s, "
+                  f"fallbacks {sim.contact_fallbacks}", flush=True)
+    return complete, runs
+
+
+def _volume_rate(sim: WearSimulation) -> float:
+    """Worn volume per km of the first step, i.e. with the new S1002 profile [mm^3/km]."""
+    return float(sim.worn_volume_mm3[1] / sim.mileage_km[1])
+
+
+def report(complete: Run, runs: list[Run], steps: WearSteps, vehicle: str) -> None:
+    ref = seed_reference()
+    km_full = complete.sim.mileage_km[-1]
+    vol_full = _volume_rate(complete.sim)
+    print(f"\nSeed 003 convergence, vehicle {vehicle}, {steps.n_steps} steps of "
+          f"{steps.depth_per_step_mm} mm; complete line {km_full:.1f} km in {complete.time_s:.1f} s"
+          f" ({complete.n_classes} segments, {complete.n_points} operating points, "
+          f"{complete.sim.contact_fallbacks} contact fallbacks)")
+    print("err = mileage error after all steps; vol1 = error of the worn volume per km with the "
+          "new profile (step 1); fb = contact fallbacks")
+    print("n_class | method  | classes (points) | km      | err %  | vol1 % | fb  | time s | "
+          "saved % | seed km | seed err %")
+    for r in runs:
+        km = r.sim.mileage_km[-1]
+        err = 100.0 * (km / km_full - 1.0)
+        vol = 100.0 * (_volume_rate(r.sim) / vol_full - 1.0)
+        saved = 100.0 * (1.0 - r.time_s / complete.time_s)
+        seed_km = ref.get(r.n_class)
+        seed = ("      - |          -" if seed_km is None else
+                f"{seed_km:7.0f} | {100.0 * (seed_km / ref[0] - 1.0):10.1f}")
+        print(f"{r.n_class:7d} | {r.name:7s} | {r.n_classes:7d} ({r.n_points:3d})    | "
+              f"{km:7.1f} | {err:+6.1f} | {vol:+6.1f} | {r.sim.contact_fallbacks:3d} | "
+              f"{r.time_s:6.1f} | {saved:7.1f} | {seed}")
+    fig, (ax, ax1) = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    for method, marker in (("seed003", "o"), ("mean", "s")):
+        sel = [r for r in runs if r.name == method]
+        label = ("wearcast, seed 003 speed rule (a_nc = 0.8)" if method == "seed003"
+                 else "wearcast, length-weighted mean speed")
+        n = [r.n_class for r in sel]
+        ax.plot(n, [100.0 * (r.sim.mileage_km[-1] / km_full - 1.0) for r in sel],
+                marker=marker, label=label)
+        ax1.plot(n, [100.0 * (_volume_rate(r.sim) / vol_full - 1.0) for r in sel],
+                 marker=marker, label=label)
+    seed_n = sorted(n for n in ref if n > 0)
+    ax.plot(seed_n, [100.0 * (ref[n] / ref[0] - 1.0) for n in seed_n], "k^--",
+            label="seed 003 Table 8 (Minuetto, Aosta line)")
+    for a in (ax, ax1):
+        a.axhline(0.0, color="grey", lw=0.8)
+        a.set_xlabel("n_class")
+    ax.set_ylabel("mileage error vs complete line [%]")
+    ax.set_title(f"mileage after {steps.n_steps} x {steps.depth_per_step_mm} mm ({vehicle}, "
+                 "synthetic Aosta-type line)", fontsize=9)
+    ax1.set_ylabel("error of worn volume per km [%]")
+    ax1.set_title("route-averaged wear rate with the new S1002 profile (step 1)", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    IMG.mkdir(parents=True, exist_ok=True)
+    fig.savefig(IMG / "wear_loop_seed003.png", dpi=110)
+    plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--steps", type=int, default=20, help="wheel steps of 0.2 mm")
+    parser.add_argument("--nclass", type=int, nargs="+",
+                        default=[2, 3, 4, 5, 6, 7, 8, 10, 12, 14])
+    parser.add_argument("--vehicle", default="minuetto")
+    args = parser.parse_args()
+    steps = WearSteps(n_steps=args.steps, depth_per_step_mm=0.2)
+    complete, runs = sweep(args.vehicle, args.nclass, steps)
+    report(complete, runs, steps, args.vehicle)
+
+
+if __name__ == "__main__":
+    main()
