@@ -957,6 +957,18 @@ def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
                         labels: list[tuple[float | None, str, float]] | None = None,
                         table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
                         fastsim_grid: int = 20) -> list[CurvingResult]:
+    """:func:`solve_curving_cases_or_none` that raises CurvingConvergenceError naming the
+    first case that did not converge."""
+    results = solve_curving_cases_or_none(vehicle, cases, labels, table, tol, fastsim_grid,
+                                          skip_failed=False)
+    return [r for r in results if r is not None]
+
+
+def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
+                                labels: list[tuple[float | None, str, float]] | None = None,
+                                table: ContactTable | None = None,
+                                tol: float = DEFAULT_TOLERANCE, fastsim_grid: int = 20,
+                                skip_failed: bool = True) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
     Every case is continued from centred wheelsets on tangent track (curvature, unbalanced
@@ -972,14 +984,18 @@ def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
     labels : per case (radius_m or None, direction, cant_mm) for the results (default from
         the curvature)
     table, tol, fastsim_grid : as :func:`solve_curving`
+    skip_failed : return None for the cases that did not converge instead of raising (one
+        batch for any number of failures; the wear loop's fallback)
 
     Returns
     -------
-    list of CurvingResult, in the order of ``cases``
+    list of CurvingResult (None for failed cases with ``skip_failed``), in the order of
+    ``cases``
 
     Raises
     ------
-    CurvingConvergenceError naming the first case that did not converge.
+    CurvingConvergenceError naming the first case that did not converge (not with
+    ``skip_failed``).
     """
     table = vehicle_contact_table(vehicle) if table is None else table
     n = len(cases)
@@ -995,7 +1011,7 @@ def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
         return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])
 
     q, norm, ok = _continuation_batch(fun, q0, p_start, p_end, tol)
-    if not np.all(ok):
+    if not np.all(ok) and not skip_failed:
         k = int(np.nonzero(~ok)[0][0])
         kappa = cases[k].curvature_per_m
         raise CurvingConvergenceError("quasi-static curving did not converge",
@@ -1005,8 +1021,11 @@ def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
     norm = np.linalg.norm(res, axis=-1)
     wear = contact_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
                                  c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
-    results = []
+    results: list[CurvingResult | None] = []
     for k, (case, (radius_m, direction, cant_mm)) in enumerate(zip(cases, labels, strict=True)):
+        if not ok[k]:
+            results.append(None)
+            continue
         ws = q[k, :10].reshape(2, 5)
         shown_r = np.inf if radius_m is None else float(radius_m)
         results.append(CurvingResult(

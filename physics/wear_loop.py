@@ -51,7 +51,7 @@ from wearcast.physics.curving import (
     build_contact_table,
     conformal_half_width_mm,
     curve_case,
-    solve_curving_cases,
+    solve_curving_cases_or_none,
 )
 from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -231,29 +231,12 @@ def _curvature(point: tuple) -> float:
 
 def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int
                   ) -> list[CurvingResult | None]:
-    """Batched curving of the operating points; a point named by a convergence error is dropped
-    (None) and the rest re-solved as a batch."""
-    out: list[CurvingResult | None] = [None] * len(points)
-    todo = list(range(len(points)))
-    while todo:
-        sub = [points[i] for i in todo]
-        cases = [curve_case(r, cant, v, "left") for r, cant, v in sub]
-        labels = [(r, "left", cant) for r, cant, _ in sub]
-        try:
-            results = solve_curving_cases(vehicle, cases, labels, table,
-                                          fastsim_grid=fastsim_grid)
-        except CurvingConvergenceError as err:
-            bad = [i for i, (r, _, _) in zip(todo, sub, strict=True)
-                   if (r is None and not np.isfinite(err.radius_m))
-                   or (r is not None and np.isclose(abs(err.radius_m), r))]
-            if not bad:  # cannot tell which: give up on the whole batch
-                return out
-            todo = [i for i in todo if i not in bad]
-            continue
-        for i, res in zip(todo, results, strict=True):
-            out[i] = res
-        break
-    return out
+    """Batched curving of the operating points in one batch; a point that does not converge
+    is None (the caller falls back to a neighbour or the previous contact)."""
+    cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
+    labels = [(r, "left", cant) for r, cant, _ in points]
+    return solve_curving_cases_or_none(vehicle, cases, labels, table,
+                                       fastsim_grid=fastsim_grid)
 
 
 def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: NDArray,

@@ -251,3 +251,27 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
         assert np.array_equal(getattr(kp, name), getattr(hertz, name))
     with pytest.raises(ValueError, match="patch_width"):
         class_contacts(veh, classes, y, z, patch_width="ellipse")
+
+
+def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
+    # The wear loop's fallback: a case that does not converge comes back as None and the others
+    # are solved in the same batch (the old path re-solved the whole batch per failure).
+    cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0, 1200.0)]
+    ok = cv.solve_curving_cases_or_none(trailer, cases)
+    assert all(r is not None for r in ok)
+    real = cv._continuation_batch
+
+    def fail_second(fun, q0, p_start, p_end, tol, **kw):
+        q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
+        conv = conv.copy()
+        conv[1] = False
+        return q, norm, conv
+
+    monkeypatch.setattr(cv, "_continuation_batch", fail_second)
+    skipped = cv.solve_curving_cases_or_none(trailer, cases)
+    assert skipped[1] is None
+    for got, want in zip((skipped[0], skipped[2]), (ok[0], ok[2]), strict=True):
+        assert got is not None and want is not None
+        assert np.array_equal(got.state, want.state)
+    with pytest.raises(cv.CurvingConvergenceError):
+        cv.solve_curving_cases(trailer, cases)
