@@ -378,6 +378,28 @@ FULL_LOOP_BUDGETS: dict[str, dict[str, int]] = {
     "DE": {"maxiter": 4, "popsize": 10}}
 
 
+def _free_box(problem: CalibrationProblem) -> tuple[list[int], NDArray, NDArray, NDArray]:
+    """Free coefficient indices, their bounds and the start clipped into them."""
+    free = list(problem.free)
+    lo = np.array([b[0] for b in problem.bounds])
+    hi = np.array([b[1] for b in problem.bounds])
+    return free, lo, hi, np.clip(np.asarray(problem.start, dtype=float)[free], lo, hi)
+
+
+def _fit_result(method: str, problem: CalibrationProblem, x: NDArray, sim: WearSimulation,
+                t0: float, runs: int, evals: int, identifiable: NDArray) -> FitResult:
+    """FitResult of the final loop run ``sim`` at the free values ``x`` (seed 000 eq. 16)."""
+    w_meas = np.asarray(problem.wear_mm, dtype=float)
+    model = _at(sim, sim.wear_mm[-1], np.asarray(problem.y_mm, dtype=float))[0]
+    measured_max = float(np.max(w_meas))
+    model_max = float(np.max(model))
+    return FitResult(method=method, coefficients=problem.coefficients(x),
+                     rmse_mm=rmse_mm(model, w_meas), max_depth_mm=model_max,
+                     re_max_depth_pct=100.0 * (model_max - measured_max) / measured_max,
+                     time_s=time.perf_counter() - t0, model_runs=runs, evaluations=evals,
+                     identifiable=identifiable, simulation=sim)
+
+
 def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: int = 5,
               rtol: float = 1e-4, seed: int = 0, predictor: bool = True) -> FitResult:
     """Fit the free coefficients (KTH zones, or c_tau of tau_max) to the measured wear.
@@ -405,10 +427,7 @@ def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: i
     solver = _SOLVERS[method]
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
-    free = list(problem.free)
-    lo = np.array([b[0] for b in problem.bounds])
-    hi = np.array([b[1] for b in problem.bounds])
-    x = np.clip(np.asarray(problem.start, dtype=float)[free], lo, hi)
+    free, lo, hi, x = _free_box(problem)
     y_meas = np.asarray(problem.y_mm, dtype=float)
     w_meas = np.asarray(problem.wear_mm, dtype=float)
     runs = evals = 0
@@ -440,15 +459,7 @@ def calibrate(problem: CalibrationProblem, method: str = "exact", *, max_runs: i
         runs += 1
         if change <= rtol:
             break
-    model = _at(sim, sim.wear_mm[-1], y_meas)[0]
-    elapsed = time.perf_counter() - t0
-    measured_max = float(np.max(w_meas))
-    model_max = float(np.max(model))
-    return FitResult(method=method, coefficients=problem.coefficients(x),
-                     rmse_mm=rmse_mm(model, w_meas), max_depth_mm=model_max,
-                     re_max_depth_pct=100.0 * (model_max - measured_max) / measured_max,
-                     time_s=elapsed, model_runs=runs, evaluations=evals,
-                     identifiable=identifiable, simulation=sim)
+    return _fit_result(method, problem, x, sim, t0, runs, evals, identifiable)
 
 
 def calibrate_full_loop(problem: CalibrationProblem, method: str = "PSO", *, seed: int = 0,
@@ -467,10 +478,7 @@ def calibrate_full_loop(problem: CalibrationProblem, method: str = "PSO", *, see
     search = _SEARCHES[method]
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
-    free = list(problem.free)
-    lo = np.array([b[0] for b in problem.bounds])
-    hi = np.array([b[1] for b in problem.bounds])
-    x0 = np.clip(np.asarray(problem.start, dtype=float)[free], lo, hi)
+    free, lo, hi, x0 = _free_box(problem)
     y_meas = np.asarray(problem.y_mm, dtype=float)
     w_meas = np.asarray(problem.wear_mm, dtype=float)
     cache: dict = {}
@@ -486,14 +494,8 @@ def calibrate_full_loop(problem: CalibrationProblem, method: str = "PSO", *, see
     x, evals = search(objective, lo, hi, x0, rng, **(budget or FULL_LOOP_BUDGETS[method]))
     sim = run_model(problem, problem.coefficients(x), contact_cache=cache)
     runs += 1
-    model = _at(sim, sim.wear_mm[-1], y_meas)[0]
-    measured_max = float(np.max(w_meas))
-    model_max = float(np.max(model))
-    return FitResult(method=f"{method} (full loop)", coefficients=problem.coefficients(x),
-                     rmse_mm=rmse_mm(model, w_meas), max_depth_mm=model_max,
-                     re_max_depth_pct=100.0 * (model_max - measured_max) / measured_max,
-                     time_s=time.perf_counter() - t0, model_runs=runs, evaluations=evals,
-                     identifiable=np.ones(len(free), dtype=bool), simulation=sim)
+    return _fit_result(f"{method} (full loop)", problem, x, sim, t0, runs, evals,
+                       np.ones(len(free), dtype=bool))
 
 
 @dataclass(frozen=True)
