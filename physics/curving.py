@@ -968,7 +968,9 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                 labels: list[tuple[float | None, str, float]] | None = None,
                                 table: ContactTable | None = None,
                                 tol: float = DEFAULT_TOLERANCE, fastsim_grid: int = 20,
-                                skip_failed: bool = True) -> list[CurvingResult | None]:
+                                skip_failed: bool = True,
+                                initial_states: list[NDArray | None] | None = None
+                                ) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
     Every case is continued from centred wheelsets on tangent track (curvature, unbalanced
@@ -986,6 +988,9 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     table, tol, fastsim_grid : as :func:`solve_curving`
     skip_failed : return None for the cases that did not converge instead of raising (one
         batch for any number of failures; the wear loop's fallback)
+    initial_states : per case an equilibrium state (``CurvingResult.state``) to start Newton
+        from at the case's own load parameters instead of the continuation from centred
+        wheelsets (None: continuation); the wear loop's warm retry after a profile update
 
     Returns
     -------
@@ -1006,6 +1011,10 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                       for c in cases], dtype=float).reshape(n, 3)
     p_start = np.zeros_like(p_end)
     q0 = np.repeat(_initial_state(vehicle, table)[None, :], n, axis=0)
+    for k, state in enumerate(initial_states or []):
+        if state is not None:
+            q0[k] = state
+            p_start[k] = p_end[k]
 
     def fun(q, params):
         return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])

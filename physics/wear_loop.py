@@ -178,7 +178,8 @@ class ClassContacts:
     normal_n [N], wheel_y_mm, rail_y_mm [mm], angle_rad, rolling_radius_mm, a_mm, b_mm, xi,
     eta [-], phi_per_mm, fx_n, fy_n, mz_nmm, tau_max_mpa, t_gamma_n, loaded (bool); speed_m_s
     (n_class,). Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape
-    (n_class, 2 axles, n_slot).
+    (n_class, 2 axles, n_slot). ``states``: the last curving equilibrium per operating point
+    (the warm start of the next update's failed points).
     """
 
     normal_n: NDArray
@@ -199,6 +200,7 @@ class ClassContacts:
     loaded: NDArray
     speed_m_s: NDArray
     rail_axles: dict = field(default_factory=dict)
+    states: dict = field(default_factory=dict)
 
 
 _CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
@@ -229,14 +231,24 @@ def _curvature(point: tuple) -> float:
     return 0.0 if point[0] is None else 1.0 / point[0]
 
 
-def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int
-                  ) -> list[CurvingResult | None]:
+def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int,
+                  warm: dict | None = None) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
-    is None (the caller falls back to a neighbour or the previous contact)."""
+    from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
+    ``CurvingResult.state`` on the previous profile) if it has one, else it is None (the caller
+    falls back to a neighbour or the previous contact)."""
     cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]
-    return solve_curving_cases_or_none(vehicle, cases, labels, table,
-                                       fastsim_grid=fastsim_grid)
+    out = solve_curving_cases_or_none(vehicle, cases, labels, table,
+                                      fastsim_grid=fastsim_grid)
+    retry = [i for i, r in enumerate(out) if r is None and warm and points[i] in warm]
+    if retry and warm:
+        again = solve_curving_cases_or_none(
+            vehicle, [cases[i] for i in retry], [labels[i] for i in retry], table,
+            fastsim_grid=fastsim_grid, initial_states=[warm[points[i]] for i in retry])
+        for i, res in zip(retry, again, strict=True):
+            out[i] = res
+    return out
 
 
 def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: NDArray,
@@ -266,7 +278,11 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
     points = [_operating_point(c, unbalanced_acceleration_m_s2, tangent_speed_kmh)
               for c in classes]
     unique = sorted(set(points), key=lambda p: (p[0] is None, p[0] or 0.0, p[1], p[2]))
-    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid), strict=True))
+    warm = None if previous is None else previous.states
+    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm),
+                      strict=True))
+    states = dict(warm or {})
+    states.update({p: r.state for p, r in solved.items() if r is not None})
     ai = axle - 1
     n = len(classes)
     slots = [np.shape(r.normal_force_n)[-1] for r in solved.values() if r is not None]
@@ -322,7 +338,7 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
         b_mm=data["b_mm"], xi=data["xi"], eta=data["eta"], phi_per_mm=data["phi_per_mm"],
         fx_n=data["fx_n"], fy_n=data["fy_n"], mz_nmm=data["mz_nmm"],
         tau_max_mpa=data["tau_max_mpa"], t_gamma_n=data["t_gamma_n"], loaded=loaded,
-        speed_m_s=speed, rail_axles=rail), fallbacks
+        speed_m_s=speed, rail_axles=rail, states=states), fallbacks
 
 
 def contact_volume_basis(contacts: ClassContacts, law: WearLaw) -> NDArray[np.float64]:

@@ -275,3 +275,14 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
         assert np.array_equal(got.state, want.state)
     with pytest.raises(cv.CurvingConvergenceError):
         cv.solve_curving_cases(trailer, cases)
+
+
+def test_initial_states_restart_newton_at_the_solution(trailer):
+    # A warm start from an equilibrium at the case's own load parameters returns it unchanged
+    # (the wear loop's retry for points that fail the continuation on a new profile).
+    cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 1200.0)]
+    cold = cv.solve_curving_cases_or_none(trailer, cases)
+    warm = cv.solve_curving_cases_or_none(trailer, cases,
+                                          initial_states=[cold[0].state, None])
+    assert np.allclose(warm[0].state, cold[0].state, atol=1e-9)
+    assert np.array_equal(warm[1].state, cold[1].state)

@@ -147,3 +147,25 @@ def test_seed_004_krause_poll_monotonic_archard_steps_at_zone_changes():
     assert np.any(change)
     # k_severe / k_mild = 1e-3 / 1.43e-4 = 7: a zone change multiplies the rate by ~7.
     assert np.all(ratio[change] > 3.0) and np.all(ratio[~change] < 3.0)
+
+
+def test_a_point_failing_from_centred_wheelsets_is_retried_from_its_last_state(monkeypatch):
+    # Second contact update: the 300 m point "fails" its continuation from centred wheelsets;
+    # the loop retries it from the equilibrium of the previous profile instead of falling back.
+    from wearcast.physics import curving as cv
+
+    real = cv._continuation_batch
+    calls = {"n": 0}
+
+    def cold_fails_after_first(fun, q0, p_start, p_end, tol, **kw):
+        q, norm, ok = real(fun, q0, p_start, p_end, tol, **kw)
+        calls["n"] += 1
+        cold = np.all(p_start == 0.0, axis=1)
+        tight = np.isclose(p_end[:, 0], 1.0 / 300.0)
+        if calls["n"] > 1:
+            ok = ok & ~(cold & tight)
+        return q, norm, ok
+
+    monkeypatch.setattr(cv, "_continuation_batch", cold_fails_after_first)
+    sim = simulate_wear("metro_b", CLASSES, steps=WearSteps(n_steps=2, depth_per_step_mm=0.05))
+    assert sim.contact_updates == 2 and sim.contact_fallbacks == 0
