@@ -241,8 +241,8 @@ def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_gri
     labels = [(r, "left", cant) for r, cant, _ in points]
     out = solve_curving_cases_or_none(vehicle, cases, labels, table,
                                       fastsim_grid=fastsim_grid)
-    retry = [i for i, r in enumerate(out) if r is None and warm and points[i] in warm]
-    if retry and warm:
+    retry = [i for i, r in enumerate(out) if r is None and points[i] in (warm or {})]
+    if warm and retry:
         again = solve_curving_cases_or_none(
             vehicle, [cases[i] for i in retry], [labels[i] for i in retry], table,
             fastsim_grid=fastsim_grid, initial_states=[warm[points[i]] for i in retry])
