@@ -111,15 +111,24 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
                 console.print(f"example fleet loaded: {ids}")
         else:
             console.print("database not empty: example fleet not loaded")
-    database.dispose()
+    from wearcast.service.auth import bootstrap_admin_key
+    from wearcast.service.jobs import JobRunner
+
+    bootstrap_admin_key(database.session_factory, settings)  # printed once, on a first start
     console.print(f"serving {settings.resolved_database_url} on http://{host}:{port}/v1"
                   + (f" with {workers} workers" if workers > 1 else ""))
     if workers > 1:
-        # worker processes import the app: same settings (from the environment), no migration
+        # jobs the last run left running are queued again; worker processes import the app:
+        # same settings (from the environment), no migration, lost jobs found by heartbeat
+        JobRunner(database, settings).recover(all_running=True, dispatch_all=False)
+        database.dispose()
         uvicorn.run("wearcast.service.cli:serve_app", factory=True, host=host, port=port,
-                    workers=workers)
+                    workers=workers, timeout_graceful_shutdown=10)
     else:
-        uvicorn.run(create_app(settings, migrate=False), host=host, port=port)
+        database.dispose()
+        # migrate=True: the one process serving recovers the jobs of the last run
+        uvicorn.run(create_app(settings, migrate=True), host=host, port=port,
+                    timeout_graceful_shutdown=10)
 
 
 def serve_app() -> Any:

@@ -11,9 +11,9 @@ loop runs), the law, the coefficients, which of them the data identifies, and th
 curve of the best method.
 
 Storage reuses the ``simulations`` table (no migration): the job's spec carries
-``kind = "coefficient_fit"``; :mod:`wearcast.service.simulation_store` hands such rows to
-:func:`run_coefficient_fit` (so restart recovery and the worker thread are shared) and keeps
-them out of ``/v1/simulations``.
+``kind = "coefficient_fit"``; :func:`wearcast.service.job_store.run_job` hands such rows to
+:func:`run_coefficient_fit` (so recovery, cancel, time limit and the workers are shared) and
+:mod:`wearcast.service.simulation_store` keeps them out of ``/v1/simulations``.
 """
 
 from __future__ import annotations
@@ -170,7 +170,7 @@ class CoefficientFitIn(Strict):
 class CoefficientFitOut(BaseModel):
     id: int
     name: str | None
-    status: Literal["queued", "running", "done", "failed"]
+    status: Literal["queued", "running", "done", "failed", "cancelled"]
     progress: float
     message: str | None = None
     error: str | None = None
@@ -287,7 +287,7 @@ def problem_from_spec(spec: dict[str, Any]):
 
 def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
     """Validate a request completely and store it as a queued job."""
-    from wearcast.service.simulation_store import queue_job, resolve_classes
+    from wearcast.service.job_store import default_timeout, queue_job, resolve_classes
 
     _check_law_fields(body)
     y, w, mileage = _measured_wear(session, body)
@@ -304,27 +304,34 @@ def create_fit(session: Session, body: CoefficientFitIn) -> db.Simulation:
         problem_from_spec(spec)
     except ValueError as exc:
         raise from_value_error(exc) from exc
-    return queue_job(session, body.name, spec)
+    return queue_job(session, body.name, spec, timeout_s=default_timeout())
 
 
 def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, Any],
-                        on_progress: Any = None) -> None:
-    """Run a queued fit to the end; status, progress (per method) and result in its row."""
-    from wearcast.service.simulation_store import finite_json, now_utc, set_job
+                        on_progress: Any = None, control: Any = None) -> None:
+    """Run a claimed fit to the end; progress (per method) and result in its row; a cancel or
+    a passed time limit ends it after the method running then."""
+    from wearcast.service.job_store import (
+        JobControl,
+        JobStopped,
+        finish,
+        finite_json,
+        set_job,
+    )
     from wearcast.statistics.coefficient_fit import compare_methods
 
+    control = control or JobControl(factory, job_id, None)
     methods = list(spec["methods"])
-    set_job(factory, job_id, status="running", started_at=now_utc(), progress=0.0,
-         message=f"fitting with {methods[0]}")
+    set_job(factory, job_id, progress=0.0, message=f"fitting with {methods[0]}")
 
     def progress(done: int, total: int, method: str) -> None:
         nxt = f", next {methods[done]}" if done < total else ""
-        set_job(factory, job_id, progress=min(1.0, done / total),
-             message=f"{done}/{total} methods done ({method}{nxt})")
+        control.progress(done / total, f"{done}/{total} methods done ({method}{nxt})")
         if on_progress is not None:
             on_progress(done, total, method)
 
     try:
+        control.check()
         problem = problem_from_spec(spec)
         predict = spec.get("predict") or {}
         pw = (predict.get("wear") or None)
@@ -336,13 +343,15 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
             predict_wear_mm=pw_on_y, seed=int(spec.get("seed", 0)),
             max_runs=int(spec.get("max_runs", 5)), rtol=float(spec.get("rtol", 1e-3)))
         payload = finite_json(result_payload(problem, table, fits))
+    except JobStopped as stop:
+        finish(factory, job_id, stop.status, error=stop.reason, message=stop.reason)
+        return
     except Exception as exc:  # the job reports any failure; it never kills the worker
         log.warning("coefficient fit %s failed: %s", job_id, traceback.format_exc())
-        set_job(factory, job_id, status="failed", finished_at=now_utc(),
-             error=f"{type(exc).__name__}: {exc}", message="failed")
+        finish(factory, job_id, "failed", error=f"{type(exc).__name__}: {exc}",
+               message="failed")
         return
-    set_job(factory, job_id, status="done", progress=1.0, finished_at=now_utc(), result=payload,
-         message="done")
+    finish(factory, job_id, "done", progress=1.0, result=payload, message="done")
 
 
 def result_payload(problem: Any, table: Any, fits: dict[str, Any]) -> dict[str, Any]:
@@ -403,7 +412,9 @@ def list_fits(session: Session, limit: int = 100) -> list[CoefficientFitOut]:
 
 
 def submit(session: Session, runner: Any, body: CoefficientFitIn) -> CoefficientFitOut:
-    """Validate, store as queued and hand to the app's job runner."""
+    """Validate, store as queued and hand to the app's job runner (429 naming
+    ``job_quota_per_key`` when the key already holds its quota of jobs)."""
+    runner.check_quota(session)
     row = create_fit(session, body)
     runner.submit(row.id)
     return CoefficientFitOut(id=row.id, name=row.name, status="queued", progress=0.0,

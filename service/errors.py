@@ -1,17 +1,35 @@
-"""Errors a client can fix, and the handlers that turn every one into a 4xx naming the field.
+"""Errors a client can fix, and the handlers that turn every failure into RFC 9457 problem
+details (``application/problem+json``).
 
-Every error body has the shape ``{"detail": [{"loc": [...], "field": "...", "reason": "..."}]}``
-(plus ``file``/``line`` for import errors), for FastAPI's own validation errors too.
+Every error body, whatever raised it (a route, request validation, an unknown path, a wrong
+method, a limit, authentication, an unexpected failure), has the shape::
+
+    {"type": "about:blank", "title": "Unprocessable Content", "status": 422,
+     "detail": "classes.share: shares must sum to 1 (±0.001), got 0.5",
+     "errors": [{"loc": ["classes", "share"], "field": "classes.share",
+                 "reason": "shares must sum to 1 (±0.001), got 0.5"}]}
+
+``errors`` lists every field at fault with its reason (plus ``file``/``line`` for import
+errors, ``limit`` for a limit that was passed). A 500 says only that the server failed and
+the request id to quote; the exception is logged, never sent.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
+from http import HTTPStatus
 from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel, ConfigDict, Field
+from sqlalchemy.exc import DataError, IntegrityError, OperationalError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+log = logging.getLogger(__name__)
+PROBLEM_MEDIA_TYPE = "application/problem+json"
 
 
 class ApiError(Exception):
@@ -23,6 +41,7 @@ class ApiError(Exception):
         self.field = field
         self.reason = reason
         self.extra = extra
+        self.headers: dict[str, str] = {}
 
     def item(self) -> dict[str, Any]:
         loc = [part for part in self.field.replace("[", ".").replace("]", "").split(".") if part]
@@ -44,6 +63,40 @@ class Conflict(ApiError):
         super().__init__(409, field, reason)
 
 
+class LimitExceeded(ApiError):
+    """A configured limit was passed: 413 for sizes, 422 for counts and values; the
+    ``limit`` member names the setting (``WEARCAST_<LIMIT>``) and its value."""
+
+    def __init__(self, field: str, limit: str, value: int | float, reason: str,
+                 status: int = 413) -> None:
+        super().__init__(status, field, f"{reason} (limit {limit} = {value:,})",
+                         limit=limit, limit_value=value)
+
+
+class ProblemItem(BaseModel):
+    """One field at fault."""
+
+    model_config = ConfigDict(extra="allow")
+    loc: list[str | int] = Field(default_factory=list)
+    field: str
+    reason: str
+    file: str | None = None
+    line: int | None = None
+    limit: str | None = None
+
+
+class Problem(BaseModel):
+    """RFC 9457 problem details, with the fields at fault in ``errors``."""
+
+    model_config = ConfigDict(extra="allow")
+    type: str = "about:blank"
+    title: str
+    status: int
+    detail: str
+    instance: str | None = None
+    errors: list[ProblemItem] = Field(default_factory=list)
+
+
 def _field_from_loc(loc: tuple[Any, ...] | list[Any]) -> str:
     parts = list(loc)
     if parts and parts[0] in {"body", "query", "path", "header", "form", "cookie"}:
@@ -62,6 +115,7 @@ def validation_items(errors: Sequence[Any]) -> list[dict[str, Any]]:
     items = []
     for error in errors:
         loc = [p for p in error.get("loc", ()) if not (isinstance(p, str) and "[" in p)]
+        loc = [p if isinstance(p, int | str) else str(p) for p in loc]
         reason = str(error.get("msg", "invalid value"))
         reason = reason.removeprefix("Value error, ")
         if error.get("type") == "json_invalid":
@@ -74,16 +128,87 @@ def validation_items(errors: Sequence[Any]) -> list[dict[str, Any]]:
     return items
 
 
+def problem_body(status: int, items: list[dict[str, Any]], detail: str | None = None,
+                 **extra: Any) -> dict[str, Any]:
+    """The problem-details document of an error answer."""
+    try:
+        title = HTTPStatus(status).phrase
+    except ValueError:
+        title = "Error"
+    if detail is None:
+        detail = "; ".join(f"{i['field']}: {i['reason']}" for i in items[:5]) or title
+        if len(items) > 5:
+            detail += f"; and {len(items) - 5} more"
+    return {"type": "about:blank", "title": title, "status": status, "detail": detail,
+            "errors": items, **extra}
+
+
+def problem_response(status: int, items: list[dict[str, Any]], detail: str | None = None,
+                     headers: dict[str, str] | None = None, **extra: Any) -> JSONResponse:
+    return JSONResponse(status_code=status, content=problem_body(status, items, detail, **extra),
+                        media_type=PROBLEM_MEDIA_TYPE, headers=headers)
+
+
+def problem(status: int, field: str, reason: str, headers: dict[str, str] | None = None,
+            **extra: Any) -> JSONResponse:
+    """A problem answer with one field at fault."""
+    return problem_response(status, [ApiError(status, field, reason, **extra).item()],
+                            headers=headers)
+
+
+def _http_exception_items(exc: StarletteHTTPException, request: Request) -> list[dict[str, Any]]:
+    if exc.status_code == 404:
+        return [{"loc": ["path"], "field": "path",
+                 "reason": f"no such resource: {request.url.path[:200]}"}]
+    if exc.status_code == 405:
+        return [{"loc": ["method"], "field": "method",
+                 "reason": f"{request.method} is not allowed on {request.url.path[:200]}"}]
+    detail = exc.detail
+    if isinstance(detail, list):
+        return [d if isinstance(d, dict) and "field" in d else
+                {"loc": [], "field": "request", "reason": str(d)} for d in detail]
+    return [{"loc": [], "field": "request", "reason": str(detail)}]
+
+
 def install_handlers(app: FastAPI) -> None:
-    """Register the handlers on ``app``."""
+    """Register the handlers on ``app`` (problem details for every error)."""
 
     @app.exception_handler(ApiError)
     async def _api_error(_request: Request, exc: ApiError) -> JSONResponse:
-        return JSONResponse(status_code=exc.status, content={"detail": [exc.item()]})
+        return problem_response(exc.status, [exc.item()], headers=exc.headers or None)
 
     @app.exception_handler(RequestValidationError)
     async def _validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse(status_code=422, content={"detail": validation_items(exc.errors())})
+        return problem_response(422, validation_items(exc.errors()))
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return problem_response(exc.status_code, _http_exception_items(exc, request),
+                                headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(DataError)
+    async def _data_error(_request: Request, exc: DataError) -> JSONResponse:
+        # a value the database cannot store (too long, out of range, a NUL byte): the
+        # client's input, not a server failure; the driver's text is not sent
+        log.info("database refused a value: %s", exc.orig)
+        return problem(422, "body", "a value cannot be stored: too long, out of range, or "
+                       "holding a NUL byte")
+
+    @app.exception_handler(IntegrityError)
+    async def _integrity_error(_request: Request, exc: IntegrityError) -> JSONResponse:
+        log.info("integrity conflict: %s", exc.orig)
+        return problem(409, "body", "conflicts with stored data (a duplicate or a reference "
+                       "to something that does not exist)")
+
+    @app.exception_handler(OverflowError)
+    async def _overflow(_request: Request, _exc: OverflowError) -> JSONResponse:
+        return problem(422, "body", "a number is out of range (integers are 64-bit)")
+
+    @app.exception_handler(OperationalError)
+    async def _operational(_request: Request, exc: OperationalError) -> JSONResponse:
+        log.warning("database unavailable: %s", exc.orig)
+        return problem(503, "database", "the database is busy or unavailable; try again",
+                       headers={"Retry-After": "5"})
 
 
 def from_value_error(exc: ValueError, prefix: str = "", status: int = 422) -> ApiError:

@@ -16,6 +16,7 @@ from typing import Any
 
 from sqlalchemy import (
     JSON,
+    Boolean,
     Date,
     DateTime,
     Float,
@@ -27,6 +28,7 @@ from sqlalchemy import (
     String,
     Text,
     UniqueConstraint,
+    false,
     func,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
@@ -211,7 +213,7 @@ class ModelCalibrationMeasurement(Base):
 class Simulation(Base):
     """A wear-loop simulation job: its request, status, progress (0-1), error and result.
 
-    ``status`` is ``queued``, ``running``, ``done`` or ``failed``; ``result`` is
+    ``status`` is ``queued``, ``running``, ``done``, ``failed`` or ``cancelled``; ``result`` is
     ``WearSimulation.to_dict()`` once done (loaded only when asked for).
     """
 
@@ -228,3 +230,15 @@ class Simulation(Base):
                                                     server_default=func.now())
     started_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
     finished_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
+    # job control (migration 0003_service): who owns it, a cancel request, its time limit,
+    # and the last sign of life of the worker running it
+    owner_key_id: Mapped[int | None] = mapped_column(Integer, index=True)
+    cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False,
+                                                   server_default=false())
+    timeout_s: Mapped[float | None] = mapped_column(Float)
+    heartbeat_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
+    attempts: Mapped[int] = mapped_column(Integer, default=0, server_default="0")
+
+
+# API keys, audit trail, idempotency keys share this metadata (migration 0003_service)
+from wearcast.service import models_access as _models_access  # noqa: E402,F401

@@ -532,7 +532,7 @@ class SimulationIn(Strict):
 class SimulationOut(BaseModel):
     id: int
     name: str | None
-    status: Literal["queued", "running", "done", "failed"]
+    status: Literal["queued", "running", "done", "failed", "cancelled"]
     progress: float
     message: str | None = None
     error: str | None = None

@@ -4,14 +4,22 @@
 uploaded files (content-addressed, see :mod:`wearcast.service.rawfiles`);
 ``WEARCAST_DATABASE_URL`` (an SQLAlchemy URL) overrides the database, e.g.
 ``postgresql+psycopg://user@host:5432/wearcast``.
+
+Security and limits (every one a ``WEARCAST_<NAME>`` variable with a safe default):
+``WEARCAST_API_KEY`` is the admin key (otherwise the first start creates one and prints it
+once); ``WEARCAST_CORS_ORIGINS`` lists the web origins allowed to call the API (none by
+default); the ``max_*`` settings bound every request (413/422 naming the limit) and
+``rate_limit_*`` every key (429 with ``Retry-After``).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field
+from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
+
+MIB = 1024 * 1024
 
 
 class Settings(BaseSettings):
@@ -22,6 +30,43 @@ class Settings(BaseSettings):
     data_dir: Path = Field(default=Path("./data"), description="data directory")
     database_url: str | None = Field(default=None, description="SQLAlchemy URL")
     import_chunk_size: int = Field(default=500, ge=1, description="profiles per bulk insert")
+
+    # --- authentication -------------------------------------------------------------------
+    api_key: SecretStr | None = Field(
+        default=None, description="the admin API key (Authorization: Bearer <key>); when "
+        "unset, the first start creates an admin key and prints it once")
+    cors_origins: list[str] = Field(
+        default_factory=list, description="web origins allowed by CORS (none by default)")
+
+    # --- limits (413/422 naming the limit) ------------------------------------------------
+    max_body_bytes: int = Field(default=2 * MIB, ge=1024,
+                                description="largest JSON request body [bytes]")
+    max_upload_bytes: int = Field(default=256 * MIB, ge=1024,
+                                  description="largest multipart upload [bytes]")
+    max_decompressed_bytes: int = Field(default=1024 * MIB, ge=1024,
+                                        description="largest total uncompressed zip content")
+    max_line_bytes: int = Field(default=1 * MIB, ge=256,
+                                description="longest line of an uploaded CSV [bytes]")
+    max_columns: int = Field(default=512, ge=8, description="most columns of an uploaded CSV")
+    max_zip_members: int = Field(default=20_000, ge=1, description="most members of a zip")
+    max_points_per_profile: int = Field(default=20_000, ge=10,
+                                        description="most points of one profile")
+    max_id_length: int = Field(default=200, ge=8, description="longest id or name [chars]")
+
+    # --- rate limits (429 with Retry-After) -----------------------------------------------
+    rate_limit_per_second: float = Field(
+        default=200.0, ge=0, description="sustained requests per second per key (0: off)")
+    rate_limit_burst: int = Field(default=400, ge=1, description="requests a key may burst")
+
+    # --- jobs -------------------------------------------------------------------------------
+    job_workers: int = Field(default=2, ge=1, description="in-process job worker threads")
+    job_timeout_s: float = Field(default=3600.0, gt=0, description="longest job [s]")
+    job_quota_per_key: int = Field(default=8, ge=1,
+                                   description="queued or running jobs one key may hold")
+    job_queue: str = Field(default="embedded", pattern="^(embedded|dramatiq)$",
+                           description="embedded (in-process threads) or dramatiq (workers)")
+    broker_url: str = Field(default="redis://127.0.0.1:6379/0",
+                            description="the Dramatiq broker (Redis) when job_queue=dramatiq")
 
     @property
     def resolved_database_url(self) -> str:

@@ -5,45 +5,42 @@ wear law, global or local application, adaptive or fixed steps; seeds 000, 002, 
 A request is validated completely before it is queued (preset, route, law, steps), so a bad
 input is a 422 and never a failed job. The job row holds the status (``queued`` ->
 ``running`` -> ``done`` | ``failed``), the progress (0-1, written after every wheel step),
-the error of a failed job and the result (``WearSimulation.to_dict()``).
+the error of a failed job and the result (``WearSimulation.to_dict()``). Queueing, claiming,
+cancel, time limit and recovery are :mod:`wearcast.service.job_store`'s and
+:mod:`wearcast.service.jobs`'s.
 """
 
 from __future__ import annotations
 
-import datetime as dt
 import logging
-import math
-import threading
 import traceback
-from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
-from wearcast.service import route_store
-from wearcast.service.db import SessionFactory, transaction
+from wearcast.service.db import SessionFactory
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
+from wearcast.service.job_store import (
+    RESTART_REASON,
+    JobControl,
+    JobStopped,
+    default_timeout,
+    finish,
+    finite_json,
+    now_utc,
+    queue_job,
+    resolve_classes,
+    run_job,
+    set_job,
+)
 from wearcast.service.schemas import SimulationIn, SimulationOut
 
 log = logging.getLogger(__name__)
-#: Reason written on jobs that were running when the service stopped.
-RESTART_REASON = "the service restarted while this simulation was running; submit it again"
-
-
-def now_utc() -> dt.datetime:
-    return dt.datetime.now(dt.UTC)
-
-
-def resolve_classes(session: Session, body: SimulationIn) -> list[dict[str, Any]]:
-    """The curve classes of the request: a stored route's classes or the given ones."""
-    if body.route_id is not None:
-        row = route_store.get_route(session, body.route_id, "route_id")
-        return [{k: c.get(k) for k in ("radius_m", "cant_mm", "speed_kmh", "direction",
-                                       "share")} | {"direction": c.get("direction") or "left"}
-                for c in row.classes]
-    return [c.model_dump() for c in body.classes or []]
+__all__ = ["RESTART_REASON", "create_simulation", "finite_json", "get_simulation",
+           "list_simulations", "now_utc", "queue_job", "resolve_classes", "run_simulation",
+           "set_job", "submit"]
 
 
 def simulation_arguments(spec: dict[str, Any]) -> dict[str, Any]:
@@ -96,74 +93,48 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
         simulation_arguments(spec)
     except ValueError as exc:
         raise from_value_error(exc) from exc
-    return queue_job(session, body.name, spec)
-
-
-def queue_job(session: Session, name: str | None, spec: dict[str, Any]) -> db.Simulation:
-    """Store a validated job (simulation or coefficient fit, told apart by its spec) as queued."""
-    row = db.Simulation(name=name, spec=spec, status="queued", progress=0.0, message="queued")
-    session.add(row)
-    session.commit()
-    return row
-
-
-def set_job(factory: SessionFactory, sim_id: int, **values: Any) -> None:
-    with transaction(factory) as session:
-        session.execute(update(db.Simulation).where(db.Simulation.id == sim_id).values(**values))
+    return queue_job(session, body.name, spec, timeout_s=default_timeout())
 
 
 def run_simulation(factory: SessionFactory, sim_id: int,
                    on_progress: Any = None) -> None:
-    """Run a queued job to the end: status, progress and result (or error) in its row.
+    """Claim a queued job and run it to its end (the CLI's path; the service's runner calls
+    :func:`wearcast.service.job_store.run_job`, which dispatches on the job's kind)."""
+    run_job(factory, sim_id, on_progress)
 
-    Never raises for a failing simulation: the error is stored and the status is ``failed``.
+
+def run_claimed_simulation(factory: SessionFactory, sim_id: int, spec: dict[str, Any],
+                           on_progress: Any = None, control: JobControl | None = None) -> None:
+    """Run a claimed simulation job: progress, result (or error) in its row.
+
+    Never raises for a failing simulation: the error is stored and the status is ``failed``;
+    a cancel or a passed time limit ends it at its next wheel step.
     ``on_progress(done_steps, n_steps, mileage_km)`` is called after every wheel step too
     (the CLI's progress bar).
     """
     from wearcast.physics.wear_loop import simulate_wear
 
-    with factory() as session:
-        spec = session.scalar(select(db.Simulation.spec).where(db.Simulation.id == sim_id))
-    if spec is None:
-        return
-    if spec.get("kind") == "coefficient_fit":  # seed 000 calibration jobs share the table
-        from wearcast.service.coefficient_fit_store import run_coefficient_fit
-
-        run_coefficient_fit(factory, sim_id, spec, on_progress)
-        return
-    set_job(factory, sim_id, status="running", started_at=now_utc(), progress=0.0,
-         message="solving contacts")
+    control = control or JobControl(factory, sim_id, None)
+    set_job(factory, sim_id, progress=0.0, message="solving contacts")
 
     def progress(done: int, total: int, mileage_km: float) -> None:
-        fraction = min(1.0, done / max(total, 1))
-        set_job(factory, sim_id, progress=fraction,
-             message=f"step {done}/{total}, {mileage_km:,.0f} km")
+        control.progress(done / max(total, 1), f"step {done}/{total}, {mileage_km:,.0f} km")
         if on_progress is not None:
             on_progress(done, total, mileage_km)
 
     try:
+        control.check()
         result = simulate_wear(**simulation_arguments(spec), progress=progress)
         payload = finite_json(result.to_dict())
+    except JobStopped as stop:
+        finish(factory, sim_id, stop.status, error=stop.reason, message=stop.reason)
+        return
     except Exception as exc:  # the job reports any failure; it never kills the worker
         log.warning("simulation %s failed: %s", sim_id, traceback.format_exc())
-        set_job(factory, sim_id, status="failed", finished_at=now_utc(),
-             error=f"{type(exc).__name__}: {exc}", message="failed")
+        finish(factory, sim_id, "failed", error=f"{type(exc).__name__}: {exc}",
+               message="failed")
         return
-    set_job(factory, sim_id, status="done", progress=1.0, finished_at=now_utc(), result=payload,
-         message="done")
-
-
-def finite_json(value: Any) -> Any:
-    """JSON-safe copy: non-finite floats become None."""
-    if isinstance(value, dict):
-        return {str(k): finite_json(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [finite_json(v) for v in value]
-    if hasattr(value, "item") and not isinstance(value, str):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    finish(factory, sim_id, "done", progress=1.0, result=payload, message="done")
 
 
 def get_simulation(session: Session, sim_id: int, with_result: bool = True) -> SimulationOut:
@@ -184,44 +155,10 @@ def list_simulations(session: Session, limit: int = 100) -> list[SimulationOut]:
     return [get_simulation(session, i, with_result=False) for i in ids]
 
 
-class SimulationRunner:
-    """A small in-process executor for simulation jobs (one worker thread by default: the
-    physics is CPU-bound and the machine is shared).
-
-    On start it marks the jobs left ``running`` by a previous process ``failed`` (with
-    :data:`RESTART_REASON`) and queues again the ones left ``queued``.
-    """
-
-    def __init__(self, factory: SessionFactory, workers: int = 1,
-                 executor: Executor | None = None) -> None:
-        self.factory = factory
-        self._executor = executor or ThreadPoolExecutor(max_workers=workers,
-                                                        thread_name_prefix="wearcast-sim")
-        self._lock = threading.Lock()
-
-    def recover(self) -> list[int]:
-        """Fail interrupted jobs, requeue waiting ones; returns the requeued ids."""
-        with transaction(self.factory) as session:
-            session.execute(update(db.Simulation).where(db.Simulation.status == "running")
-                            .values(status="failed", error=RESTART_REASON,
-                                    message="failed", finished_at=now_utc()))
-            queued = list(session.scalars(select(db.Simulation.id)
-                                          .where(db.Simulation.status == "queued")
-                                          .order_by(db.Simulation.id)))
-        for sim_id in queued:
-            self.submit(sim_id)
-        return queued
-
-    def submit(self, sim_id: int) -> None:
-        with self._lock:
-            self._executor.submit(run_simulation, self.factory, sim_id)
-
-    def shutdown(self) -> None:
-        self._executor.shutdown(wait=False, cancel_futures=True)
-
-
-def submit(session: Session, runner: SimulationRunner, body: SimulationIn) -> SimulationOut:
-    """Validate, store as queued and hand to the runner; the answer is the queued job."""
+def submit(session: Session, runner: Any, body: SimulationIn) -> SimulationOut:
+    """Validate, store as queued and hand to the runner; the answer is the queued job
+    (429 naming ``job_quota_per_key`` when the key already holds its quota of jobs)."""
+    runner.check_quota(session)
     row = create_simulation(session, body)
     runner.submit(row.id)
     return SimulationOut(id=row.id, name=row.name, status="queued", progress=0.0,

@@ -1,7 +1,7 @@
 """``/v1/simulations``: wear-loop simulations run as background jobs with progress.
 
 ``POST`` validates the request, stores it as a queued job and answers 202 at once; a worker
-thread of the app's :class:`~wearcast.service.simulation_store.SimulationRunner` runs it and
+of the app's :class:`~wearcast.service.jobs.JobRunner` runs it and
 writes its progress; ``GET /v1/simulations/{id}`` reads status, progress, error and, once
 done, the result.
 """

@@ -97,7 +97,7 @@ def test_bad_fit_requests_are_refused_before_queuing(tmp_path, twin, change, sta
     client = TestClient(create_app(_settings(tmp_path)))
     r = client.post("/v1/coefficient-fits", json=_body(twin, **change))
     assert r.status_code == status, r.text
-    assert r.json()["detail"][0]["field"] == field
+    assert r.json()["errors"][0]["field"] == field
     assert client.get("/v1/coefficient-fits").json() == []
 
 
@@ -201,7 +201,7 @@ def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, rea
     client = TestClient(create_app(_settings(tmp_path)))
     r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin, **change))
     assert r.status_code == 422, r.text
-    detail = r.json()["detail"][0]
+    detail = r.json()["errors"][0]
     assert detail["field"] == field and reason in detail["reason"], detail
     assert client.get("/v1/coefficient-fits").json() == []
 

@@ -140,25 +140,25 @@ def test_saved_extension_predicts_and_reprofiles(tmp_path):
     assert r.json()["mileage_km"]["p50"] is not None
     # an extended model is not diagnosed again
     r = client.post(f"/v1/models/{new_id}/diagnose", json={})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "model_id"
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "model_id"
 
 
 def test_diagnose_refuses_bad_input(tmp_path):
     client = _client(tmp_path)
     model_id = _load(client, "none")
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"causes": ["sunspots"]})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "causes[0]"
-    assert "traction" in r.json()["detail"][0]["reason"]
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "causes[0]"
+    assert "traction" in r.json()["errors"][0]["reason"]
     r = client.post(f"/v1/models/{model_id}/diagnose",
                     json={"filter": {"vehicle_id": "nobody"}, "causes": ["traction"]})
     # only the calibration measurements remain (one unit): still two wheels -> it runs
     assert r.status_code == 200, r.text
     r = client.post("/v1/models/999/diagnose", json={})
-    assert r.status_code == 404 and r.json()["detail"][0]["field"] == "model_id"
+    assert r.status_code == 404 and r.json()["errors"][0]["field"] == "model_id"
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"bogus": 1})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "bogus"
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "bogus"
     r = client.get(f"/v1/models/{model_id}/diagnose/report", params={"filter": "[1"})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "filter"
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "filter"
 
 
 def test_report_html_has_the_figures(tmp_path):

@@ -188,10 +188,10 @@ def test_cached_requests_run_no_sql_and_read_nothing_again(example, monkeypatch)
         event.remove(engine, "before_cursor_execute", count)
     missing = client.post("/v1/models/999/predict",
                           json={"route_id": "aosta", "mileage_km": [1.0], **POSITION})
-    assert missing.status_code == 404 and missing.json()["detail"][0]["field"] == "model_id"
+    assert missing.status_code == 404 and missing.json()["errors"][0]["field"] == "model_id"
     unknown = client.post(f"/v1/models/{model_id}/reprofiling",
                           json={"route_id": "nowhere", **POSITION})
-    assert unknown.status_code == 404 and unknown.json()["detail"][0]["field"] == "route_id"
+    assert unknown.status_code == 404 and unknown.json()["errors"][0]["field"] == "route_id"
 
 
 def test_hot_path_answers_match_the_python_api_and_their_schemas(example):

@@ -79,7 +79,7 @@ def loaded(tmp_path_factory: pytest.TempPathFactory, fleet_csv: bytes, table_csv
 
 
 def _field(response) -> str:
-    return response.json()["detail"][0]["field"]
+    return response.json()["errors"][0]["field"]
 
 
 def _count(client: TestClient, table) -> int:
@@ -242,7 +242,7 @@ def test_a_bad_row_at_the_end_leaves_the_database_unchanged(tmp_path: Path,
     response = client.post("/v1/measurements/import",
                            files={"file": ("bad.csv", data, "text/csv")})
     assert response.status_code == 422
-    item = response.json()["detail"][0]
+    item = response.json()["errors"][0]
     assert item["field"] == "side" and item["file"] == "bad.csv"
     assert item["line"] == len(frame) + 1  # header is line 1
     assert "up" in item["reason"]
@@ -322,7 +322,7 @@ def test_bad_routes_are_refused_naming_the_field(client: TestClient, body: dict,
     response = client.post("/v1/routes", json=body)
     assert response.status_code == 422, response.text
     assert _field(response) == field
-    assert response.json()["detail"][0]["reason"]
+    assert response.json()["errors"][0]["reason"]
 
 
 def test_nan_and_infinity_are_refused(client: TestClient) -> None:

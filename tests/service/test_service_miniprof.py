@@ -63,5 +63,5 @@ def test_miniprof_without_its_manifest_row_is_refused(reference_dir: Path,
         "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
         "manifest": ("manifest.csv", manifest.encode())})
     assert response.status_code == 422
-    assert response.json()["detail"][0]["file"] == name
+    assert response.json()["errors"][0]["file"] == name
     assert client.get("/v1/measurements").json()["total"] == 0

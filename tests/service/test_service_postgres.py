@@ -81,7 +81,7 @@ def test_the_walk_on_postgresql(postgres_url: str, tmp_path: Path) -> None:
         bad.loc[bad.index[-1], "axle"] = 7
         refused = client.post("/v1/measurements/import", files={
             "file": ("bad.csv", bad.to_csv(index=False).encode(), "text/csv")})
-        assert refused.status_code == 422 and refused.json()["detail"][0]["field"] == "axle"
+        assert refused.status_code == 422 and refused.json()["errors"][0]["field"] == "axle"
         assert client.get("/v1/measurements").json()["total"] == 24
         assert client.get("/v1/measurements", params={"depot": "west"}).json()["total"] == 24
         assert client.post("/v1/routes", json=ft.metro_route().to_json()).status_code == 201

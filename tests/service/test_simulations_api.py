@@ -11,8 +11,10 @@ from fastapi.testclient import TestClient
 
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
+from wearcast.service.job_store import RESTART_REASON
+from wearcast.service.schemas import SimulationIn
 from wearcast.service.settings import Settings
-from wearcast.service.simulation_store import RESTART_REASON
+from wearcast.service.simulation_store import create_simulation
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "service" / "example_fleet"
 TINY = {"vehicle": "metro_b", "law": "archard_kth", "application": "global",
@@ -116,21 +118,26 @@ def test_bad_simulation_requests_are_refused_before_queuing(tmp_path: Path, chan
     client = TestClient(create_app(_settings(tmp_path)))
     r = client.post("/v1/simulations", json={**TINY, **change})
     assert r.status_code == status, r.text
-    assert r.json()["detail"][0]["field"] == field
+    assert r.json()["errors"][0]["field"] == field
     assert client.get("/v1/simulations").json() == []  # nothing half-written
 
 
-def test_a_restart_fails_running_jobs_with_a_reason(tmp_path: Path) -> None:
+def test_a_restart_queues_an_interrupted_job_again_and_fails_it_after_a_second_stop(
+        tmp_path: Path) -> None:
     settings = _settings(tmp_path)
     app = create_app(settings)
     with app.state.database.session_factory() as session:
+        # interrupted once: runs again from the start; interrupted twice: failed with a reason
+        first = create_simulation(session, SimulationIn(**TINY))
+        first.status, first.progress, first.attempts = "running", 0.5, 1
         session.add(db.Simulation(spec={"vehicle": "metro_b"}, status="running",
-                                  progress=0.5, message="step 1/2"))
+                                  progress=0.5, message="step 1/2", attempts=2))
         session.commit()
     restarted = TestClient(create_app(settings))
-    body = restarted.get("/v1/simulations/1").json()
+    body = restarted.get("/v1/simulations/2").json()
     assert body["status"] == "failed" and body["error"] == RESTART_REASON
-    assert restarted.get("/v1/simulations/2").status_code == 404
+    assert _wait(restarted, 1)["status"] in ("done", "failed")
+    assert restarted.get("/v1/simulations/3").status_code == 404
 
 
 def test_a_simulation_that_fails_reports_the_error(tmp_path: Path) -> None:

@@ -145,28 +145,28 @@ def test_compute_refuses_bad_input(tmp_path: Path) -> None:
     r = client.post("/v1/wear-tables/compute",
                     json={"name": "x", "vehicle": "tgv", "route_id": "aosta"})
     assert r.status_code == 422
-    detail = r.json()["detail"][0]
+    detail = r.json()["errors"][0]
     assert detail["field"] == "vehicle"
     assert "aln663, manchester, metro_b, minuetto" in detail["reason"]
     r = client.post("/v1/wear-tables/compute", json={
         "name": "x", "vehicle": {"motor": "metro_b", "trailer": "tgv"}, "radii": [
             {"radius_m": 300}]})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "vehicle.trailer"
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "vehicle.trailer"
     r = client.post("/v1/wear-tables/compute", json={"name": "x", "vehicle": "metro_b"})
-    assert r.status_code == 422 and "route_id or radii" in r.json()["detail"][0]["reason"]
+    assert r.status_code == 422 and "route_id or radii" in r.json()["errors"][0]["reason"]
     r = client.post("/v1/wear-tables/compute",
                     json={"name": "x", "vehicle": "metro_b", "route_id": "nowhere"})
-    assert r.status_code == 404 and r.json()["detail"][0]["field"] == "route_id"
+    assert r.status_code == 404 and r.json()["errors"][0]["field"] == "route_id"
     r = client.post("/v1/wear-tables/compute", json={
         "name": "x", "vehicle": "metro_b", "radii": [{"radius_m": -5}]})
-    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "radii[0].radius_m"
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "radii[0].radius_m"
     # a radius far too tight for the speed: the curving solver finds no equilibrium -> 422
     # naming the radius, never a 500, and nothing is stored
     r = client.post("/v1/wear-tables/compute", json={
         "name": "x", "vehicle": "metro_b",
         "radii": [{"radius_m": 300, "cant_mm": 50}, {"radius_m": 20, "speed_kmh": 150}]})
     assert r.status_code == 422, r.text
-    detail = r.json()["detail"][0]
+    detail = r.json()["errors"][0]
     assert detail["field"] == "radii[1].radius_m" and "20 m" in detail["reason"]
     assert client.get("/v1/wear-tables/1").status_code == 404
 
@@ -189,4 +189,4 @@ def test_compute_from_radii_and_uploaded_tables_have_no_contacts(tmp_path: Path)
     up = client.post("/v1/wear-tables", files={"file": ("t.csv", table, "text/csv")}).json()
     assert up["kind"] == "uploaded"
     r = client.get(f"/v1/wear-tables/{up['id']}/contacts")
-    assert r.status_code == 404 and r.json()["detail"][0]["field"] == "table_id"
+    assert r.status_code == 404 and r.json()["errors"][0]["field"] == "table_id"

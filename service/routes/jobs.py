@@ -1,0 +1,85 @@
+"""``/v1/jobs``: every background job (simulations, coefficient fits) in one list, one job's
+status and progress, and cancelling a job (its owner's key or an admin key)."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Path, Query, Request
+from pydantic import BaseModel
+from sqlalchemy import select
+
+from wearcast.service import job_store
+from wearcast.service import models_db as db
+from wearcast.service.deps import SessionDep
+from wearcast.service.errors import ApiError, NotFound
+
+router = APIRouter(tags=["jobs"])
+JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
+
+
+class JobOut(BaseModel):
+    id: int
+    kind: Literal["simulation", "coefficient_fit"]
+    name: str | None
+    status: Literal["queued", "running", "done", "failed", "cancelled"]
+    progress: float
+    message: str | None = None
+    error: str | None = None
+    owner_key_id: int | None = None
+    attempts: int = 0
+    cancel_requested: bool = False
+    timeout_s: float | None = None
+    created_at: dt.datetime | None = None
+    started_at: dt.datetime | None = None
+    finished_at: dt.datetime | None = None
+    heartbeat_at: dt.datetime | None = None
+
+
+def _out(row: Any) -> JobOut:
+    kind: Literal["simulation", "coefficient_fit"] = (
+        "coefficient_fit" if (row.spec or {}).get("kind") == "coefficient_fit"
+        else "simulation")
+    return JobOut(id=row.id, kind=kind, name=row.name, status=row.status,
+                  progress=float(row.progress), message=row.message, error=row.error,
+                  owner_key_id=row.owner_key_id, attempts=row.attempts or 0,
+                  cancel_requested=bool(row.cancel_requested), timeout_s=row.timeout_s,
+                  created_at=row.created_at, started_at=row.started_at,
+                  finished_at=row.finished_at, heartbeat_at=row.heartbeat_at)
+
+
+@router.get("/jobs", response_model=list[JobOut])
+def list_jobs(session: SessionDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+              status: Literal["queued", "running", "done", "failed", "cancelled"] | None
+              = None) -> list[JobOut]:
+    """The newest jobs first, without their results."""
+    query = select(db.Simulation).order_by(db.Simulation.id.desc()).limit(limit)
+    if status is not None:
+        query = query.where(db.Simulation.status == status)
+    return [_out(r) for r in session.scalars(query)]
+
+
+@router.get("/jobs/{job_id}", response_model=JobOut)
+def get_job(job_id: JobId, session: SessionDep) -> JobOut:
+    row = session.get(db.Simulation, job_id)
+    if row is None:
+        raise NotFound("job_id", f"no job with id {job_id}")
+    return _out(row)
+
+
+@router.post("/jobs/{job_id}/cancel", response_model=JobOut)
+def cancel_job(job_id: JobId, session: SessionDep, request: Request) -> JobOut:
+    """Cancel a queued job at once, a running one at its next step (``cancel_requested``
+    until then); a job that has ended is answered as it is (409)."""
+    row = session.get(db.Simulation, job_id)
+    if row is None:
+        raise NotFound("job_id", f"no job with id {job_id}")
+    principal = request.state.principal
+    if row.owner_key_id not in (None, principal.key_id) and "admin" not in principal.scopes:
+        raise ApiError(403, "job_id", "only the key that submitted the job, or an admin key, "
+                       "may cancel it")
+    if row.status not in job_store.ACTIVE:
+        raise ApiError(409, "job_id", f"the job has already ended ({row.status})")
+    row = job_store.cancel(session, job_id)
+    return _out(row)
