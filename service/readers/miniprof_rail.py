@@ -274,6 +274,9 @@ def read_rail_file(data: bytes, file_name: str,
     report the others with their ``kind_reason``. Raises ImportFileError (file, line, field)
     for a file that cannot be read.
     """
+    if file_name.lower().endswith(".whl"):
+        raise ImportFileError(file_name, "a MiniProf wheel file (.whl): import it through "
+                              "POST /v1/measurements/import", field="file")
     if not file_name.lower().endswith(RAIL_FILE_EXTENSIONS):
         raise ImportFileError(file_name, "expected a MiniProf rail file (.ban, or .mpt with "
                               "rail profiles)", field="file")
