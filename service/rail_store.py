@@ -259,7 +259,7 @@ def rail_spec(session: Session, rail_id: int, field: str = "rail_id") -> dict[st
 def measured_rail_from_spec(spec: dict[str, Any]) -> MeasuredRail:
     """The physics rail of :func:`rail_spec` (raises ValueError phrased ``rail_id: ...``)."""
     try:
-        return MeasuredRail(f"rail {spec['rail_id']} ({spec['name']})",
+        return MeasuredRail(f"{spec['name']} (rail {spec['rail_id']})",
                             np.asarray(spec["y_mm"], float), np.asarray(spec["z_mm"], float),
                             kind=spec.get("kind", "rail"), inclination=spec.get("inclination"))
     except ValueError as exc:
