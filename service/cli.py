@@ -214,11 +214,12 @@ def rail_import(
 
     if gauge_side not in (None, "negative_x", "positive_x"):
         raise_field("gauge_side", "must be negative_x or positive_x")
-    with _session() as (_, session):
+    with _session() as (database, session):
         result = rail_store.import_rail_file(
             session, file.read_bytes(), file.name, name=name,
             gauge_side=gauge_side,  # type: ignore[arg-type]
-            inclination=rail_store.parse_inclination(inclination), reference=reference)
+            inclination=rail_store.parse_inclination(inclination), reference=reference,
+            raw_dir=database.settings.raw_dir)
         _show({"file_name": result.file_name,
                "created": [_rail_summary(r) for r in result.created],
                "duplicates": [_rail_summary(r) for r in result.duplicates],

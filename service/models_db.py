@@ -240,7 +240,8 @@ class Rail(Base):
     rail frame (mirror / sign only). One row per file content and part (``part`` 0 for
     single-profile files): a repeated import finds it. ``reference`` is the head the wear
     measures are taken against by default (``60E1``, ``UIC60``, ``60E2`` or ``rail:<id>``);
-    ``inclination`` the stated laying inclination (None: the vehicle's).
+    ``inclination`` the stated laying inclination (None: the vehicle's); ``raw_path`` the
+    uploaded file under ``<data_dir>/raw`` (content-addressed, as measurement imports).
     """
 
     __tablename__ = "rails"
@@ -267,5 +268,6 @@ class Rail(Base):
     inclination: Mapped[float | None] = mapped_column(Float)
     reference: Mapped[str] = mapped_column(String(100), default="60E1")
     warnings: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    raw_path: Mapped[str | None] = mapped_column(String(200))
     created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
                                                     server_default=func.now())

@@ -91,6 +91,8 @@ class RailOut(BaseModel):
     frame: RailFrameOut
     wear: RailWearOut
     warnings: list[str]
+    raw_path: str | None = Field(default=None, description=(
+        "the uploaded file, under the service's raw directory (content-addressed)"))
     created_at: dt.datetime | None = None
     x_mm: list[float] | None = None
     y_mm: list[float] | None = None

@@ -15,7 +15,9 @@ rail, e.g. a measured new rail or a drawing, as uploaded reference).
 from __future__ import annotations
 
 import hashlib
+import io
 import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,6 +32,7 @@ from wearcast.physics.rail_head_wear import (
     reference_from_points,
 )
 from wearcast.service import models_db as db
+from wearcast.service import rawfiles
 from wearcast.service.errors import NotFound, Unprocessable
 from wearcast.service.importing import import_file_error
 from wearcast.service.rail_schemas import (
@@ -128,7 +131,8 @@ def rail_out(session: Session, row: db.Rail, reference: str | None = None,
                   n_points=row.n_points, added_points=list(row.added_points or []),
                   point_notes=list(row.point_notes or []), header=dict(row.header or {}),
                   frame=frame, wear=RailWearOut.model_validate(wear.to_dict()),
-                  warnings=list(row.warnings or []), created_at=row.created_at)
+                  warnings=list(row.warnings or []), raw_path=row.raw_path,
+                  created_at=row.created_at)
     if include_points:
         out.x_mm = _from_f8(row.x_mm).tolist()
         out.y_mm = _from_f8(row.y_mm).tolist()
@@ -158,9 +162,10 @@ def _row(part: RailPart, file_name: str, layout: str, sha256: str, name: str | N
 
 def import_rail_file(session: Session, data: bytes, file_name: str, *,
                      name: str | None = None, gauge_side: GaugeSide | None = None,
-                     inclination: float | None = None, reference: str = "60E1"
-                     ) -> RailImportOut:
-    """Import the rail profiles of one MiniProf file (module docstring)."""
+                     inclination: float | None = None, reference: str = "60E1",
+                     raw_dir: Path | None = None) -> RailImportOut:
+    """Import the rail profiles of one MiniProf file (module docstring); with ``raw_dir`` the
+    file itself is kept there, content-addressed (``service.rawfiles``)."""
     if not data.strip():
         raise Unprocessable("file", f"{file_name} is empty")
     if len(data) > MAX_RAIL_FILE_BYTES:
@@ -217,7 +222,16 @@ def import_rail_file(session: Session, data: bytes, file_name: str, *,
             except ValueError as exc:
                 session.rollback()
                 raise Unprocessable("file", f"{row.name}: {exc}") from exc
-        session.commit()
+        stored = rawfiles.store(raw_dir, io.BytesIO(data), sha256) if raw_dir else None
+        for row in created:
+            row.raw_path = stored.relative_path if stored else None
+        try:
+            session.commit()
+        except Exception:
+            session.rollback()
+            if stored is not None and stored.created:
+                (raw_dir / stored.relative_path).unlink(missing_ok=True)  # type: ignore[operator]
+            raise
     created_out = [rail_out(session, r) for r in created]
     for out in created_out:
         if not out.wear.reference_fits:

@@ -42,6 +42,7 @@ def upgrade() -> None:
     sa.Column('inclination', sa.Float(), nullable=True),
     sa.Column('reference', sa.String(length=100), nullable=False),
     sa.Column('warnings', sa.JSON(), nullable=False),
+    sa.Column('raw_path', sa.String(length=200), nullable=True),
     sa.Column('created_at', sa.DateTime(timezone=True), server_default=sa.func.now(),
               nullable=False),
     sa.PrimaryKeyConstraint('id', name=op.f('pk_rails')),

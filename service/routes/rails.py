@@ -16,7 +16,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, File, Form, Query, UploadFile
 
 from wearcast.service import rail_store
-from wearcast.service.deps import SessionDep
+from wearcast.service.deps import SessionDep, SettingsDep
 from wearcast.service.errors import Unprocessable
 from wearcast.service.rail_schemas import RailImportOut, RailOut
 
@@ -25,7 +25,7 @@ router = APIRouter(tags=["rails"])
 
 @router.post("/rails/import", response_model=RailImportOut)
 def import_rail(
-    session: SessionDep,
+    session: SessionDep, settings: SettingsDep,
     file: Annotated[UploadFile, File(description="MiniProf rail file (.ban, .mpt)")],
     name: Annotated[str | None, Form(max_length=200)] = None,
     gauge_side: Annotated[Literal["negative_x", "positive_x"] | None, Form(description=(
@@ -40,7 +40,8 @@ def import_rail(
         raise Unprocessable("file", "the file is larger than 20 MB")
     return rail_store.import_rail_file(
         session, data, file.filename or "upload.ban", name=name, gauge_side=gauge_side,
-        inclination=rail_store.parse_inclination(inclination), reference=reference)
+        inclination=rail_store.parse_inclination(inclination), reference=reference,
+        raw_dir=settings.raw_dir)
 
 
 @router.get("/rails", response_model=list[RailOut])

@@ -46,6 +46,7 @@ def test_synthetic_worn_60e1_file_gives_its_wear(tmp_path: Path) -> None:
     assert r.status_code == 200, r.text
     rail = r.json()["created"][0]
     assert rail["kind"] == "rail" and rail["origin"] == "instrument"
+    assert (tmp_path / "raw" / rail["raw_path"]).read_bytes() == _ban(x_file, y_file)
     assert rail["frame"]["y_down"] and rail["frame"]["gauge_side"] == "positive_x"
     assert rail["frame"]["gauge_side_source"] == "request"
     assert rail["frame"]["inclination"] == pytest.approx(1 / 40)
