@@ -103,6 +103,32 @@ def test_known_cuts_give_known_wear() -> None:
     assert wear.placement.flank_offset_mm == pytest.approx(0.0, abs=0.01)
 
 
+@pytest.mark.parametrize("cut", [0.3, 1.0, 2.5, 5.0])
+def test_wear_follows_the_cut_depth(cut: float) -> None:
+    """Property: each measure equals the depth of metal removed where it is taken, whatever
+    the depth, and the other measures do not see a cut elsewhere."""
+    top = rail_head_wear(*_worn_60e1(top_cut=cut), "60E1")
+    assert top.vertical.value_mm == pytest.approx(cut, abs=0.01)
+    assert abs(top.lateral.value_mm) < 0.01
+    corner = rail_head_wear(*_worn_60e1(corner_cut=cut), "60E1")
+    assert corner.corner_45.value_mm == pytest.approx(cut, abs=0.02)
+    assert abs(corner.vertical.value_mm) < 0.01
+    face = rail_head_wear(*_worn_60e1(gauge_cut=cut), "60E1")
+    assert face.lateral.value_mm == pytest.approx(cut - 0.019, abs=0.02)  # plane at -36 + cut
+    assert abs(face.vertical.value_mm) < 0.01
+
+
+def test_resampling_does_not_change_the_measures() -> None:
+    y, z = _worn_60e1(top_cut=1.0, gauge_cut=2.0, corner_cut=1.0)
+    dense = rail_head_wear(y, z, "60E1")
+    from wearcast.physics.profiles.rails import resample_by_arc_length
+
+    coarse = rail_head_wear(*resample_by_arc_length(y, z, 0.5), "60E1")
+    for a, b in ((dense.vertical, coarse.vertical), (dense.lateral, coarse.lateral),
+                 (dense.corner_45, coarse.corner_45)):
+        assert a.value_mm == pytest.approx(b.value_mm, abs=0.03)
+
+
 def test_vertical_shift_is_vertical_wear_and_small_lateral_shift_is_gauge_wear() -> None:
     y, z = _head()
     # the whole head 0.8 mm lower: the instrument's zero is the vertical datum
