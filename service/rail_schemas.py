@@ -91,6 +91,9 @@ class RailOut(BaseModel):
     frame: RailFrameOut
     wear: RailWearOut
     warnings: list[str]
+    instrument_wear_mm: dict[str, float] = Field(default_factory=dict, description=(
+        "W1/W2/W3 as the file's header gives them (the instrument's own, against its own "
+        "reference), where it holds numbers"))
     raw_path: str | None = Field(default=None, description=(
         "the uploaded file, under the service's raw directory (content-addressed)"))
     created_at: dt.datetime | None = None

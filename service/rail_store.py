@@ -43,9 +43,16 @@ from wearcast.service.rail_schemas import (
     RailWearOut,
 )
 from wearcast.service.readers.errors import ImportFileError
-from wearcast.service.readers.miniprof_rail import GaugeSide, RailPart, read_rail_file
+from wearcast.service.readers.miniprof_rail import (
+    GaugeSide,
+    RailPart,
+    instrument_wear,
+    read_rail_file,
+)
 
 MAX_RAIL_FILE_BYTES = 20 * 1024 * 1024
+#: Header W1/W2/W3 and recomputed wear further apart than this are reported [mm].
+INSTRUMENT_WEAR_TOLERANCE_MM = 0.3
 _REF_RAIL = re.compile(r"^rail:(\d+)$")
 
 
@@ -131,7 +138,9 @@ def rail_out(session: Session, row: db.Rail, reference: str | None = None,
                   n_points=row.n_points, added_points=list(row.added_points or []),
                   point_notes=list(row.point_notes or []), header=dict(row.header or {}),
                   frame=frame, wear=RailWearOut.model_validate(wear.to_dict()),
-                  warnings=list(row.warnings or []), raw_path=row.raw_path,
+                  warnings=list(row.warnings or []),
+                  instrument_wear_mm=instrument_wear(dict(row.header or {})),
+                  raw_path=row.raw_path,
                   created_at=row.created_at)
     if include_points:
         out.x_mm = _from_f8(row.x_mm).tolist()
@@ -241,6 +250,17 @@ def import_rail_file(session: Session, data: bytes, file_name: str, *,
                             f"{out.id}?reference=...)")
         elif out.wear.placement.fitted or out.wear.placement.flank_offset_mm is None:
             warnings.append(f"{out.name}: {out.wear.placement.method}")
+        ours = {"W1": out.wear.vertical.value_mm, "W2": out.wear.lateral.value_mm,
+                "W3": out.wear.corner_45.value_mm}
+        for key, theirs in out.instrument_wear_mm.items():
+            mine = ours[key]
+            if mine is None or abs(mine - theirs) > INSTRUMENT_WEAR_TOLERANCE_MM:
+                warnings.append(
+                    f"{out.name}: header {key}={theirs:g} mm, recomputed against "
+                    f"{out.wear.reference}: " + ("not measurable" if mine is None else
+                                                 f"{mine:.2f} mm") + " (beyond "
+                    f"{INSTRUMENT_WEAR_TOLERANCE_MM:g} mm: another reference, datum or "
+                    "definition; both are kept)")
     return RailImportOut(file_name=file_name, sha256=sha256,
                          created=created_out,
                          duplicates=[rail_out(session, r) for r in duplicates],

@@ -112,6 +112,20 @@ class RailPart:
                       self.gauge_at_positive_x, self.y_down)
 
 
+def instrument_wear(header: dict[str, str]) -> dict[str, float]:
+    """The instrument's own head wear values W1, W2, W3 [mm] where the header holds numbers
+    (MiniProf rail files; empty in many files)."""
+    out = {}
+    for key in ("W1", "W2", "W3"):
+        try:
+            value = float(header.get(key, "").strip())
+        except ValueError:
+            continue
+        if np.isfinite(value):
+            out[key] = value
+    return out
+
+
 @dataclass(frozen=True)
 class RailFile:
     """A parsed rail file: its layout, file-level header and profiles."""
@@ -239,6 +253,14 @@ def _part(mp: MiniProfFile, number: int | None, header: dict[str, str], x: np.nd
     if serial is None and origin == "instrument":
         warnings.append(f"{label}: no instrument serial (MPSerNo empty or 0): where the points "
                         "come from is not recorded")
+    gauge_depth = header.get("RailGaugePoint", "").strip()
+    try:
+        if gauge_depth and abs(float(gauge_depth) - 14.0) > 1e-6:
+            warnings.append(f"{label}: the instrument's gauge point is RailGaugePoint="
+                            f"{gauge_depth} mm below the top; wearcast takes it 14 mm below "
+                            "(EN 13848-1)")
+    except ValueError:
+        warnings.append(f"{label}: RailGaugePoint={gauge_depth!r} is not a number (ignored)")
     if _is_wheel(mp, number):
         kind: RailKind = "wheel"
         reason = ("a wheel: it has a flange and a taperline where the wheel reader looks for "

@@ -65,6 +65,19 @@ def test_synthetic_worn_60e1_file_gives_its_wear(tmp_path: Path) -> None:
     assert len(client.get("/v1/rails").json()) == 1
 
 
+def test_header_wear_and_gauge_point_depth_are_compared(tmp_path: Path) -> None:
+    y, z = rail_profile("60E1", step_mm=0.25, inclination=0.0)
+    z = np.minimum(z, -0.5)
+    keep = z > -30.0
+    data = _ban(y[keep], z[keep], extra_header="W1=0.52\nW2=1.5\nRailGaugePoint=16\n")
+    body = _import(_client(tmp_path), "w.ban", data, gauge_side="negative_x").json()
+    rail = body["created"][0]
+    assert rail["instrument_wear_mm"] == {"W1": 0.52, "W2": 1.5}
+    text = " ".join(body["warnings"])
+    assert "header W2=1.5" in text and "header W1" not in text  # 0.50 vs 0.52: agrees
+    assert "RailGaugePoint=16" in text
+
+
 def test_bad_rail_imports_are_4xx_naming_the_field(tmp_path: Path) -> None:
     client = _client(tmp_path)
     y, z = rail_profile("60E1", step_mm=0.5, inclination=0.0)
