@@ -68,6 +68,10 @@ class RailFrameOut(BaseModel):
     field_depth_mm: float
     inclination: float | None = Field(description=(
         "laying inclination stated at import (slope; None: the vehicle's when used)"))
+    contact_shift_mm: tuple[float, float] | None = Field(default=None, description=(
+        "(dy, dz) from this frame to the contact frame that curve-radius tables and "
+        "simulations report rail positions in (top at z = 0, gauge point at the 60E1 gauge "
+        "point y = -35.981, before the inclination)"))
 
 
 class RailOut(BaseModel):

@@ -24,7 +24,12 @@ import numpy as np
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from wearcast.physics.profiles.measured_rail import MeasuredRail, orient, shape_facts
+from wearcast.physics.profiles.measured_rail import (
+    NOMINAL_GAUGE_POINT_Y_MM,
+    MeasuredRail,
+    orient,
+    shape_facts,
+)
 from wearcast.physics.rail_head_wear import (
     REFERENCE_NAMES,
     RailReference,
@@ -130,7 +135,10 @@ def rail_out(session: Session, row: db.Rail, reference: str | None = None,
                          gauge_side_source=row.gauge_side_source, y_down=bool(row.y_down),
                          top_mm=facts.top_mm, gauge_point_mm=facts.gauge_point_mm,
                          head_width_mm=facts.head_width_mm, gauge_depth_mm=facts.gauge_depth_mm,
-                         field_depth_mm=facts.field_depth_mm, inclination=row.inclination)
+                         field_depth_mm=facts.field_depth_mm, inclination=row.inclination,
+                         contact_shift_mm=None if facts.gauge_point_mm is None else (
+                             NOMINAL_GAUGE_POINT_Y_MM - facts.gauge_point_mm[0],
+                             -facts.top_mm[1]))
     out = RailOut(id=row.id, name=row.name, source_file=row.source_file,
                   part=row.part or None, kind=row.kind,  # type: ignore[arg-type]
                   origin=row.origin, layout=row.layout,  # type: ignore[arg-type]

@@ -50,6 +50,9 @@ def test_synthetic_worn_60e1_file_gives_its_wear(tmp_path: Path) -> None:
     assert rail["frame"]["y_down"] and rail["frame"]["gauge_side"] == "positive_x"
     assert rail["frame"]["gauge_side_source"] == "request"
     assert rail["frame"]["inclination"] == pytest.approx(1 / 40)
+    # the gauge point is 14 mm below the MEASURED top: z = -15.2 on the 1:20 flank from
+    # (-36.0, -14.3), y = -36.045; the contact frame puts it at -35.981 and the top at 0
+    assert rail["frame"]["contact_shift_mm"] == pytest.approx([0.064, 1.2], abs=0.005)
     wear = rail["wear"]
     assert wear["reference"] == "UIC60" and wear["reference_fits"]
     assert wear["vertical"]["value_mm"] == pytest.approx(1.2, abs=0.01)
