@@ -218,12 +218,14 @@ def place_reference(y_mm: NDArray, z_mm: NDArray, ref: RailReference,
     """Place the reference at the instrument's datum, checked (and if need be laterally
     fitted) on the field-side flank (module docstring)."""
     lo, hi = FIELD_FLANK_WINDOW_MM
-    window = (y_mm > 0.0) & (z_mm <= -lo) & (z_mm >= -hi)
+    y_top = y_mm[int(np.argmax(z_mm))]  # the field side lies beyond the measured top
+    window = (y_mm > max(0.0, y_top)) & (z_mm <= -lo) & (z_mm >= -hi)
     ref_y = _reference_field_y(ref, z_mm[window])
     offsets = (y_mm[window] - ref_y)[np.isfinite(ref_y)]
     n = int(offsets.size)
     if n < MIN_FLANK_POINTS:
-        depth = float(max(0.0, -z_mm[y_mm > 0.0].min())) if (y_mm > 0.0).any() else 0.0
+        field = y_mm > max(0.0, y_top)
+        depth = float(max(0.0, -z_mm[field].min())) if field.any() else 0.0
         return Placement(0.0, 0.0, False, n, None, None,
                          "instrument datum, unchecked: the field side is measured only "
                          f"{depth:.1f} mm below the reference top (the check needs its flank "
