@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.measured_rail import (
@@ -244,6 +245,12 @@ def import_rail_file(session: Session, data: bytes, file_name: str, *,
             row.raw_path = stored.relative_path if stored else None
         try:
             session.commit()
+        except IntegrityError:
+            # the same file was imported concurrently: answer as a repeated import
+            session.rollback()
+            return import_rail_file(session, data, file_name, name=name,
+                                    gauge_side=gauge_side, inclination=inclination,
+                                    reference=reference, raw_dir=raw_dir)
         except Exception:
             session.rollback()
             if stored is not None and stored.created:
