@@ -37,6 +37,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from wearcast.physics.profiles.rails import RailShape
+
 GRAVITY_M_S2 = 9.81
 
 
@@ -62,7 +64,8 @@ class BogieVehicle:
     cog_height_m : height above rail of the centre of gravity of the mass carried by one
         wheelset, used for the load transfer under cant deficiency [m]
     wheel_profile : wheel profile name (``S1002``)
-    rail_profile : ``60E1`` or ``60E2``
+    rail_profile : ``60E1`` or ``60E2``, or a measured rail
+        (``profiles.measured_rail.MeasuredRail``, placed by its gauge point)
     rail_inclination : rail inclination as a slope (1/40 or 1/20)
     friction : wheel-rail coefficient of friction mu [-]
     traction_torque_nm : driving (+) or braking (-) torque per axle [N m]
@@ -83,7 +86,7 @@ class BogieVehicle:
     bogie_centre_distance_m: float
     cog_height_m: float
     wheel_profile: str = "S1002"
-    rail_profile: str = "60E1"
+    rail_profile: str | RailShape = "60E1"
     rail_inclination: float = 1.0 / 40.0
     friction: float = 0.35
     traction_torque_nm: float = 0.0
@@ -91,8 +94,13 @@ class BogieVehicle:
     def __post_init__(self) -> None:
         if self.bogie_type not in ("motor", "trailer"):
             raise ValueError(f"bogie_type must be 'motor' or 'trailer', got {self.bogie_type!r}")
-        if self.rail_profile not in ("60E1", "60E2"):
-            raise ValueError(f"rail_profile must be '60E1' or '60E2', got {self.rail_profile!r}")
+        if isinstance(self.rail_profile, str):
+            if self.rail_profile not in ("60E1", "60E2"):
+                raise ValueError("rail_profile must be '60E1' or '60E2' (or a measured rail), "
+                                 f"got {self.rail_profile!r}")
+        elif not callable(getattr(self.rail_profile, "contact_points", None)):
+            raise ValueError("rail_profile must be '60E1', '60E2' or a rail given by its points "
+                             f"(profiles.measured_rail.MeasuredRail), got {self.rail_profile!r}")
         positive = ("wheelbase_m", "wheel_radius_m", "wheelset_mass_kg", "bogie_mass_kg",
                     "primary_longitudinal_stiffness_n_per_m", "primary_lateral_stiffness_n_per_m",
                     "primary_semi_spacing_m", "friction")

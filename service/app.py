@@ -37,13 +37,14 @@ def _router_modules() -> list[Any]:
         jobs,
         measurements,
         models,
+        rails,
         routes,
         simulations,
         wear_tables,
     )
 
-    return [measurements, routes, wear_tables, models, simulations, coefficient_fits, jobs,
-            admin]
+    return [measurements, routes, wear_tables, models, simulations, coefficient_fits, rails,
+            jobs, admin]
 
 
 def create_app(settings: Settings | None = None, *, migrate: bool = True) -> FastAPI:

@@ -203,6 +203,87 @@ def wear_table(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
         _show(wear_table_store.wear_table_out(session, row, with_rows=False))
 
 
+RailIdOption = Annotated[int | None, typer.Option("--rail-id", help=(
+    "stored measured rail (wearcast rails) in place of the nominal rail, both sides"))]
+
+
+@app.command("rail-import")
+def rail_import(
+        file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
+                                             help="MiniProf rail file (.ban, .mpt)")],
+        name: Annotated[str | None, typer.Option(help="rail name")] = None,
+        gauge_side: Annotated[str | None, typer.Option(help=(
+            "negative_x or positive_x: instrument-X side of the gauge face"))] = None,
+        inclination: Annotated[str | None, typer.Option(help="laying slope, e.g. 1/40")]
+        = None,
+        reference: Annotated[str, typer.Option(help="60E1, UIC60, 60E2 or rail:<id>")]
+        = "60E1") -> None:
+    """Import the rail profiles of a MiniProf file (a repeated file creates nothing)."""
+    from wearcast.service import rail_store
+
+    if gauge_side not in (None, "negative_x", "positive_x"):
+        raise_field("gauge_side", "must be negative_x or positive_x")
+    with _session() as (database, session):
+        result = rail_store.import_rail_file(
+            session, file.read_bytes(), file.name, name=name,
+            gauge_side=gauge_side,  # type: ignore[arg-type]
+            inclination=rail_store.parse_inclination(inclination), reference=reference,
+            raw_dir=database.settings.raw_dir)
+        _show({"file_name": result.file_name,
+               "created": [_rail_summary(r) for r in result.created],
+               "duplicates": [_rail_summary(r) for r in result.duplicates],
+               "skipped": [s.model_dump() for s in result.skipped],
+               "warnings": result.warnings})
+
+
+@app.command()
+def rails(reference: Annotated[str | None, typer.Option(help=(
+              "take the head wear against this head (60E1, UIC60, 60E2, rail:<id>)"))] = None
+          ) -> None:
+    """List the stored rails with their head wear (W1 vertical, W2 gauge face, W3 45 deg)."""
+    from wearcast.service import rail_store
+
+    with _session() as (_, session):
+        items = rail_store.list_rails(session, limit=1000, reference=reference)
+    table = Table(title="measured rails: head wear \\[mm] (+ = metal lost)")
+    for column in ("id", "name", "kind", "reference", "datum", "W1 vertical", "W2 gauge face",
+                   "W3 45°", "fits"):
+        table.add_column(column, justify="right" if column.startswith("W") else "left")
+    for r in items:
+        w = r.wear
+        table.add_row(str(r.id), r.name, r.kind, w.reference,
+                      "fitted" if w.placement.fitted else "instrument", _num(w.vertical.value_mm),
+                      _num(w.lateral.value_mm), _num(w.corner_45.value_mm),
+                      "yes" if w.reference_fits else "NO")
+    console.print(table)
+    for r in items:
+        for reason in r.wear.mismatch:
+            console.print(f"rail {r.id}: {reason}")
+
+
+def _r3(value: Any) -> Any:
+    if isinstance(value, tuple | list):
+        return [_r3(v) for v in value]
+    return None if value is None else round(float(value), 3)
+
+
+def _rail_summary(rail: Any) -> dict[str, Any]:
+    w = rail.wear
+    return {"id": rail.id, "name": rail.name, "kind": rail.kind, "part": rail.part,
+            "top_mm": _r3(rail.frame.top_mm), "gauge_point_mm": _r3(rail.frame.gauge_point_mm),
+            "head_width_mm": _r3(rail.frame.head_width_mm),
+            "wear": {"reference": w.reference, "placement": w.placement.method,
+                     "W1_vertical_mm": _r3(w.vertical.value_mm),
+                     "W2_gauge_face_mm": _r3(w.lateral.value_mm),
+                     "W3_45deg_mm": _r3(w.corner_45.value_mm),
+                     "reference_fits": w.reference_fits, "mismatch": w.mismatch}}
+
+
+def raise_field(field: str, reason: str) -> None:
+    err.print(f"[red]error[/red] {field}: {reason}")
+    raise typer.Exit(2)
+
+
 @app.command("wear-table-compute")
 def wear_table_compute(
         name: Annotated[str, typer.Option(help="table name")],
@@ -217,7 +298,8 @@ def wear_table_compute(
             help="a_nc for radii without a speed [m/s²]")] = 0.58,
         friction: Annotated[float | None, typer.Option(help="wheel-rail friction")] = None,
         csv: Annotated[Path | None, typer.Option(help="also write the table here (CSV)")]
-        = None) -> None:
+        = None,
+        rail_id: RailIdOption = None) -> None:
     """Compute a curve-radius wear table with the physics core (quasi-static curving)."""
     from wearcast.service import wear_table_store
     from wearcast.service.schemas import WearTableComputeIn
@@ -227,7 +309,8 @@ def wear_table_compute(
         "name": name, "vehicle": {"motor": motor, "trailer": trailer} if trailer else vehicle,
         "route_id": None if route_id is None else _route_ref(route_id),
         "radii": None if not radius else [_radius(r) for r in radius],
-        "unbalanced_acceleration_m_s2": unbalanced_acceleration, "friction": friction})
+        "unbalanced_acceleration_m_s2": unbalanced_acceleration, "friction": friction,
+        "rail_id": rail_id})
     with _session() as (_, session), console.status("solving the curving equilibria"):
         row = wear_table_store.compute_wear_table(session, body)
         if csv is not None:
@@ -330,8 +413,8 @@ def simulate(
         bogie_type: Annotated[str, typer.Option(help="motor or trailer")] = "trailer",
         axle: Annotated[int, typer.Option(help="tracked wheel's axle (1 leads)")] = 1,
         side: Annotated[str, typer.Option(help="tracked wheel's side")] = "right",
-        out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None
-        ) -> None:
+        out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None,
+        rail_id: RailIdOption = None) -> None:
     """Run the wear loop in process with a progress bar; the job is stored like an API one."""
     from wearcast.service import simulation_store
     from wearcast.service.schemas import SimulationIn
@@ -340,7 +423,7 @@ def simulate(
         "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
         "classes": None if not curve else [_loop_class(c) for c in curve], "law": law,
         "application": application, "patch_width": patch_width, "bogie_type": bogie_type,
-        "axle": axle, "side": side,
+        "axle": axle, "side": side, "rail_id": rail_id,
         "steps": {"mode": "fixed" if step_km is not None else "adaptive", "count": steps,
                   "step_km": step_km, "depth_per_step_mm": depth_per_step_mm}})
     with _session() as (database, session):

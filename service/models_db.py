@@ -240,5 +240,48 @@ class Simulation(Base):
     attempts: Mapped[int] = mapped_column(Integer, default=0, server_default="0")
 
 
+
+class Rail(Base):
+    """A measured rail head (or a rig roller standing in for a rail), points AS IN THE FILE.
+
+    ``x_mm``/``y_mm`` the instrument's X, Y (little-endian float64 blobs, file order, every
+    point, also those a note says were added: ``added_points`` lists their indices);
+    ``gauge_side`` (``negative_x``/``positive_x``) and ``y_down`` say how they turn into the
+    rail frame (mirror / sign only). One row per file content and part (``part`` 0 for
+    single-profile files): a repeated import finds it. ``reference`` is the head the wear
+    measures are taken against by default (``60E1``, ``UIC60``, ``60E2`` or ``rail:<id>``);
+    ``inclination`` the stated laying inclination (None: the vehicle's); ``raw_path`` the
+    uploaded file under ``<data_dir>/raw`` (content-addressed, as measurement imports).
+    """
+
+    __tablename__ = "rails"
+    __table_args__ = (UniqueConstraint("sha256", "part", name="uq_rails_sha256_part"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    source_file: Mapped[str] = mapped_column(String(500))
+    part: Mapped[int] = mapped_column(Integer, default=0)
+    sha256: Mapped[str] = mapped_column(String(64), index=True)
+    kind: Mapped[str] = mapped_column(String(20))
+    layout: Mapped[str] = mapped_column(String(20))
+    origin: Mapped[str] = mapped_column(String(20))
+    header: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    measured_on: Mapped[dt.date | None] = mapped_column(Date)
+    instrument_serial: Mapped[str | None] = mapped_column(String(100))
+    n_points: Mapped[int] = mapped_column(Integer)
+    x_mm: Mapped[bytes] = mapped_column(LargeBinary)
+    y_mm: Mapped[bytes] = mapped_column(LargeBinary)
+    added_points: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    point_notes: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    gauge_side: Mapped[str] = mapped_column(String(20))
+    gauge_side_source: Mapped[str] = mapped_column(String(20))
+    y_down: Mapped[bool] = mapped_column(Boolean)
+    inclination: Mapped[float | None] = mapped_column(Float)
+    reference: Mapped[str] = mapped_column(String(100), default="60E1")
+    warnings: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    raw_path: Mapped[str | None] = mapped_column(String(200))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
 # API keys, audit trail, idempotency keys share this metadata (migration 0003_service)
 from wearcast.service import models_access as _models_access  # noqa: E402,F401

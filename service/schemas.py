@@ -152,6 +152,9 @@ class WearTableComputeIn(Strict):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
+    rail_id: int | None = Field(default=None, ge=1, description=(
+        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
+        "both sides, placed by its gauge point"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
@@ -521,6 +524,9 @@ class SimulationIn(Strict):
     smoothing: SmoothingIn | None = None
     unbalanced_acceleration_m_s2: float = Field(default=0.58, ge=0, le=2)
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
+    rail_id: int | None = Field(default=None, ge=1, description=(
+        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
+        "both sides, placed by its gauge point"))
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:

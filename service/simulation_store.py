@@ -75,7 +75,12 @@ def simulation_arguments(spec: dict[str, Any]) -> dict[str, Any]:
         classes = as_loop_classes(spec["resolved_classes"])
     except ValueError as exc:
         raise ValueError(f"classes: {exc}") from exc
-    return {"vehicle": vehicle_preset(spec["vehicle"], spec.get("bogie_type", "trailer")),
+    vehicle = vehicle_preset(spec["vehicle"], spec.get("bogie_type", "trailer"))
+    if spec.get("resolved_rail"):  # a measured rail in place of the preset's nominal one
+        from wearcast.service.rail_store import measured_rail_from_spec, with_rail
+
+        vehicle = with_rail(vehicle, measured_rail_from_spec(spec["resolved_rail"]))
+    return {"vehicle": vehicle,
             "route_classes": classes, "law": WearLaw(name=spec["law"]),
             "application": spec["application"], "steps": steps, "axle": int(spec["axle"]),
             "side": spec["side"], "smoothing": smoothing,
@@ -89,6 +94,10 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
     unprocessable_law(body)
     spec = body.model_dump(mode="json")
     spec["resolved_classes"] = resolve_classes(session, body)
+    if body.rail_id is not None:
+        from wearcast.service.rail_store import rail_spec
+
+        spec["resolved_rail"] = rail_spec(session, body.rail_id)
     try:
         simulation_arguments(spec)
     except ValueError as exc:

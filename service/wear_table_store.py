@@ -237,6 +237,16 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
     from wearcast.physics.wear_tables import wear_table_for_route
 
     motor, trailer, label = _presets(body.vehicle, body.friction)
+    rail_info = None
+    if body.rail_id is not None:  # a measured rail in place of the preset's nominal one
+        from wearcast.service import rail_store
+
+        rail = rail_store.measured_rail(session, body.rail_id)
+        motor, trailer = rail_store.with_rail(motor, rail), rail_store.with_rail(trailer, rail)
+        label = f"{label}, {rail}"
+        rail_info = {"rail_id": body.rail_id, "name": rail.name, "kind": rail.kind,
+                     "inclination": motor.rail_inclination,
+                     "placement": "gauge point (14 mm below its top) at the track gauge"}
     classes = _classes(session, body)
     try:
         table, contacts = wear_table_for_route(
@@ -260,7 +270,7 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
         raise from_value_error(exc, "table") from exc
     spec = body.model_dump(mode="json")
     spec.update(route_name=classes.route_name, vehicle_label=label,
-                n_classes=len(classes.radii_m),
+                n_classes=len(classes.radii_m), rail=rail_info,
                 engine="wearcast.physics.wear_tables.wear_table_for_route")
     return frame, contacts, spec
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,6 +26,15 @@ from numpy.typing import ArrayLike, NDArray
 RAIL_FLANK_DEPTH_MM = 35.0
 #: Flank slope dy/dz of both rails (1:20), EN 13674-1.
 _FLANK_DY_DZ = 1.0 / 20.0
+
+
+class RailShape(Protocol):
+    """A rail given by its points (``profiles.measured_rail.MeasuredRail``): it samples itself
+    for the contact model, upright points turned by ``inclination``, top at z = 0 and the gauge
+    point where the 60E1 head has it, ordered by increasing y."""
+
+    def contact_points(self, step_mm: float, inclination: float
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
 
 
 @dataclass(frozen=True)
@@ -126,13 +136,15 @@ def rail_60e2_height_mm(y_mm: ArrayLike) -> NDArray[np.float64]:
     return rail_height_mm("60E2", y_mm)
 
 
-def rail_profile(name: str = "60E1", step_mm: float = 0.2,
+def rail_profile(name: str | RailShape = "60E1", step_mm: float = 0.2,
                  inclination: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Sampled rail head, evenly spaced in arc length, from gauge-side flank to field side.
 
     Parameters
     ----------
-    name : ``"60E1"`` or ``"60E2"``
+    name : ``"60E1"`` (alias ``"UIC60"``) or ``"60E2"``, or a rail given by its points (any
+        object with ``contact_points(step_mm, inclination)``, e.g.
+        ``profiles.measured_rail.MeasuredRail``), which answers for itself
     step_mm : arc-length spacing of the samples [mm]
     inclination : rail inclination as a slope (1/40, 1/20, 0 = upright); the rail is turned
         about its top so that its gauge side (y < 0) goes down, see ``incline``
@@ -142,6 +154,8 @@ def rail_profile(name: str = "60E1", step_mm: float = 0.2,
     (y [mm], z [mm]) in the rail frame, ordered from the gauge-side flank bottom (y < 0) over
     the crown to the field-side flank bottom.  Sampling in arc length resolves the steep flank.
     """
+    if not isinstance(name, str):
+        return name.contact_points(step_mm, inclination)
     head = rail_head(name)
     half = head.half_width_mm
     # dense in y, then resampled by arc length (the flank is nearly vertical)

@@ -168,7 +168,8 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
     """ProfileRecords of one MiniProf wheel file (one per manifest-listed part of an .mpt)."""
     if _extension(member) in RAIL_EXTENSIONS:
         raise ImportFileError(display, "rail profile (.ban): only wheel profiles (.whl, .mpt) "
-                              "can be imported as wheel measurements")
+                              "can be imported as wheel measurements; import rails through "
+                              "POST /v1/rails/import")
     mp = parse_miniprof(data, display)
     if mp.is_rail:
         to_wheel_frame(mp)  # raises the rail refusal

@@ -1,0 +1,128 @@
+"""Bodies of ``/v1/rails``: measured rail heads, their frame facts and head wear measures."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+
+class RailWearMeasureOut(BaseModel):
+    """One head wear measure [mm], positive where metal is lost; ``status`` ``ok``,
+    ``reference_mismatch`` (a number, but not wear: the head does not fit the reference) or
+    ``not_measured``; ``reference_point_mm`` (y, z) on the placed reference, rail frame."""
+
+    value_mm: float | None
+    status: Literal["ok", "reference_mismatch", "not_measured"]
+    reference_point_mm: tuple[float, float] | None
+    definition: str
+    note: str = ""
+
+
+class RailPlacementOut(BaseModel):
+    """Where the reference head was put on the measurement (the measurement never moves):
+    ``lateral_mm``/``vertical_mm`` of its top-of-head centre in the rail frame; ``fitted`` when
+    the lateral position was fitted to the field-side flank (``flank_offset_mm`` before, and
+    ``flank_rms_mm`` about the placed reference, over ``flank_points`` points)."""
+
+    lateral_mm: float
+    vertical_mm: float
+    fitted: bool
+    flank_points: int
+    flank_offset_mm: float | None
+    flank_rms_mm: float | None
+    method: str
+
+
+class RailWearOut(BaseModel):
+    """Head wear of a rail against ``reference`` (``reference_source`` says what it is):
+    vertical (W1), lateral/gauge-face (W2, 14 mm below the top) and 45-degree gauge-corner
+    (W3) wear; ``reference_fits`` False with the reasons in ``mismatch`` when the head does not
+    fit the reference (then no measure is wear)."""
+
+    reference: str
+    reference_source: str
+    placement: RailPlacementOut
+    vertical: RailWearMeasureOut
+    lateral: RailWearMeasureOut
+    corner_45: RailWearMeasureOut
+    reference_fits: bool
+    mismatch: list[str]
+    reference_head_width_mm: float | None
+    measured_head_width_mm: float | None
+
+
+class RailFrameOut(BaseModel):
+    """The rail frame of a measured head [mm]: y lateral (gauge side negative), z up, the
+    instrument's origin kept (mirrored / sign-fixed only, ``gauge_side``/``y_down``); the top
+    of the head, the gauge point 14 mm below it, the head width there (both sides measured)."""
+
+    gauge_side: Literal["negative_x", "positive_x"]
+    gauge_side_source: str
+    y_down: bool
+    top_mm: tuple[float, float]
+    gauge_point_mm: tuple[float, float] | None
+    head_width_mm: float | None
+    gauge_depth_mm: float
+    field_depth_mm: float
+    inclination: float | None = Field(description=(
+        "laying inclination stated at import (slope; None: the vehicle's when used)"))
+    contact_shift_mm: tuple[float, float] | None = Field(default=None, description=(
+        "(dy, dz) from this frame to the contact frame that curve-radius tables and "
+        "simulations report rail positions in (top at z = 0, gauge point at the 60E1 gauge "
+        "point y = -35.981, before the inclination)"))
+
+
+class RailOut(BaseModel):
+    """A stored rail. ``x_mm``/``y_mm`` (with ``include_points``) are the file's own numbers,
+    every point; ``rail_y_mm``/``rail_z_mm`` the measured points in the rail frame (points a
+    file note says were added left out)."""
+
+    id: int
+    name: str
+    source_file: str
+    part: int | None
+    kind: Literal["rail", "roller"]
+    origin: Literal["instrument", "drawing"]
+    layout: str
+    measured_on: dt.date | None
+    instrument_serial: str | None
+    n_points: int
+    added_points: list[int]
+    point_notes: list[dict[str, object]]
+    header: dict[str, str]
+    frame: RailFrameOut
+    wear: RailWearOut
+    warnings: list[str]
+    instrument_wear_mm: dict[str, float] = Field(default_factory=dict, description=(
+        "W1/W2/W3 as the file's header gives them (the instrument's own, against its own "
+        "reference), where it holds numbers"))
+    raw_path: str | None = Field(default=None, description=(
+        "the uploaded file, under the service's raw directory (content-addressed)"))
+    created_at: dt.datetime | None = None
+    x_mm: list[float] | None = None
+    y_mm: list[float] | None = None
+    rail_y_mm: list[float] | None = None
+    rail_z_mm: list[float] | None = None
+
+
+class RailSkippedOut(BaseModel):
+    """A profile of an uploaded file that is not imported as a rail, and why."""
+
+    part: int | None
+    kind: Literal["wheel", "other"]
+    reason: str
+
+
+class RailImportOut(BaseModel):
+    """``POST /v1/rails/import``: what the file held. ``created`` rails are new;
+    ``duplicates`` were stored before (same file content and part; nothing new is written);
+    ``skipped`` profiles are not rails; ``warnings`` per file, part and line."""
+
+    file_name: str
+    sha256: str
+    created: list[RailOut]
+    duplicates: list[RailOut]
+    skipped: list[RailSkippedOut]
+    warnings: list[str]
