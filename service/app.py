@@ -21,6 +21,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
         health,
         measurements,
         models,
+        planning,
         routes,
         simulations,
         wear_tables,
@@ -40,6 +41,17 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.router.add_event_handler("shutdown", runner.shutdown)
     install_handlers(app)
     for module in (health, measurements, routes, wear_tables, models, simulations,
-                   coefficient_fits):
+                   coefficient_fits, planning):
         app.include_router(module.router, prefix="/v1")
+    mount_planner(app)
     return app
+
+
+def mount_planner(app: FastAPI) -> None:
+    """The planner web page (plain HTML and JavaScript, no build step) at ``/planner/``."""
+    from pathlib import Path
+
+    from fastapi.staticfiles import StaticFiles
+
+    static = Path(__file__).parent / "static" / "planner"
+    app.mount("/planner", StaticFiles(directory=static, html=True), name="planner")

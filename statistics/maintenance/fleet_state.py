@@ -304,14 +304,14 @@ def wheel_state(frame: pd.DataFrame, limits: FleetLimits, km_per_day: float | No
 
 def _dates(state: WheelState) -> dict[str, dict[str, dt.date | None]]:
     out: dict[str, dict[str, dt.date | None]] = {}
+    day, kpd = state.measured_on, state.km_per_day
     for name, rem in state.remaining.items():
         out[name] = {}
         for q in ("p10", "p50", "p90"):
             km = getattr(rem, q)
-            ok = (km is not None and math.isfinite(km) and state.measured_on is not None
-                  and state.km_per_day is not None and state.km_per_day > 0)
-            out[name][q] = (state.measured_on + dt.timedelta(days=km / state.km_per_day)
-                            if ok else None)
+            ok = km is not None and math.isfinite(km) and kpd is not None and kpd > 0
+            out[name][q] = (day + dt.timedelta(days=km / kpd)
+                            if ok and day is not None and kpd is not None else None)
     return out
 
 
@@ -369,6 +369,7 @@ def fleet_state(measurements: pd.DataFrame, limits: FleetLimits | None = None,
     wheels: list[WheelState] = []
     for vehicle_id, vg in frame.groupby("vehicle_id", sort=True):
         given = attrs.get(str(vehicle_id))
+        kpd: float | None
         if given is not None and given > 0:
             kpd, source = float(given), "attribute"
         else:
