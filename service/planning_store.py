@@ -27,11 +27,11 @@ from wearcast.service.importing import from_f32
 from wearcast.service.planning_schemas import FleetIn, PlanIn, VehicleIn
 from wearcast.statistics import reprofiling as stat_reprofiling
 from wearcast.statistics.maintenance.fleet_state import FleetState, Remaining, fleet_state
-from wearcast.statistics.maintenance.lathe_plan import PlanWheel, lathe_plan
+from wearcast.statistics.maintenance.lathe_plan import lathe_plan
 from wearcast.statistics.maintenance.limits import FLANGE_LIMITS, FleetLimits
+from wearcast.statistics.maintenance.plan_inputs import fleet_rates, plan_wheels, wheel_rates
 from wearcast.statistics.maintenance.turning import (
     TargetProfile,
-    projected_profile,
     s1002_targets,
     turning_options,
     wheel_life,
@@ -241,27 +241,6 @@ def _latest_profile(session: Session, wheel_id: str) -> db.Measurement | None:
                           .order_by(M.mileage_km.desc()).limit(1))
 
 
-def _rates(state: FleetState) -> dict[str, float]:
-    """Fleet median wear rates [mm/km] of the wheels with a history (a wheel without one
-    borrows them to value its turning options)."""
-    out = {}
-    for name in (*FLANGE_LIMITS, "diameter"):
-        values = [w.remaining[name].rate_mm_per_1000km for w in state.wheels
-                  if w.remaining[name].source == "history"
-                  and w.remaining[name].rate_mm_per_1000km is not None]
-        out[name] = float(np.median(values)) / 1000.0 if values else 0.0
-    return out
-
-
-def _wheel_rates(wheel, fleet_rates: dict[str, float]) -> dict[str, float]:
-    out = {}
-    for name in (*FLANGE_LIMITS, "diameter"):
-        rem = wheel.remaining[name]
-        own = rem.rate_mm_per_1000km if rem.source == "history" else None
-        out[name] = own / 1000.0 if own is not None and own > 0 else fleet_rates[name]
-    return out
-
-
 def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
                  model_id: int | None = None, route_id: int | str | None = None,
                  today: dt.date | None = None) -> dict[str, Any]:
@@ -313,7 +292,7 @@ def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
             "reference": {"y_mm": grid.tolist(),
                           **{t.name: np.round(t.heights(grid), 4).tolist()
                              for t in targets}}}
-        rates = _wheel_rates(wheel, _rates(state))
+        rates = wheel_rates(wheel, fleet_rates(state))
         try:
             options = turning_options(y, z, targets, limits, rates, rates["diameter"])
         except ValueError as exc:
@@ -344,44 +323,23 @@ def _turning_payload(wheel, options, limits: FleetLimits, rates: dict[str, float
 # --------------------------------------------------------------------------- plans
 
 
-def _plan_wheels(session: Session, state: FleetState, targets: list[TargetProfile]
-                 ) -> tuple[list[PlanWheel], list[dict[str, Any]]]:
-    fleet_rates = _rates(state)
-    wheels, unplanned = [], []
-    for w in state.wheels:
-        p10, _ = w.first("p10")
-        p50, _ = w.first("p50")
-        why = None
-        if p10 is None or p50 is None:
-            why = "no remaining-km forecast (fewer than 2 measurements since turning and no model)"
-        elif w.measured_on is None or not w.km_per_day:
-            why = "no date or mileage per day"
-        latest = None if why else _latest_profile(session, w.wheel_id)
-        if why is None and latest is None:
-            why = "no measured profile to cut from"
-        if why is not None or latest is None:
-            unplanned.append({"wheel_id": w.wheel_id, "reason": why})
-            continue
-        y, z = from_f32(latest.y_mm), from_f32(latest.z_mm)
-        since = max(w.mileage_km - (w.turned_at_km or 0.0), 1.0)
-        measured_since = max(float(latest.mileage_km) - (w.turned_at_km or 0.0), 1.0)
-        rates = _wheel_rates(w, fleet_rates)
-
-        def options_at(km: float, y=y, z=z, measured_since=measured_since, rates=rates):
-            zz = projected_profile(y, z, km / measured_since)
-            return turning_options(y, zz, targets, state.limits, rates, rates["diameter"])
-
-        assert w.measured_on is not None and w.km_per_day is not None
-        wheels.append(PlanWheel(w.wheel_id, f"{w.vehicle_id}/{w.bogie_type}/{w.axle}",
-                                w.measured_on, w.km_per_day, since, float(p10), float(p50),
-                                w.diameter_mm, options_at, rates["diameter"]))
-    return wheels, unplanned
+def _latest_profiles(session: Session, wheel_ids: list[str]
+                     ) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
+    out = {}
+    for wheel_id in wheel_ids:
+        row = _latest_profile(session, wheel_id)
+        if row is not None:
+            y, z = from_f32(row.y_mm), from_f32(row.z_mm)
+            if y is not None and z is not None:
+                out[wheel_id] = (y, z, float(row.mileage_km))
+    return out
 
 
 def create_plan(session: Session, body: PlanIn) -> dict[str, Any]:
     state, _ = compute_state(session, body.fleet_id, body.model_id, body.route_id)
     targets = _targets(body.target_flange_thicknesses_mm)
-    wheels, unplanned = _plan_wheels(session, state, targets)
+    profiles = _latest_profiles(session, [w.wheel_id for w in state.wheels])
+    wheels, unplanned = plan_wheels(state, profiles, targets)
     start = body.start or dt.date.today()
     extra = {f"{k.split('/')[0]}/{k.split('/')[1]}/{k.split('/')[2]}":
              f"axle diameter difference {s.spread_mm:g} mm > {s.limit_mm:g} mm"
