@@ -11,7 +11,7 @@ Measured profiles are the true ones in the instrument's frame (heights from the 
 circle) with Gaussian noise; each wheel is also measured once before its last turning. The
 running diameter falls by ``2 a_t`` per km at the tape circle and is measured with noise.
 Mileages are cumulative; each vehicle runs ``km_per_day`` (drawn), so every measurement has
-a date.
+a date. The diameters after turning of a vehicle's axles lie within ±1.5 mm of each other.
 """
 
 from __future__ import annotations
@@ -114,11 +114,12 @@ def generate_fleet(n_vehicles: int = 4, *, seed: int = 0, noise_mm: float = 0.01
         vehicle = f"V{v + 1:03d}"
         kpd = float(rng.uniform(300.0, 700.0))
         age_km = float(rng.uniform(400_000.0, 900_000.0))
+        vehicle_diameter = float(rng.uniform(862.0, 913.0))
         for bogie in ("motor", "trailer"):
             for axle in (1, 2):
                 flange_rate = float(rng.lognormal(math.log(flange_rate_mm_per_km), 0.3))
                 tread_rate = float(rng.lognormal(math.log(tread_rate_mm_per_km), 0.3))
-                diameter = float(rng.uniform(860.0, 915.0))
+                diameter = vehicle_diameter + float(rng.uniform(-1.5, 1.5))
                 probe = SyntheticWheel("", "", "", 1, "", kpd, flange_rate, tread_rate, 0.0,
                                        diameter, (0.0,), today)
                 life = probe.true_crossing_km(FleetLimits(), y)

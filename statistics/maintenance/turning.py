@@ -167,12 +167,29 @@ def turning_cut(worn_y_mm: ArrayLike, worn_z_mm: ArrayLike, target: TargetProfil
     grid = np.arange(lo, hi + 1e-9, GRID_STEP_MM)
     inside = y[(y >= lo) & (y <= hi)]
     grid = np.union1d(grid, inside)
-    zt = target.heights(grid)
-    slope = np.abs(np.gradient(zt, grid))
-    excess = np.where(slope <= MAX_CHECK_SLOPE, zt - np.interp(grid, y, z_rel), np.nan)
+    zt, checked = _target_on(target, grid)
+    excess = np.where(checked, zt - np.interp(grid, y, z_rel), np.nan)
     k = int(np.nanargmax(excess))
     c = float(excess[k])
     return Cut(target.name, c, 2.0 * c, float(grid[k]), (float(lo), float(hi)))
+
+
+_TARGET_CACHE: dict[tuple[str, int, bytes], tuple[NDArray, NDArray]] = {}
+_TARGET_CACHE_SIZE = 64
+
+
+def _target_on(target: TargetProfile, grid: NDArray) -> tuple[NDArray, NDArray]:
+    """Target heights on ``grid`` and where they are checked (slope <= MAX_CHECK_SLOPE),
+    kept for the last few grids (a plan evaluates each wheel's grid many times)."""
+    key = (target.name, id(target.heights), grid.tobytes())
+    found = _TARGET_CACHE.get(key)
+    if found is None:
+        zt = target.heights(grid)
+        found = (zt, np.abs(np.gradient(zt, grid)) <= MAX_CHECK_SLOPE)
+        if len(_TARGET_CACHE) >= _TARGET_CACHE_SIZE:
+            _TARGET_CACHE.pop(next(iter(_TARGET_CACHE)))
+        _TARGET_CACHE[key] = found
+    return found
 
 
 def projected_profile(y_mm: ArrayLike, z_mm: ArrayLike, factor: float,
