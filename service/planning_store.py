@@ -252,11 +252,14 @@ def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
     if wheel is None:
         raise NotFound("wheel_id", f"wheel {wheel_id!r} is not in fleet {fleet_id!r}")
     mine = frame[frame["wheel_id"] == wheel_id].sort_values("mileage_km")
-    history = [{"measurement_id": int(r.measurement_id), "mileage_km": float(r.mileage_km),
-                "measured_on": None if r.measured_on is None else r.measured_on.isoformat(),
-                **{c: None if pd.isna(getattr(r, c)) else float(getattr(r, c))
-                   for c in ("sd_mm", "sh_mm", "qr_mm", "diameter_mm")}}
-               for r in mine.itertuples()]
+    history: list[dict[str, Any]] = []
+    for r in mine.to_dict("records"):
+        day = r["measured_on"]
+        history.append({
+            "measurement_id": int(r["measurement_id"]), "mileage_km": float(r["mileage_km"]),
+            "measured_on": None if day is None or pd.isna(day) else day.isoformat(),
+            **{c: None if pd.isna(r[c]) else float(r[c])
+               for c in ("sd_mm", "sh_mm", "qr_mm", "diameter_mm")}})
     limits = state.limits
     forecast = {}
     for name in ("sd", "sh", "qr", "diameter"):

@@ -92,10 +92,11 @@ class SyntheticFleet:
         """The profiles as a long CSV (one row per point, with ``diameter_mm``)."""
         lines = ["wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,measured_on,"
                  "diameter_mm,y_mm,z_mm"]
-        for r in self.measurements.itertuples():
-            y, z = self.profiles[(r.wheel_id, r.mileage_km)]
-            head = (f"{r.wheel_id},{r.vehicle_id},{r.bogie_type},{r.axle},{r.side},"
-                    f"{r.mileage_km:.1f},{r.measured_on.isoformat()},{r.diameter_mm:.3f}")
+        for r in self.measurements.to_dict("records"):
+            y, z = self.profiles[(str(r["wheel_id"]), float(r["mileage_km"]))]
+            head = (f"{r['wheel_id']},{r['vehicle_id']},{r['bogie_type']},{r['axle']},"
+                    f"{r['side']},{r['mileage_km']:.1f},{r['measured_on'].isoformat()},"
+                    f"{r['diameter_mm']:.3f}")
             lines.extend(f"{head},{a:.4f},{b:.4f}" for a, b in zip(y, z, strict=True))
         return "\n".join(lines) + "\n"
 
