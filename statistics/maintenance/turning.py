@@ -15,11 +15,16 @@ smallest radial cut (tape-circle radius removed) is therefore
 
 and the diameter loss is 2 c. The maximum is taken over a 0.05 mm grid of the overlap of
 the two profiles plus every measured point inside it (the worn profile is the polyline
-through its points; the target is evaluated exactly), leaving out where the target is
-steeper than ``MAX_CHECK_SLOPE`` (3:1, the back of the flange towards the back face, out of
-wheel-rail contact): there a height difference measures a lateral one, and a tenth of a
-millimetre of sampling moves it by tenths of a millimetre. The flange face of S1002 (70°,
-slope 2.75) is checked. A cut below zero (the worn wheel has
+through its points; the target is evaluated exactly) inside ``CHECK_RANGE_Y_MM``, from the
+flange tip's inner end to the end of the tread, leaving out where the target is steeper
+than ``MAX_CHECK_SLOPE`` (3:1). Not checked: the back of the flange towards the back face and
+the outer chamfer beyond the tread. Neither is in wheel-rail contact, the lathe restores
+them in the same pass, and on a measured wheel they carry what the frame cannot know (a
+datum's lateral error on the near-vertical flange back, the rim's own chamfer): on the real
+MiniProf wheels they otherwise bound the cut at y = -68.5 or +60 mm for every target. On a
+steep flank a height difference measures a lateral one (a tenth of a millimetre of
+sampling moves it by tenths of a millimetre); the flange face of S1002 (70°, slope 2.75)
+is checked. A cut below zero (the worn wheel has
 more material than the target everywhere, never the case after wear) is reported as is.
 
 **Targets.** S1002 (EN 13715) and its thinner-flange variants, built by
@@ -60,6 +65,9 @@ REQUIRED_COVERAGE_MM = (-60.0, 25.0)
 GRID_STEP_MM = 0.05
 #: Target slopes |dz/dy| above which the cut is not checked (the flange back).
 MAX_CHECK_SLOPE = 3.0
+#: Where the cut is checked [mm]: from the inner end of the S1002 flange-tip arc to the end
+#: of its tread (the section boundaries of the Netter/DLR piecewise form).
+CHECK_RANGE_Y_MM = (-62.764705882, 32.15796)
 
 
 def thinner_flange_variant(flange_thickness_mm: float, reference: Heights = s1002_height_mm
@@ -163,7 +171,8 @@ def turning_cut(worn_y_mm: ArrayLike, worn_z_mm: ArrayLike, target: TargetProfil
         raise ValueError(f"profile: covers y {y[0]:.1f} to {y[-1]:.1f} mm; the cut needs "
                          f"{lo_req:g} to {hi_req:g} mm")
     z_rel = z - float(np.interp(0.0, y, z))
-    lo, hi = max(y[0], target.y_min_mm), min(y[-1], target.y_max_mm)
+    lo = max(y[0], target.y_min_mm, CHECK_RANGE_Y_MM[0])
+    hi = min(y[-1], target.y_max_mm, CHECK_RANGE_Y_MM[1])
     grid = np.arange(lo, hi + 1e-9, GRID_STEP_MM)
     inside = y[(y >= lo) & (y <= hi)]
     grid = np.union1d(grid, inside)

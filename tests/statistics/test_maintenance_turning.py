@@ -24,7 +24,7 @@ def _brute_force_cut(y_w: np.ndarray, z_w: np.ndarray, heights, step: float = 0.
     """Smallest cut c on a 0.002 mm ladder such that every point of the target, sampled on
     its own 0.013 mm grid and moved down by c, lies on or below the worn polyline."""
     z_rel = z_w - np.interp(0.0, y_w, z_w)
-    ys = np.arange(max(y_w[0], -70.0), min(y_w[-1], 60.0), 0.013)
+    ys = np.arange(max(y_w[0], -62.76), min(y_w[-1], 32.15), 0.013)
     zt = heights(ys)
     zw = np.interp(ys, y_w, z_rel)
     flat = np.abs(np.diff(zt, append=zt[-1]) / 0.013) <= 3.0  # the flange back is not cut
