@@ -39,7 +39,7 @@ from wearcast.statistics.maintenance.turning import (
 
 M, W, V = db.Measurement, db.Wheel, db.Vehicle
 #: Limits so far away that only the one under study can be crossed [mm].
-_RELAXED = {"sd_min_mm": -1e6, "sh_max_mm": 1e6, "qr_min_mm": -1e6}
+_RELAXED = {"sd_min_mm": 1e-3, "sh_max_mm": 1e6, "qr_min_mm": 1e-3}
 
 
 # --------------------------------------------------------------------------- fleets, vehicles
