@@ -168,3 +168,31 @@ def test_miniprof_diameter_from_the_file_header(reference_dir: Path, tmp_path: P
         "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
         "manifest": ("manifest.csv", bad.encode())})
     assert r.status_code == 422 and "diameter_mm" in r.text
+
+
+def test_real_miniprof_wheels_turning_and_state(reference_dir: Path, tmp_path: Path):
+    """The nine real MiniProf wheels: the worn S1002-like wheels need far less diameter to
+    reach a thinner-flange variant than S1002; whl_left_iter288 (qR 5.43) is crossed."""
+    import zipfile
+
+    c = TestClient(create_app(Settings(data_dir=tmp_path)))
+    names = sorted(p.name for p in (reference_dir / "miniprof").glob("*.whl"))
+    rows = ["file,wheel_id,vehicle_id,bogie_type,axle,side,mileage_km\n"]
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        for i, name in enumerate(names):
+            archive.writestr(name, (reference_dir / "miniprof" / name).read_bytes())
+            side = "right" if name.endswith("r.whl") or name.startswith("right") else "left"
+            rows.append(f"{name},{name[:-4]},V{i},trailer,1,{side},{1000 * (i + 1)}\n")
+        archive.writestr("manifest.csv", "".join(rows))
+    r = c.post("/v1/measurements/import", files={"file": ("real.zip", buffer.getvalue())})
+    assert r.status_code == 200, r.text
+    state = {w["wheel_id"]: w for w in c.get("/v1/fleet/state").json()["wheels"]}
+    assert len(state) == 9
+    assert state["whl_left_iter288"]["crossed"]["qr"] == pytest.approx(6.5 - 5.43, abs=0.1)
+    assert state["whl_left_iter288"]["remaining_km"]["qr"]["p50"] == 0.0
+    for wheel_id in ("Car7422_0001r", "Car7813_0001r", "avg_wheel"):
+        d = c.get(f"/v1/fleet/wheels/{wheel_id}").json()
+        loss = {o["target"]: o["diameter_loss_mm"] for o in d["turning"]["options"]}
+        assert loss["S1002"] > loss["S1002/e29.5"] + 5.0, (wheel_id, loss)
+        assert loss["S1002/e29.5"] >= 0.0
