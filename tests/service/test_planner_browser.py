@@ -93,13 +93,18 @@ def _wait(browser, condition, timeout=20.0):
     return WebDriverWait(browser, timeout).until(lambda d: condition(d))
 
 
-def _rows(browser):
-    from selenium.webdriver.common.by import By
+_ROWS_JS = """
+return Array.from(document.querySelectorAll('#fleet-table tbody tr')).map(tr => [
+  tr.dataset.wheelId,
+  Object.fromEntries(Array.from(tr.cells).map(td => [td.dataset.col, td.textContent])),
+  tr.className]);
+"""
 
-    return [(tr.get_attribute("data-wheel-id"),
-             {td.get_attribute("data-col"): td.text for td in
-              tr.find_elements(By.TAG_NAME, "td")}, tr.get_attribute("class"))
-            for tr in browser.find_elements(By.CSS_SELECTOR, "#fleet-table tbody tr")]
+
+def _rows(browser):
+    """The fleet table as the page shows it: (wheel id, {column: text}, row class) per row,
+    read in one script call."""
+    return [tuple(r) for r in browser.execute_script(_ROWS_JS)]
 
 
 def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
@@ -139,8 +144,9 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
     assert len(_rows(browser)) == sum(w["urgency"] == chosen for w in api["wheels"])
     Select(browser.find_element(By.ID, "urgency-filter")).select_by_visible_text("all")
 
-    # open a wheel: its Sd points and the Sd limit are the API's
-    wheel_id = _rows(browser)[0][0]
+    # open a wheel with an Sd history: its Sd points, forecast and limit are the API's
+    wheel_id = next(r[0] for r in _rows(browser)
+                    if by_id[r[0]]["remaining_km"]["sd"]["source"] == "history")
     browser.find_element(By.CSS_SELECTOR, f'tr[data-wheel-id="{wheel_id}"]').click()
     _wait(browser, lambda d: d.find_element(By.ID, "wheel-title").text == f"Wheel {wheel_id}")
     detail = httpx.get(server + f"/v1/fleet/wheels/{wheel_id}",
