@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.maintenance.limits import FleetLimits
@@ -112,3 +114,21 @@ def test_projection_scales_wear():
     c1 = turning_cut(y, z, TARGETS[0]).radial_mm
     c2 = turning_cut(y, z2, TARGETS[0]).radial_mm
     assert c2 == pytest.approx(2 * c1, rel=0.02)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.0, 3.0), st.floats(-60.0, 30.0), st.floats(2.0, 20.0)),
+                min_size=1, max_size=4))
+def test_cut_restoring_s1002_is_the_layer_above_its_tape_circle_value(bumps):
+    """Property: a wheel worn by a layer L(y) >= 0 from S1002 and measured in its own frame
+    needs the cut max L - L(0) over the checked range to restore S1002 (and no more: the
+    cut is the smallest; adding wear never lowers it)."""
+    y = np.arange(-69.0, 58.0, 0.02)
+    layer = sum(a * np.exp(-((y - c) / w) ** 2) for a, c, w in bumps)
+    z = s1002_height_mm(y) - layer
+    cut = turning_cut(y, z, TARGETS[0])
+    inside = (y >= -62.76) & (y <= 32.15)
+    expected = float(layer[inside].max() - np.interp(0.0, y, layer))
+    assert cut.radial_mm == pytest.approx(expected, abs=2e-3)
+    more = turning_cut(y, z - 0.3 * np.exp(-((y + 45) / 5) ** 2), TARGETS[0])
+    assert more.radial_mm >= cut.radial_mm - 1e-9
