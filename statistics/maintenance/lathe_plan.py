@@ -157,6 +157,8 @@ class PolicyCost:
     def km_new_to_scrap(self, usable_diameter_mm: float) -> float:
         """Kilometres one wheel runs from new to scrap at this policy's rate."""
         rate = self.mm_per_1000km
+        if math.isnan(rate):  # no wheel computed
+            return math.nan
         return 1000.0 * usable_diameter_mm / rate if rate > 0 else math.inf
 
     def to_dict(self, usable_diameter_mm: float) -> dict[str, Any]:
