@@ -31,6 +31,7 @@ import datetime as dt
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -185,22 +186,45 @@ class FleetState:
 ModelForecast = Callable[["WheelState"], Mapping[str, Remaining]]
 
 
-def turning_starts(frame: pd.DataFrame) -> np.ndarray:
+Columns = Mapping[str, np.ndarray]
+
+
+def _columns(frame: pd.DataFrame | Columns) -> Columns:
+    if isinstance(frame, pd.DataFrame):
+        return {c: frame[c].to_numpy() for c in frame.columns}
+    return frame
+
+
+def _floats(cols: Columns, name: str) -> np.ndarray:
+    n = len(cols["mileage_km"])
+    if name not in cols:
+        return np.full(n, np.nan)
+    values = np.asarray(cols[name])
+    if values.dtype.kind == "f":
+        return values
+    return pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
+
+
+def turning_starts(frame: pd.DataFrame | Columns) -> np.ndarray:
     """Boolean per row (sorted by mileage) of one wheel: True where a turning happened just
     before the measurement (the row starts a new life)."""
-    n = len(frame)
+    cols = _columns(frame)
+    n = len(cols["mileage_km"])
     out = np.zeros(n, dtype=bool)
     for name, jump in TURNING_JUMP_MM.items():
-        col = f"{name}_mm"
-        if col not in frame:
+        if f"{name}_mm" not in cols:
             continue
-        v = frame[col].to_numpy(dtype=float)
-        d = np.diff(v) * LIMIT_DIRECTIONS[name]  # > 0: back towards new
+        d = np.diff(_floats(cols, f"{name}_mm")) * LIMIT_DIRECTIONS[name]  # > 0: back to new
         out[1:] |= np.nan_to_num(d, nan=0.0) > jump
-    if "diameter_mm" in frame:
-        v = frame["diameter_mm"].to_numpy(dtype=float)
-        out[1:] |= np.nan_to_num(-np.diff(v), nan=0.0) > TURNING_DIAMETER_DROP_MM
+    if "diameter_mm" in cols:
+        d = -np.diff(_floats(cols, "diameter_mm"))
+        out[1:] |= np.nan_to_num(d, nan=0.0) > TURNING_DIAMETER_DROP_MM
     return out
+
+
+@lru_cache(maxsize=256)
+def _t90(dof: int) -> float:
+    return float(stats.t.ppf(0.9, dof))
 
 
 def history_remaining(mileage_km: np.ndarray, values: np.ndarray, name: str,
@@ -229,7 +253,7 @@ def history_remaining(mileage_km: np.ndarray, values: np.ndarray, name: str,
         resid = v - (v.mean() + slope * (s - s.mean()))
         se_fit = math.sqrt(float((resid ** 2).sum()) / (n - 2) / sxx)
         se = math.hypot(se_fit, floor)
-        t = float(stats.t.ppf(0.9, n - 2))
+        t = _t90(n - 2)
     else:
         se, t = floor, Z90
     hi, lo = rate + t * se, rate - t * se
@@ -242,18 +266,29 @@ def history_remaining(mileage_km: np.ndarray, values: np.ndarray, name: str,
                      reason=None if rate > 0 else f"{name} shows no wear towards its limit")
 
 
-def estimate_km_per_day(frame: pd.DataFrame) -> float | None:
+def estimate_km_per_day(frame: pd.DataFrame | Columns) -> float | None:
     """Mileage per day of one vehicle from its wheels' dated measurements: the sum of each
     wheel's mileage between its first and last dated measurement over the sum of the days
     between them (None without two dates a day apart)."""
-    dated = frame.dropna(subset=["measured_on"])
+    cols = _columns(frame)
+    if "measured_on" not in cols:
+        return None
     km = days = 0.0
-    for _, g in dated.groupby("wheel_id"):
-        g = g.sort_values("measured_on")
-        d = (g["measured_on"].iloc[-1] - g["measured_on"].iloc[0]).days
-        dk = float(g["mileage_km"].iloc[-1] - g["mileage_km"].iloc[0])
-        if d >= 1 and dk >= 0:
-            km, days = km + dk, days + d
+    first: dict[str, tuple[dt.date, float]] = {}
+    last: dict[str, tuple[dt.date, float]] = {}
+    for wid, day, s in zip(cols["wheel_id"].tolist(), cols["measured_on"].tolist(),
+                           cols["mileage_km"].tolist(), strict=True):
+        if day is None or pd.isna(day):
+            continue
+        if wid not in first or day < first[wid][0]:
+            first[wid] = (day, float(s))
+        if wid not in last or day >= last[wid][0]:
+            last[wid] = (day, float(s))
+    for wid, (d0, s0) in first.items():
+        d1, s1 = last[wid]
+        d = (d1 - d0).days
+        if d >= 1 and s1 - s0 >= 0:
+            km, days = km + (s1 - s0), days + d
     return km / days if days > 0 and km > 0 else None
 
 
@@ -261,37 +296,40 @@ def _maybe(value: Any) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
 
-def wheel_state(frame: pd.DataFrame, limits: FleetLimits, km_per_day: float | None,
-                km_per_day_source: str, model_forecast: ModelForecast | None = None
-                ) -> WheelState:
+def wheel_state(frame: pd.DataFrame | Columns, limits: FleetLimits,
+                km_per_day: float | None, km_per_day_source: str,
+                model_forecast: ModelForecast | None = None) -> WheelState:
     """The state of one wheel from its measurements (columns of :func:`fleet_state`)."""
-    g = frame.sort_values("mileage_km", kind="stable").reset_index(drop=True)
-    starts = np.flatnonzero(turning_starts(g))
+    raw = _columns(frame)
+    order = np.argsort(np.asarray(raw["mileage_km"], dtype=float), kind="stable")
+    cols = {k: np.asarray(v)[order] for k, v in raw.items()}
+    starts = np.flatnonzero(turning_starts(cols))
     first = int(starts[-1]) if starts.size else 0
-    life = g.iloc[first:]
-    last = g.iloc[-1]
-    s = life["mileage_km"].to_numpy(dtype=float)
+    mileage = np.asarray(cols["mileage_km"], dtype=float)
+    s = mileage[first:]
     remaining: dict[str, Remaining] = {}
     crossed: dict[str, float] = {}
+    latest: dict[str, float | None] = {}
     for name in QUANTITIES:
-        col = f"{name}_mm"
-        values = life[col].to_numpy(dtype=float) if col in life else np.full(len(life), np.nan)
-        rem = history_remaining(s, values, name, limits)
+        values = _floats(cols, f"{name}_mm")
+        latest[name] = _maybe(values[-1])
+        rem = history_remaining(s, values[first:], name, limits)
         remaining[name] = rem
         if rem.source == "crossed" and rem.margin_mm is not None:
             crossed[name] = -rem.margin_mm
-    measured_on = last.get("measured_on")
+    day = cols["measured_on"][-1] if "measured_on" in cols else None
+    mid = cols["measurement_id"][-1] if "measurement_id" in cols else None
     state = WheelState(
-        wheel_id=str(last["wheel_id"]), vehicle_id=str(last["vehicle_id"]),
-        bogie_type=str(last["bogie_type"]), axle=int(last["axle"]), side=str(last["side"]),
-        measurement_id=None if pd.isna(last.get("measurement_id")) else
-        int(last["measurement_id"]),
-        mileage_km=float(last["mileage_km"]),
-        measured_on=None if measured_on is None or pd.isna(measured_on) else measured_on,
-        sd_mm=_maybe(last.get("sd_mm")), sh_mm=_maybe(last.get("sh_mm")),
-        qr_mm=_maybe(last.get("qr_mm")), diameter_mm=_maybe(last.get("diameter_mm")),
-        turned_at_km=float(g["mileage_km"].iloc[first]) if starts.size else None,
-        n_since_turning=len(life), remaining=remaining, km_per_day=km_per_day,
+        wheel_id=str(cols["wheel_id"][-1]), vehicle_id=str(cols["vehicle_id"][-1]),
+        bogie_type=str(cols["bogie_type"][-1]), axle=int(cols["axle"][-1]),
+        side=str(cols["side"][-1]),
+        measurement_id=None if mid is None or pd.isna(mid) else int(mid),
+        mileage_km=float(mileage[-1]),
+        measured_on=None if day is None or pd.isna(day) else day,
+        sd_mm=latest["sd"], sh_mm=latest["sh"], qr_mm=latest["qr"],
+        diameter_mm=latest["diameter"],
+        turned_at_km=float(mileage[first]) if starts.size else None,
+        n_since_turning=len(s), remaining=remaining, km_per_day=km_per_day,
         km_per_day_source=km_per_day_source, crossed=crossed)
     if model_forecast is not None and any(remaining[n].source == "unknown"
                                           for n in FLANGE_LIMITS):
@@ -361,20 +399,32 @@ def fleet_state(measurements: pd.DataFrame, limits: FleetLimits | None = None,
     missing = [c for c in REQUIRED_COLUMNS if c not in measurements]
     if missing:
         raise ValueError(f"measurements.{missing[0]}: column is missing")
-    frame = measurements.copy()
-    for col in ("sd_mm", "sh_mm", "qr_mm", "diameter_mm", "measured_on", "measurement_id"):
-        if col not in frame:
-            frame[col] = None
+    frame = measurements.sort_values(["vehicle_id", "wheel_id", "mileage_km"],
+                                     kind="stable")
+    cols = {c: frame[c].to_numpy() for c in frame.columns}
+    for col in ("sd_mm", "sh_mm", "qr_mm", "diameter_mm"):
+        cols[col] = _floats(cols, col)
     attrs = dict(km_per_day or {})
     wheels: list[WheelState] = []
-    for vehicle_id, vg in frame.groupby("vehicle_id", sort=True):
-        given = attrs.get(str(vehicle_id))
+    vehicle, wheel = cols["vehicle_id"], cols["wheel_id"]
+    n = len(wheel)
+    if n == 0:
+        return FleetState([], [], limits)
+    v_starts = np.flatnonzero(np.r_[True, vehicle[1:] != vehicle[:-1]])
+    v_ends = np.r_[v_starts[1:], n]
+    for a, b in zip(v_starts.tolist(), v_ends.tolist(), strict=True):
+        vcols = {k: v[a:b] for k, v in cols.items()}
+        given = attrs.get(str(vehicle[a]))
         kpd: float | None
         if given is not None and given > 0:
             kpd, source = float(given), "attribute"
         else:
-            kpd = estimate_km_per_day(vg)
+            kpd = estimate_km_per_day(vcols)
             source = "estimated" if kpd is not None else "unknown"
-        for _, wg in vg.groupby("wheel_id", sort=True):
-            wheels.append(wheel_state(wg, limits, kpd, source, model_forecast))
+        w = vcols["wheel_id"]
+        w_starts = np.flatnonzero(np.r_[True, w[1:] != w[:-1]])
+        w_ends = np.r_[w_starts[1:], b - a]
+        for c, d in zip(w_starts.tolist(), w_ends.tolist(), strict=True):
+            wheels.append(wheel_state({k: v[c:d] for k, v in vcols.items()}, limits, kpd,
+                                      source, model_forecast))
     return FleetState(wheels, diameter_spreads(wheels, limits), limits)
