@@ -37,6 +37,7 @@ def _router_modules() -> list[Any]:
         jobs,
         measurements,
         models,
+        planning,
         rails,
         routes,
         simulations,
@@ -44,7 +45,7 @@ def _router_modules() -> list[Any]:
     )
 
     return [measurements, routes, wear_tables, models, simulations, coefficient_fits, rails,
-            jobs, admin]
+            planning, jobs, admin]
 
 
 def create_app(settings: Settings | None = None, *, migrate: bool = True) -> FastAPI:
@@ -102,6 +103,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
                            allow_methods=["GET", "POST", "DELETE"],
                            allow_headers=["Authorization", "Content-Type", "Idempotency-Key"],
                            expose_headers=["Retry-After", "X-Request-ID"])
+    mount_planner(app)
     app.add_middleware(ProblemGuard)
     app.openapi = lambda: problem_openapi(app)  # type: ignore[method-assign]
     return app
@@ -144,3 +146,13 @@ def problem_openapi(app: FastAPI) -> dict[str, Any]:
                         "description": "seconds to wait", "schema": {"type": "integer"}}}
     app.openapi_schema = schema
     return schema
+
+
+def mount_planner(app: FastAPI) -> None:
+    """The planner web page (plain HTML and JavaScript, no build step) at ``/planner/``."""
+    from pathlib import Path
+
+    from fastapi.staticfiles import StaticFiles
+
+    static = Path(__file__).parent / "static" / "planner"
+    app.mount("/planner", StaticFiles(directory=static, html=True), name="planner")

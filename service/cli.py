@@ -702,6 +702,15 @@ def demo(out_dir: Annotated[Path, typer.Option(help="where the demo database and
     run_demo(out_dir, echo=console.print)
 
 
+def _add_planning() -> None:
+    from wearcast.service.planning_cli import plan_app
+
+    app.add_typer(plan_app, name="plan")
+
+
+_add_planning()
+
+
 def main() -> None:
     """Entry point of the ``wearcast`` script."""
     app()

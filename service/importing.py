@@ -281,6 +281,7 @@ def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
         "measured_on": meta.measured_on, "route_id": registry.route_name(meta.route_id),
         "running_mode": meta.running_mode, "instrument_id": meta.instrument_id,
         "load_t": meta.load_t, "reference_profile": meta.reference_profile,
+        "diameter_mm": meta.diameter_mm,
         "covariates": dict(meta.covariates), "source_file": meta.source_file or None,
         "source_line": meta.source_line,
     }

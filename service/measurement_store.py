@@ -66,6 +66,7 @@ STANDARD_FIELDS: dict[str, tuple[Any, Callable[[Any], Any]]] = {
     "running_mode": (M.running_mode, _as_text),
     "instrument_id": (M.instrument_id, _as_text),
     "load_t": (M.load_t, _as_float),
+    "diameter_mm": (M.diameter_mm, _as_float),
     "reference_profile": (M.reference_profile, _as_text),
     "kind": (M.kind, _as_text),
     "source_file": (M.source_file, _as_text),
@@ -197,7 +198,7 @@ def create(session: Session, body: MeasurementIn) -> MeasurementOut:
         route_id=None if body.route_id is None else str(body.route_id),
         running_mode=body.running_mode, instrument_id=body.instrument_id, load_t=body.load_t,
         reference_profile=body.reference_profile, covariates=dict(body.covariates),
-        source_file="api", source_line=None)
+        source_file="api", source_line=None, diameter_mm=body.diameter_mm)
     record: ProfileRecord | ParameterRecord
     if body.y_mm is not None and body.z_mm is not None:
         reported = body.instrument_parameters.model_dump(exclude_none=True) \

@@ -78,8 +78,35 @@ class RawFile(Base):
 
 
 class Vehicle(Base):
+    """A vehicle; ``fleet_id`` and ``km_per_day`` (its mileage per day) are planning
+    attributes, both optional."""
+
     __tablename__ = "vehicles"
     vehicle_id: Mapped[str] = mapped_column(String(200), primary_key=True)
+    fleet_id: Mapped[str | None] = mapped_column(String(200), index=True)
+    km_per_day: Mapped[float | None] = mapped_column(Float)
+
+
+class Fleet(Base):
+    """A fleet's maintenance limits (overrides of the defaults, JSON) for planning."""
+
+    __tablename__ = "fleets"
+    fleet_id: Mapped[str] = mapped_column(String(200), primary_key=True)
+    limits: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
+class Plan(Base):
+    """A lathe plan: its request (``spec``) and the computed plan (``result``)."""
+
+    __tablename__ = "plans"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    fleet_id: Mapped[str | None] = mapped_column(String(200), index=True)
+    spec: Mapped[dict[str, Any]] = mapped_column(JSON)
+    result: Mapped[dict[str, Any]] = mapped_column(JSON, deferred=True)
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
 
 
 class Wheel(Base):
@@ -109,6 +136,7 @@ class Measurement(Base):
     running_mode: Mapped[str | None] = mapped_column(String(20))
     instrument_id: Mapped[str | None] = mapped_column(String(200))
     load_t: Mapped[float | None] = mapped_column(Float)
+    diameter_mm: Mapped[float | None] = mapped_column(Float)  # measured tape-circle diameter
     reference_profile: Mapped[str] = mapped_column(String(100), default="S1002")
     covariates: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
     source_file: Mapped[str | None] = mapped_column(String(500))

@@ -197,6 +197,7 @@ class MeasurementIn(Strict):
     load_t: float | None = Field(default=None, ge=0)
     reference_profile: str = "S1002"
     covariates: dict[str, FilterValue] = Field(default_factory=dict)
+    diameter_mm: float | None = Field(default=None, gt=0, le=2000)
     y_mm: list[float] | None = None
     z_mm: list[float] | None = None
     sd_mm: float | None = None
@@ -239,6 +240,7 @@ class MeasurementOut(BaseModel):
     running_mode: str | None
     instrument_id: str | None
     load_t: float | None
+    diameter_mm: float | None = None
     reference_profile: str
     covariates: dict[str, Any]
     source_file: str | None

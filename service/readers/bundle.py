@@ -13,7 +13,8 @@ Dispatch by extension (content is sniffed when the extension says nothing):
   inflates a member beyond its declared size.
 
 A MiniProf record's metadata is its manifest row; ``measured_on`` and ``instrument_id`` left
-empty there are taken from the file (``Date``, ``MPSerNo`` → ``"miniprof:<serial>"``); a
+empty there are taken from the file (``Date``, ``MPSerNo`` → ``"miniprof:<serial>"``,
+``DiameterTaperline`` → ``diameter_mm``); a
 manifest ``side`` that contradicts the file's ``Side=%L/%R`` is refused.
 """
 
@@ -28,6 +29,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import IO, Any, BinaryIO, TypeAlias
 
+from wearcast.service.readers.diameter import miniprof_diameter_mm
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import iter_profile_records, read_header, sniff_kind
 from wearcast.service.readers.manifest import MANIFEST_NAME, manifest_key, read_manifest
@@ -201,6 +203,8 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
             updates["measured_on"] = mp.measured_on
         if meta.instrument_id is None and mp.instrument_serial is not None:
             updates["instrument_id"] = f"miniprof:{mp.instrument_serial}"
+        if meta.diameter_mm is None and part is None:
+            updates["diameter_mm"] = miniprof_diameter_mm(mp.header)
         out.append(ProfileRecord(dataclasses.replace(meta, **updates), y_mm, z_mm,
                                  mp.instrument_parameters))
     return out

@@ -3,7 +3,7 @@
 Required columns ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km, y_mm, z_mm``
 (``y_mm``/``z_mm`` [mm] in the wheel frame: y from the tape circle, negative towards the
 flange; z up); optional ``measured_on, route_id, running_mode, instrument_id, load_t,
-reference_profile``; any other column is a covariate.
+reference_profile, diameter_mm`` (measured tape-circle diameter [mm]); any other column is a covariate.
 
 Rules the reader enforces:
 
@@ -155,7 +155,7 @@ class _Pending:
 def _meta_values(meta: MeasurementMeta) -> tuple[object, ...]:
     return (meta.vehicle_id, meta.bogie_type, meta.axle, meta.side, meta.measured_on,
             meta.route_id, meta.running_mode, meta.instrument_id, meta.load_t,
-            meta.reference_profile, tuple(sorted(meta.covariates.items())))
+            meta.reference_profile, tuple(sorted(meta.covariates.items())), meta.diameter_mm)
 
 
 def _profile_problems(count: np.ndarray, y_min: np.ndarray, y_max: np.ndarray,

@@ -32,7 +32,8 @@ RunningMode = Literal["lead", "mixed"]
 REQUIRED_META_COLUMNS: tuple[str, ...] = (
     "wheel_id", "vehicle_id", "bogie_type", "axle", "side", "mileage_km")
 OPTIONAL_META_COLUMNS: tuple[str, ...] = (
-    "measured_on", "route_id", "running_mode", "instrument_id", "load_t", "reference_profile")
+    "measured_on", "route_id", "running_mode", "instrument_id", "load_t", "reference_profile",
+    "diameter_mm")
 META_COLUMNS: tuple[str, ...] = REQUIRED_META_COLUMNS + OPTIONAL_META_COLUMNS
 PROFILE_COLUMNS: tuple[str, ...] = ("y_mm", "z_mm")
 PARAMETER_COLUMNS: tuple[str, ...] = ("sd_mm", "sh_mm", "qr_mm")
@@ -44,6 +45,7 @@ class MeasurementMeta:
     """Who was measured, where and when — one measurement's metadata.
 
     ``mileage_km`` [km] is finite and >= 0; ``load_t`` [t] is the vehicle's load when given;
+    ``diameter_mm`` [mm] the wheel's measured running (tape-circle) diameter when given;
     ``covariates`` holds every extra column (numbers as float, text as str).
     ``source_file``/``source_line`` say where the measurement came from (the first row of a
     long-CSV measurement, the manifest row for a MiniProf file).
@@ -62,6 +64,7 @@ class MeasurementMeta:
     load_t: float | None = None
     reference_profile: str = DEFAULT_REFERENCE_PROFILE
     covariates: dict[str, str | float] = field(default_factory=dict)
+    diameter_mm: float | None = None
     source_file: str = ""
     source_line: int | None = None
 
@@ -175,6 +178,7 @@ CONVERTERS: dict[str, Callable[[str], object]] = {
     "instrument_id": _text,
     "load_t": _positive_float,
     "reference_profile": _text,
+    "diameter_mm": _positive_float,
 }
 #: Text columns that must hold a value on every row.
 REQUIRED_TEXT_COLUMNS = ("wheel_id", "vehicle_id", "bogie_type", "axle", "side")
@@ -332,5 +336,6 @@ def build_metas(coded: Sequence[CodedColumn], rows: np.ndarray, mileage_km: np.n
             running_mode=standard["running_mode"][i],
             instrument_id=standard["instrument_id"][i], load_t=standard["load_t"][i],
             reference_profile=DEFAULT_REFERENCE_PROFILE if reference is None else reference,
-            covariates=cov, source_file=file_name, source_line=line_list[i]))
+            covariates=cov, source_file=file_name, source_line=line_list[i],
+            diameter_mm=standard["diameter_mm"][i]))
     return metas

@@ -1,0 +1,50 @@
+"""Request bodies of the planning endpoints (fleets, vehicles, lathe plans)."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class FleetIn(_Strict):
+    """A fleet: its limit overrides (``sd_min_mm``, ``scrap_diameter_mm``, ...) and the
+    vehicles that belong to it."""
+
+    limits: dict[str, float] = Field(default_factory=dict)
+    vehicles: list[str] = Field(default_factory=list)
+
+
+class VehicleIn(_Strict):
+    """Planning attributes of a vehicle: its mileage per day [km/day] and its fleet."""
+
+    km_per_day: float | None = Field(default=None, gt=0, le=5000)
+    fleet_id: str | None = Field(default=None, min_length=1, max_length=200)
+
+
+class PlanIn(_Strict):
+    """A lathe plan request.
+
+    ``model_id`` and ``route_id`` name a calibrated model that forecasts the wheels with
+    fewer than two measurements since turning; ``target_flange_thicknesses_mm`` the
+    S1002 flange thicknesses a wheel may be turned to (32.5 = S1002 itself).
+    """
+
+    fleet_id: str | None = None
+    start: dt.date | None = None
+    horizon_weeks: int = Field(default=26, ge=1, le=260)
+    capacity_per_week: int = Field(default=4, ge=0, le=10_000)
+    fixed_interval_km: float = Field(default=150_000.0, gt=0, le=5e6)
+    model_id: int | None = None
+    route_id: int | str | None = None
+    target_flange_thicknesses_mm: list[float] = Field(
+        default_factory=lambda: [32.5, 31.5, 30.5, 29.5, 28.5], min_length=1, max_length=12)
+    name: str | None = Field(default=None, max_length=200)
+
+    def spec(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
