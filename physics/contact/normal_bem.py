@@ -67,7 +67,7 @@ def influence_coefficients(nx: int, ny: int, dx_mm: float, dy_mm: float,
 
 @lru_cache(maxsize=32)
 def _kernel_fft(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float
-                ) -> _FloatArray:
+                ) -> NDArray[np.complex128]:
     c = influence_coefficients(nx, ny, dx_mm, dy_mm, e_star_mpa)
     padded = np.zeros((2 * ny, 2 * nx))
     # circular layout: offset k at index k (k >= 0) and 2n + k (k < 0)

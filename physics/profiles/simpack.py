@@ -123,10 +123,10 @@ def parse_simpack_profile(text: str) -> SimpackProfile:
         if block == "point":
             parts = line.replace(",", " ").split()
             try:
-                y, z = float(parts[0]), float(parts[1])
+                y_val, z_val = float(parts[0]), float(parts[1])
             except (IndexError, ValueError) as exc:
                 raise ProfileFileError("point", f"line {number} is not 'y z': {raw!r}") from exc
-            rows.append((y, z))
+            rows.append((y_val, z_val))
         elif block in ("header", "spline") and "=" in line:
             key, value = (part.strip() for part in line.split("=", 1))
             (header if block == "header" else settings)[key.lower()] = value.strip("'\"")
