@@ -78,7 +78,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import ellipe, ellipk
 
-from wearcast.physics.contact.geometry import WheelLocus
+from wearcast.physics.contact.geometry import NoContactError, WheelLocus
 from wearcast.physics.contact.hertz import (
     STEEL_POISSON,
     STEEL_YOUNG_MPA,
@@ -459,7 +459,8 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
             f_hi, patches = solve(hi)
             f_hi -= load
             if hi > 5.0:
-                raise RuntimeError("normal contact: no approach carries the wheel load")
+                raise NoContactError("wheel", "no approach up to 5 mm carries the wheel load: "
+                                     "the wheel does not reach its rail")
         side = 0
         d = hi
         for _ in range(60):

@@ -122,7 +122,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                          angular_velocity_rad_s: ArrayLike | None = None, mu: float = 0.3,
                          shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
                          poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
-                         bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 10
+                         bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 40
                          ) -> list[LoadedWheel]:
     """Loaded contact of one wheel for every pose of its locus (module docstring).
 
@@ -163,8 +163,12 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                                  speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
                                  shear_modulus_mpa, poisson, n_grid, bound)
             forces = [p.normal_force_n for p in loaded]
-            ratios = [[p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0
-                       for p in loaded]]
+            new = [p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0 for p in loaded]
+            if ratios is not None and rounds > 3 and len(ratios[0]) == len(new):
+                # under-relaxed after a few rounds: a patch that switches between Hertz and
+                # the BEM (or merges) can otherwise make the fixed point oscillate
+                new = [0.5 * (a + b) for a, b in zip(ratios[0], new, strict=True)]
+            ratios = [new]
             if len(forces) == len(previous) and np.max(
                     np.abs(np.subtract(forces, previous)), initial=0.0) < rtol * loads[row]:
                 break
