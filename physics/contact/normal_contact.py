@@ -404,6 +404,56 @@ def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, appro
     return _finish(region, method, ps, x, s, res.pressure_mpa)
 
 
+def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: float,
+                           approach_mm: float, method: str, young_mpa: float, poisson: float,
+                           element_mm: float, margin_mm: float = 0.6
+                           ) -> tuple[float, NormalPatch] | None:
+    """Fast path of ``wheel_normal_contact`` for a single patch: its normal force is known
+    from the load, F_n = W / (cos delta + r sin delta), so the BEM (or Hertz) is solved with
+    the force prescribed and returns the approach; the patch is re-identified at that
+    approach until it settles (2-3 solves instead of a bracketing iteration).  None when
+    there is not exactly one patch or the method has no force-prescribed form ("kp")."""
+    d = approach_mm
+    for _ in range(6):
+        regions = patch_regions(locus, row, d)
+        if len(regions) != 1:
+            return None
+        region = regions[0]
+        fn = load_n / max(np.cos(region.contact_angle_rad)
+                          + ratio * np.sin(region.contact_angle_rad), 0.05)
+        ps = _plane_samples(locus, row, region, extend_mm=margin_mm + 2.0 * element_mm)
+        chosen = method
+        if chosen == "auto":
+            chosen = "hertz" if is_elliptic(ps, d) else "bem-coarse"
+        k = int(np.argmin(ps.g))
+        c_min = float(ps.c[k])
+        if chosen == "hertz":
+            if float(ps.b[k]) <= 0:
+                return None
+            unit = hertz_contact(1.0, float(ps.a[k]) * c_min, float(ps.b[k]), young_mpa,
+                                 poisson)
+            d_new = float(ps.g[k]) + float(unit.approach_mm) * fn ** (2.0 / 3.0) / c_min
+            patch = _hertz_patch(region, ps, d_new, young_mpa, poisson, element_mm)
+        elif chosen in ("bem", "bem-coarse"):
+            coarse = chosen == "bem-coarse"
+            h, x, s = _grid(ps, d, element_mm, margin_mm, COARSE_ELEMENTS if coarse else None)
+            res = solve_normal_bem(h, x, s, normal_force_n=fn, young_mpa=young_mpa,
+                                   poisson=poisson, tol=1e-6 if coarse else 1e-7)
+            border = np.concatenate([res.pressure_mpa[0], res.pressure_mpa[-1],
+                                     res.pressure_mpa[:, 0], res.pressure_mpa[:, -1]])
+            d_new = d + res.approach_mm / c_min
+            patch = _finish(region, chosen, ps, x, s, res.pressure_mpa)
+            if np.any(border > 0):  # the grid was too small: grow it and solve again
+                d = max(d_new, 1.2 * d)
+                continue
+        else:
+            return None
+        if abs(d_new - d) <= 1e-3 * abs(d_new):
+            return d_new, patch
+        d = d_new
+    return None
+
+
 def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.float64],
                          method: str = "auto", lateral_ratio: list[list[float]] | None = None,
                          young_mpa: float = STEEL_YOUNG_MPA, poisson: float = STEEL_POISSON,
@@ -415,8 +465,10 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
     The common vertical approach d solves sum_i F_n,i(d) (cos delta_i + r_i sin delta_i) = W
     (r_i = F_s/F_n from ``lateral_ratio``, default 0) by bracketing and the Illinois
     (regula falsi) iteration to ``rtol`` of W; the patches are re-identified at every d
-    (``patches.patch_regions``), so merging and splitting follow the load.
-    ``approach_guess_mm`` (per pose, optional) starts the bracket near a known solution.
+    (``patches.patch_regions``), so merging and splitting follow the load.  A single patch
+    takes a fast path: its force is known, so it is solved with the force prescribed and the
+    approach follows (``_single_patch_by_force``).  ``approach_guess_mm`` (per pose,
+    optional) starts either iteration near a known solution.
 
     Returns one ``WheelNormalContact`` per pose; module docstring for the patch fields.
     """
@@ -441,6 +493,15 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
             return total, patches
 
         load = float(loads[row])
+        if approach_guess_mm is not None:
+            start = float(np.broadcast_to(np.asarray(approach_guess_mm, dtype=float), (n,))[row])
+        else:
+            start = 0.03 * (load / 1e4) ** (2.0 / 3.0)
+        fast = _single_patch_by_force(locus, row, load, ratios[0] if ratios else 0.0, start,
+                                      method, young_mpa, poisson, element_mm)
+        if fast is not None:
+            out.append(WheelNormalContact(approach_mm=fast[0], patches=[fast[1]]))
+            continue
         lo, f_lo = 0.0, -load
         if approach_guess_mm is not None:
             guess = float(np.broadcast_to(np.asarray(approach_guess_mm, dtype=float), (n,))[row])
