@@ -40,6 +40,20 @@ def _march_totals_py(dpx: NDArray[np.float64], dpy: NDArray[np.float64],
     shape_t = np.ascontiguousarray(shape.T)
     p = np.empty(n_y)
     q = np.empty(n_y)
+    # per column the strips inside the ellipse (bound > 0): outside, the traction is reset to
+    # zero (scale g / |p| = 0) without computing it
+    j_lo = np.zeros(n_x, dtype=np.int64)
+    j_hi = np.zeros(n_x, dtype=np.int64)
+    for i in range(n_x):
+        first = n_y
+        last = -1
+        for j in range(n_y):
+            if shape_t[i, j] > 0.0:
+                if first == n_y:
+                    first = j
+                last = j
+        j_lo[i] = first
+        j_hi[i] = last + 1 if last >= 0 else first
     for k in range(n):
         gk = g_peak[k]
         p[:] = 0.0
@@ -50,7 +64,15 @@ def _march_totals_py(dpx: NDArray[np.float64], dpy: NDArray[np.float64],
         for i in range(n_x - 1, -1, -1):
             dq = dpy[k, i]
             col_q = 0.0
-            for j in range(n_y):
+            lo = j_lo[i]
+            hi = j_hi[i]
+            for j in range(lo):
+                p[j] = 0.0
+                q[j] = 0.0
+            for j in range(hi, n_y):
+                p[j] = 0.0
+                q[j] = 0.0
+            for j in range(lo, hi):
                 pj = p[j] + dpx[k, j]
                 qj = q[j] + dq
                 s = min(gk * shape_t[i, j] / np.sqrt(pj * pj + qj * qj + 1e-300), 1.0)
