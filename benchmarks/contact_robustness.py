@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcast.physics.contact.geometry import NoContactError, WheelsetTrack, wheel_locus
+from wearcast.physics.contact.geometry import WheelsetTrack
+from wearcast.physics.contact.locus import NoContactError, wheel_locus
 from wearcast.physics.contact.wheel_rail import loaded_wheel_contact
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve
 

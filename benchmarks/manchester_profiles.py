@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wearcast.physics.contact.geometry import WheelsetTrack, wheel_locus
+from wearcast.physics.contact.geometry import WheelsetTrack
+from wearcast.physics.contact.locus import wheel_locus
 from wearcast.physics.contact.wheel_rail import loaded_wheel_contact
 from wearcast.physics.profiles.simpack import rail_curve, read_simpack_profile, wheel_curve
 

@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wearcast.physics.contact.geometry import WheelsetTrack, s1002_60e1, wheel_locus
+from wearcast.physics.contact.geometry import WheelsetTrack, s1002_60e1
+from wearcast.physics.contact.locus import wheel_locus
 from wearcast.physics.contact.normal_contact import wheel_normal_contact
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve
 

@@ -1,7 +1,7 @@
 """Normal contact of one wheel on its rail: non-Hertzian patches, BEM or fast, Hertz where valid.
 
 This is the function the curving and wear models call per wheel: ``wheel_normal_contact``
-takes a contact locus (``geometry.wheel_locus``, roll solved or prescribed) and a vertical
+takes a contact locus (``locus.wheel_locus``, roll solved or prescribed) and a vertical
 wheel load and returns, per pose, the contact patches (``patches.patch_regions``: merged or
 split by the interpenetration region as CONTACT does) with their pressure on a grid, normal
 force, reference location, pressure centre, peak pressure and an equivalent ellipse.
@@ -79,13 +79,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import ellipe, ellipk
 
-from wearcast.physics.contact.geometry import NoContactError, WheelLocus
 from wearcast.physics.contact.hertz import (
     STEEL_POISSON,
     STEEL_YOUNG_MPA,
     effective_modulus_mpa,
     hertz_contact,
 )
+from wearcast.physics.contact.locus import NoContactError, WheelLocus
 from wearcast.physics.contact.normal_bem import solve_normal_bem
 from wearcast.physics.contact.patches import PatchRegion, patch_regions
 
@@ -171,6 +171,8 @@ def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: 
     dz = locus.z_rail_mm[row, idx] - region.z_rail_mm
     s = sign * np.cos(dr) * dy - np.sin(dr) * dz
     # keep the monotone run of s that contains the patch
+    if s.size < 2:
+        raise ValueError("patch: fewer than 2 locus samples across it")
     inc = np.diff(s) > 0
     centre = int(np.argmin(np.abs(s)))
     keep_lo, keep_hi = centre, centre + 1

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from wearcast.physics.contact.geometry import WheelLocus
+from wearcast.physics.contact.locus import WheelLocus
 
 _FloatArray = NDArray[np.float64]
 

@@ -2,7 +2,7 @@
 
 The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pose:
 
-1. contact locus (``geometry.wheel_locus``; roll solved or prescribed, yaw);
+1. contact locus (``locus.wheel_locus``; roll solved or prescribed, yaw);
 2. patches merged or split by the interpenetration region and the normal problem carrying
    the vertical wheel load W (``normal_contact.wheel_normal_contact``, BEM / Kik-Piotrowski /
    Hertz);
@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.fastsim import Bound, fastsim
-from wearcast.physics.contact.geometry import WheelLocus
+from wearcast.physics.contact.locus import WheelLocus
 from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
 from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA, rigid_creepages
 
@@ -128,7 +128,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
 
     Parameters
     ----------
-    locus : contact locus of the wheel (``geometry.wheel_locus``)
+    locus : contact locus of the wheel (``locus.wheel_locus``)
     nominal_radius_mm : r0 of the wheelset [mm] (axle height)
     wheel_load_n : vertical force W on the rail [N], scalar or (N,)
     speed_m_s : rolling speed V [m/s]

@@ -5,12 +5,8 @@ symmetry)."""
 import numpy as np
 import pytest
 
-from wearcast.physics.contact.geometry import (
-    NoContactError,
-    contact_table,
-    s1002_60e1,
-    wheel_locus,
-)
+from wearcast.physics.contact.geometry import contact_table, s1002_60e1
+from wearcast.physics.contact.locus import NoContactError, wheel_locus
 from wearcast.physics.contact.normal_contact import wheel_normal_contact
 from wearcast.physics.contact.patches import patch_regions
 

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcast.physics.contact.geometry import NoContactError, WheelsetTrack, wheel_locus
+from wearcast.physics.contact.geometry import WheelsetTrack
+from wearcast.physics.contact.locus import NoContactError, wheel_locus
 from wearcast.physics.contact.normal_contact import wheel_normal_contact
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve
 

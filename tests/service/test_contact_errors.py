@@ -1,6 +1,6 @@
 """A wheel that cannot make contact (physics ``NoContactError``) becomes a 422 naming the field."""
 
-from wearcast.physics.contact.geometry import NoContactError
+from wearcast.physics.contact.locus import NoContactError
 from wearcast.service.errors import from_value_error
 
 
