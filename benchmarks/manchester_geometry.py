@@ -30,33 +30,18 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.contact.geometry import WheelsetTrack, contact_table, s1002_60e1
-from wearcast.physics.profiles.measured import ProfileCurve
+from wearcast.physics.profiles.simpack import rail_curve, read_simpack_profile, wheel_curve
 
 DEFAULT_REFERENCE = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
 
 
-def read_simpack_points(path: Path) -> np.ndarray:
-    """(n, 2) array of the ``y z`` rows between ``point.begin`` and ``point.end`` [mm]."""
-    rows, inside = [], False
-    for line in path.read_text().splitlines():
-        text = line.strip()
-        if text.startswith("point.begin"):
-            inside = True
-        elif text.startswith("point.end"):
-            break
-        elif inside and text and not text.startswith("!"):
-            rows.append([float(v) for v in text.split()[:2]])
-    return np.asarray(rows)
-
-
 def mbench_wheelset(bench: Path) -> WheelsetTrack:
-    """The benchmark's own profiles: wheel mirrored in y (mirror.y = 1); the rail is given
-    already canted 1:40 with z downwards, so it is flipped to z up and not inclined again."""
-    wheel = read_simpack_points(bench / "MBench_S1002_v3.prw")
-    rail = read_simpack_points(bench / "MBench_UIC60_v3.prr")
-    return WheelsetTrack(wheel=ProfileCurve.from_points(-wheel[:, 0], wheel[:, 1]),
-                         rail=ProfileCurve.from_points(rail[:, 0], -rail[:, 1]),
-                         rail_inclination=0.0)
+    """The benchmark's own profiles, read by ``physics.profiles.simpack`` (the wheel file's
+    header mirrors it in y; the rail file is already canted 1:40 with z down, so it is turned
+    to z up and not inclined again)."""
+    wheel = wheel_curve(read_simpack_profile(bench / "MBench_S1002_v3.prw"))
+    rail = rail_curve(read_simpack_profile(bench / "MBench_UIC60_v3.prr"))
+    return WheelsetTrack(wheel=wheel, rail=rail, rail_inclination=0.0)
 
 
 def compare(wt: WheelsetTrack, bench: Path, with_yaw: bool) -> pd.DataFrame:

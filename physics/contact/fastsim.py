@@ -41,6 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact import fastsim_kernel
 from wearcast.physics.contact.kalker import fastsim_flexibilities, kalker_coefficients
 
 Bound = Literal["parabolic", "elliptic"]
@@ -225,8 +226,49 @@ def fastsim(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLik
     -------
     FastsimResult (forces, traction, slip and adhesion fields).
 
-    Kalker 1982; discretisation as CONTACT (module docstring).
+    Kalker 1982; discretisation as CONTACT (module docstring).  ``fastsim_forces`` gives the
+    totals alone, faster (no traction fields are stored).
     """
+    result = _fastsim(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, mu, shear_modulus_mpa,
+                      poisson, n_x, n_y, bound, combined_flexibility, flexibilities_mm_per_mpa,
+                      spin_offset_fraction, fields=True)
+    assert isinstance(result, FastsimResult)
+    return result
+
+
+@dataclass(frozen=True)
+class FastsimForces:
+    """FASTSIM totals for a batch of patches (shape S of the inputs): ``fx_n``, ``fy_n`` [N]
+    and ``mz_nmm`` [N mm], as ``FastsimResult``."""
+
+    fx_n: NDArray[np.float64]
+    fy_n: NDArray[np.float64]
+    mz_nmm: NDArray[np.float64]
+
+
+def fastsim_forces(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLike,
+                   b_mm: ArrayLike, normal_force_n: ArrayLike, mu: ArrayLike,
+                   shear_modulus_mpa: float = 82_000.0, poisson: float = 0.28,
+                   n_x: int = 40, n_y: int = 40, bound: Bound = "parabolic",
+                   combined_flexibility: bool = True,
+                   flexibilities_mm_per_mpa: tuple[ArrayLike, ArrayLike, ArrayLike] | None = None,
+                   spin_offset_fraction: float = SPIN_OFFSET_FRACTION) -> FastsimForces:
+    """The totals of ``fastsim`` (same arguments, same numbers) without the traction fields:
+    the compiled march (``fastsim_kernel``) then only sums, which is the fast path for
+    tables and curving (``benchmarks/bench_fastsim.py``)."""
+    result = _fastsim(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, mu, shear_modulus_mpa,
+                      poisson, n_x, n_y, bound, combined_flexibility, flexibilities_mm_per_mpa,
+                      spin_offset_fraction, fields=False)
+    assert isinstance(result, FastsimForces)
+    return result
+
+
+def _fastsim(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLike,
+             b_mm: ArrayLike, normal_force_n: ArrayLike, mu: ArrayLike,
+             shear_modulus_mpa: float, poisson: float, n_x: int, n_y: int, bound: Bound,
+             combined_flexibility: bool,
+             flexibilities_mm_per_mpa: tuple[ArrayLike, ArrayLike, ArrayLike] | None,
+             spin_offset_fraction: float, fields: bool) -> FastsimResult | FastsimForces:
     if bound not in ("parabolic", "elliptic"):
         raise ValueError(f"bound must be 'parabolic' or 'elliptic', got {bound!r}")
     if n_x < 1 or n_y < 1:
@@ -263,20 +305,25 @@ def fastsim(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLik
     else:
         shape_fn = np.sqrt(np.where(inside, 1.0 - rho2, 0.0))
         peak = 1.5 * fn / (np.pi * a * b)
-    # Traction bound in the march layout (n_x, n, n_y).
-    g_t = (mu * peak)[None, :, None] * np.ascontiguousarray(shape_fn.T)[:, None, :]
-
     # Per-element traction increments in adhesion (constant along x for px).
     dpx = -dx[:, None] * (xi[:, None] / l1[:, None] - phi[:, None] * y / l3[:, None])  # (n,n_y)
     x_spin = x + spin_offset_fraction * dx[:, None]
     dpy = -dx[:, None] * (eta[:, None] / l2[:, None] + phi[:, None] * x_spin / l3[:, None])
-
-    big_p, big_q, scale = _march(dpx, np.ascontiguousarray(dpy.T), g_t)
-
     da = dx * dy
-    fx = da * big_p.sum(axis=(0, 2))
-    fy = da * big_q.sum(axis=(0, 2))
-    mz = da * (np.einsum("ikj,ki->k", big_q, x) - np.einsum("ikj,kj->k", big_p, y))
+    if not fields and fastsim_kernel.march_totals is not None:
+        sum_p, sum_q, sum_m = fastsim_kernel.march_totals(dpx, np.ascontiguousarray(dpy),
+                                                          shape_fn, mu * peak, x, y)
+        return FastsimForces((da * sum_p).reshape(shape), (da * sum_q).reshape(shape),
+                             (da * sum_m).reshape(shape))
+    # numpy march (reference implementation), layout (n_x, n, n_y)
+    g_t = (mu * peak)[None, :, None] * np.ascontiguousarray(shape_fn.T)[:, None, :]
+    p_t, q_t, s_t = _march(dpx, np.ascontiguousarray(dpy.T), g_t)
+    fx = da * p_t.sum(axis=(0, 2))
+    fy = da * q_t.sum(axis=(0, 2))
+    mz = da * (np.einsum("ikj,ki->k", q_t, x) - np.einsum("ikj,kj->k", p_t, y))
+    if not fields:
+        return FastsimForces(fx.reshape(shape), fy.reshape(shape), mz.reshape(shape))
+    big_p, big_q, scale = (np.moveaxis(v, 0, -1) for v in (p_t, q_t, s_t))  # (n, n_y, n_x)
 
     def tot(val):
         return val.reshape(shape)
@@ -284,8 +331,8 @@ def fastsim(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLik
     def fld(val):
         return val.reshape(shape + val.shape[1:])
 
-    def grid(val):  # (n_x, n, n_y) -> S + (n_y, n_x), a view
-        return fld(np.moveaxis(val, 0, -1))
+    def grid(val):  # (n, n_y, n_x) -> S + (n_y, n_x)
+        return fld(val)
 
     return FastsimResult(
         fx_n=tot(fx), fy_n=tot(fy), mz_nmm=tot(mz),

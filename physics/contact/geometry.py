@@ -209,18 +209,24 @@ def _points(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray
 
     c, s = np.cos(col(roll)), np.sin(col(roll))
     cy, sy = np.cos(col(yaw)), np.sin(col(yaw))
-    theta = np.zeros(np.broadcast_shapes(np.shape(axial), np.shape(col(yaw))))
     lateral = axial * cy
-    vertical = -radius * np.cos(theta)
+    vertical = -radius
     y = col(shift) + lateral * c - vertical * s
-    for _ in range(3 if np.any(yaw != 0.0) else 0):
+    if not np.any(yaw != 0.0):  # the 2D cross-section: no trigonometry on the samples
+        z = r0 + lateral * s + vertical * c
+        return np.broadcast_to(-axial * sy, np.shape(y)), y, z
+    sin_t = np.zeros(np.shape(y))
+    for _ in range(3):
         slope = np.interp(y, side.rail_y, side.rail_slope, left=0.0, right=0.0)
-        theta = np.arctan(slope * sy)
-        lateral = radius * np.sin(theta) * sy + axial * cy
-        vertical = -radius * np.cos(theta)
+        # theta = atan(slope sin(psi)): sin and cos of it without trigonometric calls
+        t = slope * sy
+        cos_t = 1.0 / np.sqrt(1.0 + t * t)
+        sin_t = t * cos_t
+        lateral = radius * sin_t * sy + axial * cy
+        vertical = -radius * cos_t
         y = col(shift) + lateral * c - vertical * s
     z = r0 + lateral * s + vertical * c
-    x = radius * np.sin(theta) * cy - axial * sy
+    x = radius * sin_t * cy - axial * sy
     return x, y, z
 
 

@@ -125,3 +125,30 @@ def test_bad_input_is_refused():
         fastsim(**CASE, bound="square")
     with pytest.raises(ValueError, match="semi-axes"):
         fastsim(0, 0, 0, -1.0, 1.0, 1.0, 0.3)
+
+
+@pytest.mark.parametrize(
+    ("bound", "n", "fy_rel", "mz_nmm"),
+    [("parabolic", 40, -0.6118, -3.900e4), ("elliptic", 40, -0.6016, -4.829e4),
+     ("parabolic", 200, -0.6359, -3.798e4)],
+)
+def test_fast_totals_reproduce_contact_and_fastsim(bound, n, fy_rel, mz_nmm):
+    # fastsim_forces (compiled kernel, totals only) gives CONTACT's printed numbers and the
+    # same totals as the numpy march of fastsim, to rounding
+    from wearcast.physics.contact.fastsim import fastsim_forces
+
+    r = fastsim_forces(**CASE, bound=bound, n_x=n, n_y=n)
+    assert r.fy_n / MU_FN == pytest.approx(fy_rel, abs=5e-5)
+    assert r.mz_nmm == pytest.approx(mz_nmm, abs=5.1e1)
+    rng = np.random.default_rng(3)
+    k = 50
+    args = dict(xi=rng.uniform(-3e-3, 3e-3, k), eta=rng.uniform(-3e-3, 3e-3, k),
+                phi_per_mm=rng.uniform(-1e-3, 1e-3, k), a_mm=rng.uniform(2, 9, k),
+                b_mm=rng.uniform(2, 9, k), normal_force_n=rng.uniform(1e4, 1e5, k), mu=0.3)
+    full = fastsim(**args, bound=bound, n_x=n, n_y=n)
+    fast = fastsim_forces(**args, bound=bound, n_x=n, n_y=n)
+    scale = 0.3 * args["normal_force_n"]
+    np.testing.assert_allclose(fast.fx_n / scale, full.fx_n / scale, atol=1e-12)
+    np.testing.assert_allclose(fast.fy_n / scale, full.fy_n / scale, atol=1e-12)
+    np.testing.assert_allclose(fast.mz_nmm / (scale * args["a_mm"]),
+                               full.mz_nmm / (scale * args["a_mm"]), atol=1e-12)

@@ -1,0 +1,196 @@
+"""Loaded contact of one wheel on its rail: non-Hertzian patches + rigid creepages + FASTSIM.
+
+The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pose:
+
+1. contact locus (``locus.wheel_locus``; roll solved or prescribed, yaw);
+2. patches merged or split by the interpenetration region and the normal problem carrying
+   the vertical wheel load W (``normal_contact.wheel_normal_contact``, BEM / Kik-Piotrowski /
+   Hertz);
+3. rigid creepages at each patch's reference point (``wheelset_contact.rigid_creepages``,
+   CONTACT's convention: rail minus wheel velocity over V);
+4. creep forces from FASTSIM (``fastsim.fastsim``, CONTACT's discretisation and combined
+   flexibility) on the patch's equivalent ellipse (a, b from the patch: b half its lateral
+   extent, a = area / (pi b)) with its normal force;
+5. vertical equilibrium sum F_n cos(delta) + F_s sin(delta) = W: steps 2-4 are repeated with
+   the patches' F_s/F_n until the normal forces settle (CONTACT solves the same coupled
+   problem; 2-4 rounds to 1e-4 W).
+
+Signs as ``wheelset_contact``: per wheel in its own (mirrored for the right wheel) frame,
+forces on the rail, F_s towards the wheel's field side.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from wearcast.physics.contact.fastsim import Bound, fastsim
+from wearcast.physics.contact.locus import WheelLocus
+from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
+from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA, rigid_creepages
+
+_FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LoadedPatch:
+    """One loaded patch: its normal solution and the tangential results.
+
+    normal : the ``NormalPatch`` (reference location, pressure, equivalent ellipse)
+    xi, eta, phi_per_mm : creepages at the reference point [-], [-], [1/mm]
+    fx_n, fs_n : creep forces on the rail [N], F_s in the contact plane towards the field side
+    mz_nmm : spin moment on the rail [N mm]
+    """
+
+    normal: NormalPatch
+    xi: float
+    eta: float
+    phi_per_mm: float
+    fx_n: float
+    fs_n: float
+    mz_nmm: float
+
+    @property
+    def normal_force_n(self) -> float:
+        """F_n [N]."""
+        return self.normal.normal_force_n
+
+    @property
+    def contact_angle_rad(self) -> float:
+        """delta at the reference [rad]."""
+        return self.normal.contact_angle_rad
+
+
+@dataclass(frozen=True)
+class LoadedWheel:
+    """All loaded patches of one wheel at one pose (field side first)."""
+
+    approach_mm: float
+    patches: list[LoadedPatch]
+    rounds: int
+
+    @property
+    def vertical_force_n(self) -> float:
+        """sum F_n cos(delta) + F_s sin(delta) on the rail [N]."""
+        return float(sum(p.normal_force_n * np.cos(p.contact_angle_rad)
+                         + p.fs_n * np.sin(p.contact_angle_rad) for p in self.patches))
+
+    @property
+    def lateral_force_n(self) -> float:
+        """sum F_s cos(delta) - F_n sin(delta), positive towards the field side [N]."""
+        return float(sum(p.fs_n * np.cos(p.contact_angle_rad)
+                         - p.normal_force_n * np.sin(p.contact_angle_rad)
+                         for p in self.patches))
+
+    @property
+    def dominant(self) -> LoadedPatch:
+        """The patch carrying the largest normal force."""
+        return max(self.patches, key=lambda p: p.normal_force_n)
+
+
+def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approach: float,
+                speed_m_s: float, omega: float, nominal_radius_mm: float, mu: float,
+                shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound
+                ) -> list[LoadedPatch]:
+    if not patches:
+        return []
+    point = np.array([[p.region.x_track_mm for p in patches],
+                      [p.region.y_track_mm for p in patches],
+                      [p.region.z_track_mm - approach for p in patches]])
+    delta = np.array([p.contact_angle_rad for p in patches])
+    xi, eta, phi = rigid_creepages(locus.side, speed_m_s, omega, locus.shift_mm[row],
+                                   locus.yaw_rad[row], locus.roll_rad[row],
+                                   locus.height_mm[row] - approach, nominal_radius_mm, point,
+                                   delta)
+    fn = np.array([p.normal_force_n for p in patches])
+    loaded = fn > 0
+    a = np.where(loaded, [p.a_mm for p in patches], 1.0)
+    b = np.where(loaded, [p.b_mm for p in patches], 1.0)
+    res = fastsim(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
+                  poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
+    return [LoadedPatch(p, float(xi[k]), float(eta[k]), float(phi[k]),
+                        float(res.fx_n[k]) if loaded[k] else 0.0,
+                        float(res.fy_n[k]) if loaded[k] else 0.0,
+                        float(res.mz_nmm[k]) if loaded[k] else 0.0)
+            for k, p in enumerate(patches)]
+
+
+def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
+                         wheel_load_n: ArrayLike = 10_000.0, speed_m_s: float = 2.0,
+                         angular_velocity_rad_s: ArrayLike | None = None, mu: float = 0.3,
+                         shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
+                         poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
+                         bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 40
+                         ) -> list[LoadedWheel]:
+    """Loaded contact of one wheel for every pose of its locus (module docstring).
+
+    Parameters
+    ----------
+    locus : contact locus of the wheel (``locus.wheel_locus``)
+    nominal_radius_mm : r0 of the wheelset [mm] (axle height)
+    wheel_load_n : vertical force W on the rail [N], scalar or (N,)
+    speed_m_s : rolling speed V [m/s]
+    angular_velocity_rad_s : axle angular velocity [rad/s], scalar or (N,); default V / r0
+    mu, shear_modulus_mpa, poisson : friction coefficient, G [MPa], nu
+    method : normal-contact method ("bem", "kp", "hertz", "auto"; ``normal_contact``)
+    n_grid, bound : FASTSIM grid and traction bound
+    rtol, max_rounds : convergence of the normal / tangential coupling (normal forces,
+        relative to W); RuntimeError if not reached
+    """
+    n = locus.gap_mm.shape[0]
+    loads = np.broadcast_to(np.asarray(wheel_load_n, dtype=float), (n,))
+    if angular_velocity_rad_s is None:
+        omegas = np.full(n, speed_m_s * 1000.0 / nominal_radius_mm)
+    else:
+        omegas = np.broadcast_to(np.asarray(angular_velocity_rad_s, dtype=float), (n,))
+    young = 2.0 * shear_modulus_mpa * (1.0 + poisson)
+    out = []
+    for row in range(n):
+        single = _row_locus(locus, row)
+        ratios: list[list[float]] | None = None
+        previous: list[float] = []
+        guess = None
+        rounds = 0
+        while True:
+            rounds += 1
+            normal = wheel_normal_contact(single, float(loads[row]), method=method,
+                                          lateral_ratio=ratios, young_mpa=young,
+                                          poisson=poisson, approach_guess_mm=guess)[0]
+            guess = normal.approach_mm
+            loaded = _tangential(single, 0, normal.patches, normal.approach_mm,
+                                 speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
+                                 shear_modulus_mpa, poisson, n_grid, bound)
+            forces = [p.normal_force_n for p in loaded]
+            new = [p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0 for p in loaded]
+            if ratios is not None and rounds > 3 and len(ratios[0]) == len(new):
+                # under-relaxed after a few rounds: a patch that switches between Hertz and
+                # the BEM (or merges) can otherwise make the fixed point oscillate
+                new = [0.5 * (a + b) for a, b in zip(ratios[0], new, strict=True)]
+            ratios = [new]
+            if len(forces) == len(previous) and np.max(
+                    np.abs(np.subtract(forces, previous)), initial=0.0) < rtol * loads[row]:
+                break
+            if rounds >= max_rounds:
+                raise RuntimeError(f"normal/tangential coupling did not converge at pose {row}")
+            previous = forces
+        out.append(LoadedWheel(normal.approach_mm, loaded, rounds))
+    return out
+
+
+def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
+    """The locus restricted to one pose (shape (1, M))."""
+    def pick(a: _FloatArray) -> _FloatArray:
+        return a[row:row + 1]
+
+    return WheelLocus(
+        side=locus.side, shift_mm=pick(locus.shift_mm), yaw_rad=pick(locus.yaw_rad),
+        roll_rad=pick(locus.roll_rad), height_mm=pick(locus.height_mm),
+        gap_mm=pick(locus.gap_mm), y_wheel_mm=locus.y_wheel_mm, z_wheel_mm=locus.z_wheel_mm,
+        x_track_mm=pick(locus.x_track_mm), y_track_mm=pick(locus.y_track_mm),
+        z_track_mm=pick(locus.z_track_mm), z_rail_mm=pick(locus.z_rail_mm),
+        contact_angle_rad=pick(locus.contact_angle_rad),
+        rolling_radius_mm=locus.rolling_radius_mm,
+        curvature_a_per_mm=locus.curvature_a_per_mm, arc_length_mm=locus.arc_length_mm,
+        valid=pick(locus.valid))
