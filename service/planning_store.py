@@ -114,16 +114,17 @@ _COLUMNS = ["measurement_id", "wheel_id", "vehicle_id", "bogie_type", "axle", "s
 
 
 def measurements_frame(session: Session, fleet_id: str | None,
-                       wheel_id: str | None = None) -> pd.DataFrame:
-    """Every measurement of the fleet's vehicles (all vehicles without a fleet id)."""
+                       vehicle_id: str | None = None) -> pd.DataFrame:
+    """Every measurement of the fleet's vehicles (all vehicles without a fleet id), or of
+    one of its vehicles."""
     query = (select(M.id, M.wheel_id, W.vehicle_id, W.bogie_type, W.axle, W.side,
                     M.mileage_km, M.measured_on, M.kind, M.sd_mm, M.sh_mm, M.qr_mm,
                     M.diameter_mm, M.flange_area_mm2, M.tread_area_mm2)
              .join(W, W.wheel_id == M.wheel_id).join(V, V.vehicle_id == W.vehicle_id))
     if fleet_id is not None:
         query = query.where(V.fleet_id == fleet_id)
-    if wheel_id is not None:
-        query = query.where(M.wheel_id == wheel_id)
+    if vehicle_id is not None:
+        query = query.where(W.vehicle_id == vehicle_id)
     rows = session.execute(query.order_by(M.wheel_id, M.mileage_km)).all()
     frame = pd.DataFrame([tuple(r) for r in rows], columns=_COLUMNS)
     for col in ("sd_mm", "sh_mm", "qr_mm", "diameter_mm", "flange_area_mm2",
@@ -175,12 +176,16 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
 
 
 def compute_state(session: Session, fleet_id: str | None, model_id: int | None = None,
-                  route_id: int | str | None = None) -> tuple[FleetState, pd.DataFrame]:
+                  route_id: int | str | None = None, vehicle_id: str | None = None
+                  ) -> tuple[FleetState, pd.DataFrame]:
+    """The fleet's state (or that of one of its vehicles) and the measurements behind it."""
     limits = fleet_limits(session, fleet_id)
-    frame = measurements_frame(session, fleet_id)
+    frame = measurements_frame(session, fleet_id, vehicle_id)
     query = select(V.vehicle_id, V.km_per_day)
     if fleet_id is not None:
         query = query.where(V.fleet_id == fleet_id)
+    if vehicle_id is not None:
+        query = query.where(V.vehicle_id == vehicle_id)
     km_per_day = {v: k for v, k in session.execute(query) if k is not None}
     forecast = None if model_id is None else _model_forecast(session, model_id, route_id,
                                                              frame, limits)
@@ -245,9 +250,11 @@ def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
                  model_id: int | None = None, route_id: int | str | None = None,
                  today: dt.date | None = None) -> dict[str, Any]:
     """History, state, forecast lines, latest profile over its reference, turning options."""
-    if session.get(W, wheel_id) is None:
+    row = session.get(W, wheel_id)
+    if row is None:
         raise NotFound("wheel_id", f"no wheel {wheel_id!r}")
-    state, frame = compute_state(session, fleet_id, model_id, route_id)
+    # the wheel's vehicle is enough for its state (dates need only its vehicle's mileage)
+    state, frame = compute_state(session, fleet_id, model_id, route_id, row.vehicle_id)
     wheel = next((w for w in state.wheels if w.wheel_id == wheel_id), None)
     if wheel is None:
         raise NotFound("wheel_id", f"wheel {wheel_id!r} is not in fleet {fleet_id!r}")
@@ -295,7 +302,12 @@ def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
             "reference": {"y_mm": grid.tolist(),
                           **{t.name: np.round(t.heights(grid), 4).tolist()
                              for t in targets}}}
-        rates = wheel_rates(wheel, fleet_rates(state))
+        own = all(wheel.remaining[n].source == "history"
+                  and (wheel.remaining[n].rate_mm_per_1000km or 0.0) > 0
+                  for n in (*FLANGE_LIMITS, "diameter"))
+        # the fleet's median rates stand in for those the wheel's history cannot give
+        fleet = state if own else compute_state(session, fleet_id)[0]
+        rates = wheel_rates(wheel, fleet_rates(fleet))
         try:
             options = turning_options(y, z, targets, limits, rates, rates["diameter"])
         except ValueError as exc:

@@ -3,7 +3,8 @@
 Required columns ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km, y_mm, z_mm``
 (``y_mm``/``z_mm`` [mm] in the wheel frame: y from the tape circle, negative towards the
 flange; z up); optional ``measured_on, route_id, running_mode, instrument_id, load_t,
-reference_profile, diameter_mm`` (measured tape-circle diameter [mm]); any other column is a covariate.
+reference_profile, diameter_mm`` (measured tape-circle diameter [mm]); any other column is a
+covariate.
 
 Rules the reader enforces:
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -92,9 +93,11 @@ def plan_wheels(state: FleetState, profiles: Mapping[str, LatestProfile],
         behind = wear_km(w, rates, mileage)
         since_latest = behind + (w.mileage_km - mileage)
 
+        @lru_cache(maxsize=8)  # the plan asks again at the same km for its costs
         def options_at(km_since: float, y=y, z=z, behind=behind, rates=rates):
             zz = projected_profile(y, z, km_since / behind)
-            return turning_options(y, zz, targets, state.limits, rates, rates["diameter"])
+            return tuple(turning_options(y, zz, targets, state.limits, rates,
+                                         rates["diameter"]))
 
         wheels.append(PlanWheel(w.wheel_id, f"{w.vehicle_id}/{w.bogie_type}/{w.axle}",
                                 w.measured_on, w.km_per_day, since_latest,

@@ -33,7 +33,8 @@ def test_model_forecast_for_a_wheel_without_history(tmp_path):
             "wheel_id": "A1-M1L", "include_points": "true"}).json()["items"][2]
         body = {k: source[k] for k in ("vehicle_id", "bogie_type", "axle", "side",
                                        "mileage_km", "y_mm", "z_mm")}
-        body.update(wheel_id="NEW-1", vehicle_id="NEWV", diameter_mm=890.0)
+        body.update(wheel_id="NEW-1", vehicle_id="NEWV", diameter_mm=890.0,
+                    measured_on="2026-05-20")
         r = client.post("/v1/measurements", json=body)
         assert r.status_code == 201, r.text
         state = client.get("/v1/fleet/state", params={"model_id": model_id,
@@ -53,10 +54,22 @@ def test_model_forecast_for_a_wheel_without_history(tmp_path):
                     assert got == "inf"
                 else:
                     assert got == pytest.approx(expected, rel=1e-9)
+        # a plan with the model plans it (dated, with its vehicle's mileage per day)
+        assert client.put("/v1/vehicles/NEWV", json={"km_per_day": 400}).status_code == 200
+        r = client.post("/v1/plans", json={"model_id": model_id, "route_id": "aosta",
+                                           "start": "2026-06-01", "capacity_per_week": 2})
+        assert r.status_code == 201, r.text
+        plan = r.json()
+        assert "NEW-1" not in {u["wheel_id"] for u in plan["unplanned"]}
+        [mine] = [w for w in plan["wheelsets"] if "NEW-1" in w["wheel_ids"]]
+        assert mine["deadline"] is not None
         # without a model the same wheel's remaining km are unknown, and it cannot be planned
         plain = client.get("/v1/fleet/state").json()
         wheel = next(w for w in plain["wheels"] if w["wheel_id"] == "NEW-1")
         assert wheel["remaining_km"]["sd"]["source"] == "unknown"
         assert wheel["urgency"] == "unknown"
+        plan = client.post("/v1/plans", json={"start": "2026-06-01"}).json()
+        assert any(u["wheel_id"] == "NEW-1" and "fewer than 2" in u["reason"]
+                   for u in plan["unplanned"])
         bad = client.get("/v1/fleet/state", params={"model_id": model_id})
         assert bad.status_code == 422 and "route_id" in bad.text
