@@ -9,6 +9,7 @@ Skips, saying so, when selenium, chromium or chromedriver is absent
 from __future__ import annotations
 
 import datetime as dt
+import os
 import shutil
 import socket
 import threading
@@ -23,6 +24,9 @@ from wearcast.service.settings import Settings
 from wearcast.statistics.maintenance.synthetic import generate_fleet
 
 TODAY = dt.date(2026, 6, 1)
+#: The suite's admin key (tests/conftest.py sets WEARCAST_API_KEY for every app it builds).
+KEY = os.environ["WEARCAST_API_KEY"]
+AUTH = {"Authorization": f"Bearer {KEY}"}
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run")
 
@@ -72,7 +76,7 @@ def server(tmp_path_factory):
         except httpx.HTTPError:
             time.sleep(0.05)
     fleet = generate_fleet(2, seed=11, today=TODAY)
-    r = httpx.post(base + "/v1/measurements/import",
+    r = httpx.post(base + "/v1/measurements/import", headers=AUTH,
                    files={"file": ("fleet.csv", fleet.long_csv().encode())}, timeout=120)
     assert r.status_code == 200, r.text
     yield base
@@ -111,8 +115,9 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select
 
-    api = httpx.get(server + "/v1/fleet/state", params={"today": TODAY.isoformat()}).json()
-    browser.get(f"{server}/planner/?today={TODAY.isoformat()}")
+    api = httpx.get(server + "/v1/fleet/state", params={"today": TODAY.isoformat()},
+                    headers=AUTH).json()
+    browser.get(f"{server}/planner/?today={TODAY.isoformat()}#key={KEY}")
     _wait(browser, lambda d: len(_rows(d)) == api["n_wheels"])
     by_id = {w["wheel_id"]: w for w in api["wheels"]}
     # what the page shows is what the API answered
@@ -150,7 +155,7 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
     browser.find_element(By.CSS_SELECTOR, f'tr[data-wheel-id="{wheel_id}"]').click()
     _wait(browser, lambda d: d.find_element(By.ID, "wheel-title").text == f"Wheel {wheel_id}")
     detail = httpx.get(server + f"/v1/fleet/wheels/{wheel_id}",
-                       params={"today": TODAY.isoformat()}).json()
+                       params={"today": TODAY.isoformat()}, headers=AUTH).json()
     points = browser.find_elements(By.CSS_SELECTOR, "#chart-sd circle.point")
     shown = sorted((float(p.get_attribute("data-mileage")), float(p.get_attribute("data-value")))
                    for p in points)
@@ -176,8 +181,8 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
         box.send_keys(value)
     browser.find_element(By.ID, "plan-run").click()
     _wait(browser, lambda d: d.find_element(By.ID, "plan-result").is_displayed())
-    plans = httpx.get(server + "/v1/plans").json()
-    plan = httpx.get(server + f"/v1/plans/{plans[-1]['id']}").json()
+    plans = httpx.get(server + "/v1/plans", headers=AUTH).json()
+    plan = httpx.get(server + f"/v1/plans/{plans[-1]['id']}", headers=AUTH).json()
     assert plan["spec"]["capacity_per_week"] == 2 and plan["horizon_weeks"] == 40
     assert plan["start"] == TODAY.isoformat()
     rows = browser.find_elements(By.CSS_SELECTOR, "#plan-weeks tbody tr")
@@ -192,8 +197,14 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
     assert sets == [w["wheelset"] for w in plan["wheelsets"]
                     if w["week"] is not None or w["at_risk"]]
     href = browser.find_element(By.ID, "plan-export-csv").get_attribute("href")
-    assert httpx.get(href).text.startswith("week,turn_date,wheelset")
+    assert httpx.get(href, headers=AUTH).text.startswith("week,turn_date,wheelset")
     # reopen it from the stored-plan list
     Select(browser.find_element(By.ID, "plan-list")).select_by_value(str(plan["id"]))
     _wait(browser, lambda d: f"Plan {plan['id']}:" in d.find_element(By.ID,
                                                                     "plan-summary").text)
+
+
+def test_planner_api_needs_the_key_the_page_sends(server):
+    """Without a key the API answers 401 (the page asks for one); the static page is open."""
+    assert httpx.get(server + "/v1/fleet/state").status_code == 401
+    assert httpx.get(server + "/planner/").status_code == 200

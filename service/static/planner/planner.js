@@ -13,8 +13,27 @@ const km = (v) => (v === null || v === undefined ? "–" : v === "inf" ? "∞" :
   Math.round(v).toLocaleString("en-US"));
 const num = (v) => (v === "inf" ? Infinity : v === null || v === undefined ? NaN : Number(v));
 
-async function api(path, options) {
-  const response = await fetch(API + path, options);
+// The API needs a key (Authorization: Bearer <key>). The page asks for it once and keeps it
+// in this tab's sessionStorage; a link may carry it in the fragment (#key=...), which the
+// browser never sends to the server.
+const KEY_STORE = "wearcast-api-key";
+
+function apiKey() {
+  return sessionStorage.getItem(KEY_STORE) || "";
+}
+
+function authHeaders(extra = {}) {
+  const key = apiKey();
+  return key ? { ...extra, Authorization: `Bearer ${key}` } : extra;
+}
+
+async function api(path, options = {}) {
+  const response = await fetch(API + path,
+    { ...options, headers: authHeaders(options.headers || {}) });
+  if (response.status === 401) {
+    $("api-key").focus();
+    throw new Error("401: enter an API key with the read scope (write to create plans)");
+  }
   const text = await response.text();
   if (!response.ok) throw new Error(`${response.status}: ${text}`);
   return JSON.parse(text);
@@ -275,6 +294,7 @@ function renderPlan(plan) {
     a.href = `${API}/plans/${plan.id}?format=${f}`;
     a.textContent = `export ${f.toUpperCase()}`;
     a.id = `plan-export-${f}`;
+    a.addEventListener("click", (e) => { e.preventDefault(); download(a.href, plan.id, f); });
     exp.append(a, " ");
   }
   const risk = $("plan-at-risk");
@@ -334,6 +354,19 @@ async function loadPlanList() {
   } catch (e) { /* the list is a convenience */ }
 }
 
+async function download(url, id, format) {
+  // a plain link cannot send the API key: fetch with it and save the answer as a file
+  try {
+    const response = await fetch(url, { headers: authHeaders() });
+    if (!response.ok) throw new Error(`${response.status}: ${await response.text()}`);
+    const link = document.createElement("a");
+    link.href = URL.createObjectURL(await response.blob());
+    link.download = `plan-${id}.${format}`;
+    link.click();
+    URL.revokeObjectURL(link.href);
+  } catch (e) { status(e.message, true); }
+}
+
 async function openPlan() {
   const id = $("plan-list").value;
   if (!id) return;
@@ -343,6 +376,16 @@ async function openPlan() {
 // ---------------------------------------------------------------- wiring
 
 function init() {
+  const fragment = new URLSearchParams(location.hash.slice(1));
+  if (fragment.get("key")) {
+    sessionStorage.setItem(KEY_STORE, fragment.get("key"));
+    history.replaceState(null, "", location.pathname + location.search);
+  }
+  $("api-key").value = apiKey();
+  $("api-key").addEventListener("change", () => {
+    sessionStorage.setItem(KEY_STORE, $("api-key").value.trim());
+    loadFleet();
+  });
   const q = new URLSearchParams(location.search);
   $("fleet-id").value = q.get("fleet_id") || "";
   $("today").value = q.get("today") || "";
