@@ -21,6 +21,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
         health,
         measurements,
         models,
+        references,
         routes,
         simulations,
         wear_tables,
@@ -40,6 +41,6 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.router.add_event_handler("shutdown", runner.shutdown)
     install_handlers(app)
     for module in (health, measurements, routes, wear_tables, models, simulations,
-                   coefficient_fits):
+                   coefficient_fits, references):
         app.include_router(module.router, prefix="/v1")
     return app

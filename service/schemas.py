@@ -253,6 +253,11 @@ class MeasurementOut(BaseModel):
     vertical_shift_mm: float | None
     rotation_rad: float | None
     rms_residual_mm: float | None
+    reference_fits: bool | None = Field(None, description="false: the shape does not fit "
+                                        "reference_profile; no wear areas until one is given")
+    placement: dict[str, Any] | None = Field(None, description="datum found/guessed, tilt, "
+                                             "alignment kind")
+    warnings: list[dict[str, Any]] | None = None
     y_mm: list[float] | None = None
     z_mm: list[float] | None = None
 
@@ -272,6 +277,10 @@ class ImportOut(BaseModel):
     created: int = Field(description="measurements stored by this batch")
     duplicates: int = Field(description="measurements already present, skipped")
     points: int
+    warnings: list[dict[str, Any]] = Field(
+        default_factory=list, description="per file and line: code, level (info | warning), "
+        "message, wheel_id, mileage_km (at most 1000 listed)")
+    warnings_total: int = 0
 
 
 # --- models -----------------------------------------------------------------------------

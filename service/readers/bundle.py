@@ -201,7 +201,9 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
         if meta.instrument_id is None and mp.instrument_serial is not None:
             updates["instrument_id"] = f"miniprof:{mp.instrument_serial}"
         out.append(ProfileRecord(dataclasses.replace(meta, **updates), y_mm, z_mm,
-                                 mp.instrument_parameters))
+                                 mp.instrument_parameters,
+                                 header_parameters=None if mp.parts else mp.header_parameters,
+                                 instrument_datum=True, manifest_line=meta.source_line))
     return out
 
 
