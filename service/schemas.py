@@ -382,10 +382,23 @@ class Limits(Strict):
     qr_min_mm: float | None = Field(default=None, gt=0)
 
 
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=20000)
+    z_mm: list[float] = Field(min_length=20, max_length=20000)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
 class ReprofilingIn(Strict):
     route_id: int | str | None = None
     route: RouteSpec | None = None
-    wheel_id: str | None = None
+    wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
+                                 "profile (its Sd/Sh/qR and wear areas)")
+    measurement_id: int | None = Field(None, description="start from this measurement")
+    profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     bogie_type: BogieType | None = None
     axle: Axle | None = None
     side: Side | None = None
@@ -396,8 +409,12 @@ class ReprofilingIn(Strict):
     def _check(self) -> ReprofilingIn:
         if (self.route_id is None) == (self.route is None):
             raise ValueError("give either route_id or route (exactly one)")
-        if self.wheel_id is None and None in (self.bogie_type, self.axle, self.side):
-            raise ValueError("give wheel_id, or bogie_type, axle and side")
+        starts = [self.wheel_id, self.measurement_id, self.profile]
+        if sum(v is not None for v in starts) > 1:
+            raise ValueError("give at most one of wheel_id, measurement_id, profile")
+        stored = self.wheel_id is not None or self.measurement_id is not None
+        if not stored and None in (self.bogie_type, self.axle, self.side):
+            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
         return self
 
 
@@ -428,6 +445,12 @@ class ReprofilingOut(BaseModel):
     extrapolated: bool
     reason: str | None
     limits: dict[str, float]
+    crossed_limits: dict[str, float] = Field(
+        default_factory=dict, description="limits the measured start is already past, and by "
+        "how much [mm]; remaining_km is then 0")
+    start_parameters_mm: dict[str, float] | None = Field(
+        None, description="measured Sd/Sh/qR the prediction starts from")
+    start_notes: list[str] = Field(default_factory=list)
 
 
 # --- diagnosis ----------------------------------------------------------------------------

@@ -101,7 +101,7 @@ async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
 @router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
 async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> Response:
     cached = None
-    if body.wheel_id is None:  # a wheel's latest measurement may change: always read
+    if body.wheel_id is None and body.measurement_id is None:  # stored states: always read
         cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
                                            body.route)
     if cached is None:
