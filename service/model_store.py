@@ -613,6 +613,37 @@ class _Position(TypedDict):
     side: str
 
 
+def _wheel_hybrid(inputs: ModelInputs, route: RouteInputs, body: ReprofilingIn,
+                  start: WheelStart) -> tuple[hybrid.HybridModel, dict[str, float] | None]:
+    """The hybrid model of this wheel (an extended model made concrete for its covariates)
+    and its weighted measures P_s on the route."""
+    position: _Position = {"bogie_type": start.bogie_type, "axle": start.axle,
+                           "side": start.side}
+    measures = weighted_measures(inputs, route.route, **position)
+    model = inputs.model
+    if isinstance(model, ExtendedModel):
+        covariates = _covariates(inputs, route, body.covariates) or {}
+        for key, value in (start.covariates or {}).items():
+            covariates.setdefault(key, value)
+        model = wheel_model(model, route.route, inputs.table, covariates=covariates,
+                            **position)
+    return model, measures
+
+
+def parameter_corridor(inputs: ModelInputs, route: RouteInputs, body: ReprofilingIn,
+                       start: WheelStart, mileage_km: np.ndarray
+                       ) -> stat_reprofiling.ParameterCorridor:
+    """Predicted Sd/Sh/qR P10/P50/P90 from the wheel's start state (for pictures)."""
+    try:
+        model, measures = _wheel_hybrid(inputs, route, body, start)
+        return stat_reprofiling.parameter_corridor(
+            model, route.route, inputs.table, mileage_km, bogie_type=start.bogie_type,
+            axle=start.axle, side=start.side, start_areas=start.areas_mm2,
+            start_parameters=start.parameters, weighted_measures=measures)
+    except ValueError as exc:
+        raise _statistics_error(exc) from exc
+
+
 def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
                         body: ReprofilingIn, start: WheelStart) -> dict[str, Any]:
     """The :class:`ReprofilingOut` fields (plain floats; None where not finite)."""
@@ -620,14 +651,7 @@ def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
     position: _Position = {"bogie_type": start.bogie_type, "axle": start.axle,
                            "side": start.side}
     try:
-        measures = weighted_measures(inputs, route.route, **position)
-        model = inputs.model
-        if isinstance(model, ExtendedModel):
-            covariates = _covariates(inputs, route, body.covariates) or {}
-            for key, value in (start.covariates or {}).items():
-                covariates.setdefault(key, value)
-            model = wheel_model(model, route.route, inputs.table, covariates=covariates,
-                                **position)
+        model, measures = _wheel_hybrid(inputs, route, body, start)
         result = stat_reprofiling.reprofiling_mileage(
             model, route.route, inputs.table, **position,
             limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,

@@ -99,19 +99,35 @@ def resolve_reference(session: Session, name: str, field: str = "reference_profi
 def own_baseline_spec(session: Session, wheel_id: str) -> tuple[ReferenceSpec, int] | None:
     """The wheel's first profile measurement (lowest mileage) as a reference, and its id;
     None when the wheel has no stored profile."""
-    from wearcast.statistics.cleaning import clean_profile
-
     row = session.execute(
         select(db.Measurement.id, db.Measurement.y_mm, db.Measurement.z_mm)
         .where(db.Measurement.wheel_id == wheel_id, db.Measurement.kind == "profile")
         .order_by(db.Measurement.mileage_km, db.Measurement.id).limit(1)).first()
     if row is None:
         return None
-    y = np.frombuffer(row[1], dtype="<f4").astype(float)
-    z = np.frombuffer(row[2], dtype="<f4").astype(float)
+    return _measurement_spec(row[0], row[1], row[2]), row[0]
+
+
+def _measurement_spec(measurement_id: int, y_blob: bytes, z_blob: bytes) -> ReferenceSpec:
+    from wearcast.statistics.cleaning import clean_profile
+
+    y = np.frombuffer(y_blob, dtype="<f4").astype(float)
+    z = np.frombuffer(z_blob, dtype="<f4").astype(float)
     cleaned = clean_profile(y, z)
-    return (ReferenceSpec(f"own:measurement {row[0]}", "points",
-                          tuple(cleaned.y_mm.tolist()), tuple(cleaned.z_mm.tolist())), row[0])
+    return ReferenceSpec(f"own:{measurement_id}", "points", tuple(cleaned.y_mm.tolist()),
+                         tuple(cleaned.z_mm.tolist()))
+
+
+def stored_reference_spec(session: Session, name: str) -> ReferenceSpec:
+    """The reference a stored measurement names: a catalogue name, an uploaded one, or
+    ``own:<measurement id>`` (a wheel's own baseline)."""
+    if name.startswith("own:") and name[4:].isdigit():
+        row = session.get(db.Measurement, int(name[4:]))
+        if row is None or row.y_mm is None or row.z_mm is None:
+            raise Unprocessable("reference_profile", f"baseline measurement {name[4:]} is "
+                                "gone")
+        return _measurement_spec(row.id, row.y_mm, row.z_mm)
+    return resolve_reference(session, name)
 
 
 # ----------------------------------------------------------------------- user references

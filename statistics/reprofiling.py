@@ -526,3 +526,54 @@ def _already_crossed(measured: dict[str, float], crossed: dict[str, float],
         reason="the measured wheel is already past its limit(s): " + "; ".join(parts),
         equivalent_mileage_km={r: math.nan for r in start}, limits=_limit_dict(lim),
         crossed_limits=crossed, start_parameters=measured)
+
+
+@dataclass(frozen=True)
+class ParameterCorridor:
+    """Sd, Sh, qR [mm] along a mileage grid for the P10/P50/P90 rates.
+
+    ``parameters_mm`` has shape (3, n, 3): rate quantile (high = early, median, low = late)
+    x mileage x (Sd, Sh, qR); ``mileage_km`` (n,) counts from the start state.
+    """
+
+    mileage_km: np.ndarray
+    parameters_mm: np.ndarray
+    extrapolated: np.ndarray
+
+
+def parameter_corridor(
+    model: HybridModel,
+    route: Route,
+    table: pd.DataFrame | WearTable,
+    mileage_km: np.ndarray,
+    *,
+    bogie_type: str,
+    axle: int,
+    side: str,
+    start_areas: Mapping[str, float] | None = None,
+    start_parameters: Mapping[str, float] | None = None,
+    weighted_measures: Mapping[str, float] | None = None,
+) -> ParameterCorridor:
+    """The predicted Sd/Sh/qR band from a start state (as :func:`reprofiling_mileage`
+    follows it: measured parameters plus the model's changes), for pictures.
+
+    Parameters
+    ----------
+    mileage_km : (n,) mileages [km] from the start state, >= 0
+    start_areas, start_parameters : the measured start (see :func:`reprofiling_mileage`)
+    """
+    s = np.asarray(mileage_km, dtype=float)
+    if s.ndim != 1 or not np.all(np.isfinite(s)) or np.any(s < 0):
+        raise ValueError("mileage_km: must be finite mileages >= 0")
+    start = {r: float((start_areas or {}).get(r, 0.0) or 0.0) for r in REGIONS}
+    _, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
+                            quantiles=(0.9, 0.5, 0.1), weighted_measures=weighted_measures)
+    params, _, extra = _evaluate(model, start, rates, DEFAULT_LIMITS,
+                                 np.broadcast_to(s, (3, s.size)).copy())
+    measured = _measured_start(start_parameters)
+    if measured:
+        p0, _ = parameters_at_areas(model, np.array([start["flange"]]),
+                                    np.array([start["tread"]]))
+        params = params + (np.array([measured["sd_mm"], measured["sh_mm"], measured["qr_mm"]])
+                           - p0[0])
+    return ParameterCorridor(s, params, extra)

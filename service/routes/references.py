@@ -1,18 +1,21 @@
-"""``/v1/reference-profiles`` (the catalogue: built-in S1002 family and user profiles) and
-``/v1/wheels/{wheel_id}/reference`` (re-take a wheel's wear against another reference)."""
+"""``/v1/reference-profiles`` (the catalogue: built-in S1002 family and user profiles),
+``/v1/wheels/{wheel_id}/reference`` (re-take a wheel's wear against another reference) and
+the measured-wheel pictures (``/v1/wheels/{wheel_id}/pictures/parameters``,
+``/v1/measurements/{measurement_id}/pictures/profile``)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
-from fastapi import APIRouter
+from fastapi import APIRouter, Query, Response
 from pydantic import Field, model_validator
 
-from wearcast.service import importing, reference_store
+from wearcast.service import importing, reference_store, wheel_pictures
 from wearcast.service import models_db as db
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import NotFound
+from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
 from wearcast.service.schemas import Strict
 
 router = APIRouter(tags=["reference profiles"])
@@ -71,3 +74,31 @@ def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str
 def set_wheel_reference(wheel_id: str, body: WheelReferenceIn,
                         session: SessionDep) -> dict[str, Any]:
     return importing.apply_reference(session, wheel_id, body.reference_profile)
+
+
+_IMAGE: dict[int | str, dict[str, Any]] = {
+    200: {"content": {"image/svg+xml": {}, "image/png": {}}}}
+
+
+@router.get("/wheels/{wheel_id}/pictures/parameters", response_class=Response,
+            responses=_IMAGE)
+def wheel_parameters_picture(
+        wheel_id: str, session: SessionDep, model_id: int, route_id: str,
+        horizon_km: Annotated[float | None, Query(gt=0)] = None,
+        format: ImageFormat = "svg") -> Response:
+    """Sd, Sh, qR against mileage: measured points, predicted P10–P90 band, limits and the
+    crossing."""
+    image = wheel_pictures.wheel_parameter_picture(
+        session, model_id, wheel_id=wheel_id,
+        route_id=route_id, horizon_km=horizon_km,
+        fmt=format)
+    return Response(content=image, media_type=MEDIA_TYPES[format])
+
+
+@router.get("/measurements/{measurement_id}/pictures/profile", response_class=Response,
+            responses=_IMAGE)
+def measurement_profile_picture(measurement_id: int, session: SessionDep,
+                                format: ImageFormat = "svg") -> Response:
+    """The measured profile over its reference, the wear area shaded."""
+    image = wheel_pictures.measurement_profile_picture(session, measurement_id, fmt=format)
+    return Response(content=image, media_type=MEDIA_TYPES[format])

@@ -109,3 +109,28 @@ def test_start_choices_are_exclusive(setup: dict) -> None:
                                     json={"route_id": "metro", "wheel_id": "W288",
                                           "measurement_id": 1})
     assert response.status_code == 422 and "measurement_id" in response.text
+
+
+def test_wheel_pictures_draw_limits_band_and_crossing(setup: dict, tmp_path: Path) -> None:
+    client = setup["client"]
+    for wheel in ("W288", "WAVG"):
+        response = client.get(f"/v1/wheels/{wheel}/pictures/parameters",
+                              params={"model_id": setup["model_id"], "route_id": "metro"})
+        assert response.status_code == 200, response.text
+        assert response.headers["content-type"] == "image/svg+xml"
+        text = response.text
+        assert "limit min 6.5 mm" in text and "measured" in text
+        if wheel == "W288":
+            assert "past by 1.07 mm" in text and "crossed by 1.07 mm" in text
+        else:
+            assert "predicted P10" in text and "predicted crossing" in text
+    png = client.get("/v1/wheels/WAVG/pictures/parameters",
+                     params={"model_id": setup["model_id"], "route_id": "metro",
+                             "format": "png"})
+    assert png.status_code == 200 and png.content[:4] == b"\x89PNG"
+    item = client.get("/v1/measurements", params={"wheel_id": "W288"}).json()["items"][0]
+    profile = client.get(f"/v1/measurements/{item['id']}/pictures/profile")
+    assert profile.status_code == 200
+    assert "reference S1002" in profile.text and "does NOT fit" in profile.text
+    assert client.get("/v1/wheels/nope/pictures/parameters", params={
+        "model_id": setup["model_id"], "route_id": "metro"}).status_code == 404
