@@ -394,23 +394,71 @@ def _covariates(inputs: ModelInputs, route: RouteInputs,
 
 def compute_prediction(inputs: ModelInputs, route: RouteInputs, body: PredictIn
                        ) -> hybrid.Prediction:
+    assert body.bogie_type is not None and body.axle is not None and body.side is not None
     return run_prediction(inputs, route.route, bogie_type=body.bogie_type, axle=body.axle,
                           side=body.side, mileage_km=body.mileage_km,
                           covariates=_covariates(inputs, route, body.covariates))
 
 
+def _measured_prediction(inputs: ModelInputs, route: RouteInputs, body: PredictIn,
+                         start: WheelStart) -> tuple[PredictIn, hybrid.Prediction]:
+    """A prediction from a measured start: areas grow from the measured ones and Sd/Sh/qR
+    follow the measured values plus the model's changes (as reprofiling does); mileages
+    count from the start measurement. Returns the request with the wheel's position."""
+    import dataclasses
+
+    body = body.model_copy(update={"bogie_type": start.bogie_type, "axle": start.axle,
+                                   "side": start.side})
+    covariates = _covariates(inputs, route, body.covariates) or {}
+    for key, value in (start.covariates or {}).items():
+        covariates.setdefault(key, value)
+    result = run_prediction(inputs, route.route, bogie_type=start.bogie_type, axle=start.axle,
+                            side=start.side, mileage_km=[0.0, *body.mileage_km],
+                            start_areas_mm2=start.areas_mm2, covariates=covariates or None)
+    keep = slice(1, None)
+    changes: dict[str, Any] = {
+        name: np.asarray(getattr(result, name))[..., keep]
+        for name in ("mileage_km", "flange_area_mm2", "tread_area_mm2", "extrapolated")}
+    for name in ("wear_mm", "z_mm"):
+        changes[name] = np.asarray(getattr(result, name))[keep]
+    for name in ("sd_mm", "sh_mm", "qr_mm"):
+        values = np.asarray(getattr(result, name), dtype=float)
+        if start.parameters is not None:
+            values = values + (start.parameters[name] - values[0])
+        changes[name] = values[keep]
+    return body, dataclasses.replace(result, **changes)
+
+
+def _start_fields(start: WheelStart | None) -> dict[str, Any]:
+    if start is None:
+        return {"start_mileage_km": None, "start_measurement_id": None,
+                "start_parameters_mm": None, "start_notes": []}
+    return {"start_mileage_km": start.mileage_km, "start_measurement_id": start.measurement_id,
+            "start_parameters_mm": start.parameters, "start_notes": list(start.notes)}
+
+
 def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
     """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
     inputs, route = load_inputs(session, model_id, body.route_id, body.route)
+    if body.measured_start:
+        start = wheel_start(session, body)
+        body, result = _measured_prediction(inputs, route, body, start)
+        out = prediction_out(model_id, route.name, body, result)
+        return out.model_copy(update=_start_fields(start))
     return prediction_out(model_id, route.name, body, compute_prediction(inputs, route, body))
 
 
-def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: PredictIn
-                 ) -> bytes:
-    """:func:`predict`'s answer as JSON bytes (the :class:`PredictionOut` schema)."""
-    result = compute_prediction(inputs, route, body)
-    return orjson.dumps(_prediction_payload(model_id, route.name, body, result),
-                        option=orjson.OPT_SERIALIZE_NUMPY)
+def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: PredictIn,
+                 start: WheelStart | None = None) -> bytes:
+    """:func:`predict`'s answer as JSON bytes (the :class:`PredictionOut` schema); ``start``
+    is the measured start state when the request names one."""
+    if start is not None:
+        body, result = _measured_prediction(inputs, route, body, start)
+    else:
+        result = compute_prediction(inputs, route, body)
+    payload = _prediction_payload(model_id, route.name, body, result)
+    payload.update(_start_fields(start))
+    return orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
 
 
 _reference_cache: LruCache[np.ndarray] = LruCache(8)
@@ -544,7 +592,7 @@ def _measured_state(sd: float | None, sh: float | None, qr: float | None,
     return parameters, areas, tuple(notes)
 
 
-def _profile_start(body: ReprofilingIn) -> WheelStart:
+def _profile_start(body: ReprofilingIn | PredictIn) -> WheelStart:
     """Start state of an uploaded profile: placed by its datum, wear against its reference."""
     from wearcast.service.importing import _process_arrays
     from wearcast.service.reference_store import ReferenceSpec
@@ -572,7 +620,7 @@ def _profile_start(body: ReprofilingIn) -> WheelStart:
                       float(profile.mileage_km), None, areas, None, parameters, notes)
 
 
-def wheel_start(session: Session | None, body: ReprofilingIn) -> WheelStart:
+def wheel_start(session: Session | None, body: ReprofilingIn | PredictIn) -> WheelStart:
     """The wheel's position from the request, or with ``wheel_id`` / ``measurement_id``
     from storage (its latest / that measured profile as the start state: measured Sd/Sh/qR
     and wear areas), or an uploaded ``profile``; needs a session only for stored starts."""

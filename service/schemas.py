@@ -330,10 +330,41 @@ class WheelPosition(RouteRef):
     side: Side
 
 
-class PredictIn(WheelPosition):
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=20000)
+    z_mm: list[float] = Field(min_length=20, max_length=20000)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
+class PredictIn(RouteRef):
+    bogie_type: BogieType | None = None
+    axle: Axle | None = None
+    side: Side | None = None
+    wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
+                                 "profile; mileage_km then counts from that measurement")
+    measurement_id: int | None = Field(None, description="start from this measurement")
+    profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     covariates: dict[str, Any] | None = Field(default=None, description=(
         "the wheel's covariates for an extended model (load_t, running_mode, ...)"))
     mileage_km: list[float] = Field(min_length=1, max_length=1000)
+
+    @model_validator(mode="after")
+    def _start(self) -> PredictIn:
+        starts = [self.wheel_id, self.measurement_id, self.profile]
+        if sum(v is not None for v in starts) > 1:
+            raise ValueError("give at most one of wheel_id, measurement_id, profile")
+        stored = self.wheel_id is not None or self.measurement_id is not None
+        if not stored and None in (self.bogie_type, self.axle, self.side):
+            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+        return self
+
+    @property
+    def measured_start(self) -> bool:
+        return any(v is not None for v in (self.wheel_id, self.measurement_id, self.profile))
 
     @field_validator("mileage_km")
     @classmethod
@@ -374,22 +405,16 @@ class PredictionOut(BaseModel):
     y_mm: list[float]
     reference_z_mm: list[float]
     points: list[PredictionAt]
+    start_mileage_km: float | None = None
+    start_measurement_id: int | None = None
+    start_parameters_mm: dict[str, float] | None = None
+    start_notes: list[str] = Field(default_factory=list)
 
 
 class Limits(Strict):
     sd_min_mm: float | None = Field(default=None, gt=0)
     sh_max_mm: float | None = Field(default=None, gt=0)
     qr_min_mm: float | None = Field(default=None, gt=0)
-
-
-class MeasuredProfileIn(Strict):
-    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
-    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
-
-    y_mm: list[float] = Field(min_length=20, max_length=20000)
-    z_mm: list[float] = Field(min_length=20, max_length=20000)
-    mileage_km: float = Field(0.0, ge=0)
-    reference_profile: str = "S1002"
 
 
 class ReprofilingIn(Strict):

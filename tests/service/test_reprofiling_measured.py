@@ -134,3 +134,25 @@ def test_wheel_pictures_draw_limits_band_and_crossing(setup: dict, tmp_path: Pat
     assert "reference S1002" in profile.text and "does NOT fit" in profile.text
     assert client.get("/v1/wheels/nope/pictures/parameters", params={
         "model_id": setup["model_id"], "route_id": "metro"}).status_code == 404
+
+
+def test_predict_starts_from_the_measured_wheel(setup: dict) -> None:
+    client = setup["client"]
+    url = f"/v1/models/{setup['model_id']}/predict"
+    worn = client.post(url, json={"route_id": "metro", "wheel_id": "WAVG",
+                                  "mileage_km": [0.0, 100_000.0]})
+    assert worn.status_code == 200, worn.text
+    body = worn.json()
+    measured = body["start_parameters_mm"]
+    first, later = body["points"]
+    for key in ("sd_mm", "sh_mm", "qr_mm"):
+        assert first[key] == pytest.approx(measured[key], abs=1e-9)
+    assert later["sh_mm"] > first["sh_mm"]  # the tread wears on: Sh grows from the measured
+    assert body["start_mileage_km"] == 80_000 and body["bogie_type"] == "motor"
+    item = client.get("/v1/measurements", params={"wheel_id": "WAVG"}).json()["items"][0]
+    assert body["start_areas_mm2"]["flange"] == pytest.approx(item["flange_area_mm2"])
+    assert first["flange_area_mm2"]["p50"] == pytest.approx(item["flange_area_mm2"])
+    new = client.post(url, json={"route_id": "metro", "bogie_type": "motor", "axle": 1,
+                                 "side": "left", "mileage_km": [0.0]}).json()
+    assert new["start_parameters_mm"] is None
+    assert new["points"][0]["qr_mm"] == pytest.approx(10.8, abs=0.05)
