@@ -402,6 +402,33 @@ def _warning(code: str, level: str, message: str) -> dict[str, Any]:
     return {"code": code, "level": level, "message": message}
 
 
+def _datum_header_notes(header: dict[str, str] | None) -> list[str]:
+    """What the file's own datum entries say (MiniProf ``Xoffset``/``Yoffset``, reference
+    points): the exported points already carry the offsets the instrument software applied,
+    so they are reported, not applied again."""
+    if not header:
+        return ["the file carries no datum offsets or reference points"]
+    out = []
+    offsets = {k: header[k] for k in ("Xoffset", "Yoffset") if k in header}
+    if offsets:
+        try:
+            nonzero = {k: float(v) for k, v in offsets.items() if float(v) != 0.0}
+        except ValueError:
+            nonzero = {}
+            out.append(f"unreadable datum offsets {offsets}")
+        if nonzero:
+            out.append("the file's datum offsets " + ", ".join(f"{k} = {v:g} mm" for k, v in
+                                                                nonzero.items())
+                       + " are taken as already applied to the exported points (check)")
+        else:
+            out.append("the file's datum offsets Xoffset/Yoffset are 0")
+    refs = sorted(k for k in header if k.startswith("RefPoint"))
+    if refs:
+        out.append(f"{len(refs)} instrument reference points in the header "
+                   f"({refs[0]} = {header[refs[0]]})")
+    return out
+
+
 def measurement_warnings(record: ProfileRecord, p: _Processed) -> list[dict[str, Any]]:
     """What the import had to find, guess or drop for one profile (see module docstring)."""
     out: list[dict[str, Any]] = []
@@ -427,7 +454,8 @@ def measurement_warnings(record: ProfileRecord, p: _Processed) -> list[dict[str,
     placement = p.placement or {}
     if placement.get("alignment") == "datum":
         found = placement.get("back_face_found")
-        notes = placement.get("notes") or []
+        notes = list(placement.get("notes") or [])
+        notes += _datum_header_notes(record.datum_header)
         out.append(_warning("datum_found" if found else "datum_guessed",
                             "info" if found else "warning", "; ".join(notes)))
         out.append(_warning("wear_alignment", "info", (
@@ -672,10 +700,13 @@ def apply_reference(session: Session, wheel_id: str, name: str, *, commit: bool 
         m.lateral_shift_mm, m.vertical_shift_mm = p.lateral_shift_mm, p.vertical_shift_mm
         m.rotation_rad, m.rms_residual_mm = p.rotation_rad, p.rms_residual_mm
         m.placement = p.placement
-        kept = [w for w in (m.warnings or []) if w.get("code") == "header_parameters"]
+        # what the import found in the file (header, datum, cleaning) stays; the reference
+        # fit and the wear alignment are taken anew
+        redone = ("reference_mismatch", "wear_alignment")
+        kept = [w for w in (m.warnings or []) if w.get("code") not in redone]
         record = ProfileRecord(meta=_meta_stub(m), y_mm=np.asarray(y), z_mm=np.asarray(z))
         m.warnings = kept + [w for w in measurement_warnings(record, p)
-                             if w["code"] != "header_parameters"] or None
+                             if w["code"] in redone] or None
         out.append({"measurement_id": m.id, "mileage_km": m.mileage_km,
                     "reference_profile": stored_name, "reference_fits": m.reference_fits,
                     "flange_area_mm2": m.flange_area_mm2, "tread_area_mm2": m.tread_area_mm2,

@@ -92,6 +92,9 @@ class ProfileRecord:
     instrument_datum: bool = False
     #: Line of the manifest row that described this file (MiniProf), for warnings
     manifest_line: int | None = None
+    #: The instrument's datum entries of the header as printed (MiniProf ``Xoffset``,
+    #: ``Yoffset``, ``RefPoint1``…), reported with the placement
+    datum_header: dict[str, str] | None = None
 
 
 @dataclass(frozen=True)

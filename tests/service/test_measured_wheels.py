@@ -189,3 +189,26 @@ def test_unknown_reference_names_the_field(imported) -> None:
     assert response.status_code == 422 and "reference_profile" in response.text
     response = client.put("/v1/wheels/nope/reference", json={"reference_profile": "S1002"})
     assert response.status_code == 404
+
+
+def test_own_baseline_declared_in_the_manifest_and_datum_entries_reported(
+        reference_dir: Path, tmp_path: Path) -> None:
+    client = TestClient(create_app(Settings(data_dir=tmp_path)))
+    name = "whl_left_iter288.whl"
+    manifest = ("file,wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,reference_profile\n"
+                f"{name},W1,V1,motor,1,left,0,own\n")
+    response = client.post("/v1/measurements/import", files={
+        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
+        "manifest": ("manifest.csv", manifest.encode())})
+    assert response.status_code == 200, response.text
+    datum = [w for w in response.json()["warnings"] if w["code"] == "datum_found"]
+    assert datum and "Xoffset/Yoffset are 0" in datum[0]["message"]
+    assert "reference points" in datum[0]["message"]
+    item = client.get("/v1/measurements").json()["items"][0]
+    assert item["reference_profile"] == f"own:{item['id']}" and item["reference_fits"]
+    assert abs(item["flange_area_mm2"]) < 1.0 and abs(item["tread_area_mm2"]) < 1.0
+    bad = client.post("/v1/measurements/import", files={
+        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
+        "manifest": ("manifest.csv", manifest.replace(",own", ",P8").replace("W1", "W2")
+                     .encode())})
+    assert bad.status_code == 422 and "reference_profile" in bad.text
