@@ -112,6 +112,8 @@ def test_no_wheel_gets_negative_wear_and_mismatches_are_flagged(imported) -> Non
                      n for n in NAMES if n.startswith("Car"))):
         assert items[name]["reference_fits"] is False, name
     assert items["avg_wheel.whl"]["reference_fits"] is True
+    flagged = client.get("/v1/measurements", params={"reference_fits": "false"}).json()
+    assert flagged["total"] == 8
 
 
 def test_the_import_answer_warns_per_file_and_line(imported) -> None:
