@@ -477,7 +477,13 @@ class _Counts:
     duplicates: int = 0
     points: int = 0
     warnings: list[dict[str, Any]] = field(default_factory=list)
+    infos: list[dict[str, Any]] = field(default_factory=list)
     warnings_total: int = 0
+
+    def listed(self) -> tuple[dict[str, Any], ...]:
+        """Warnings for the answer: level ``warning`` first, then ``info``, at most
+        ``MAX_WARNINGS``."""
+        return tuple((self.warnings + self.infos)[:MAX_WARNINGS])
 
 
 def store_records(session: Session, records: Iterable[Record], batch_id: int | None, *,
@@ -505,12 +511,14 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
                 registry.own_wheels.add(record.meta.wheel_id)
             for warning in row.get("warnings") or ():
                 counts.warnings_total += 1
-                if len(counts.warnings) < MAX_WARNINGS:
+                # the answer lists warnings before infos, each in file order, up to the cap
+                kept = counts.warnings if warning["level"] == "warning" else counts.infos
+                if len(kept) < MAX_WARNINGS:
                     line = (record.manifest_line if isinstance(record, ProfileRecord)
                             and record.manifest_line is not None else record.meta.source_line)
-                    counts.warnings.append({"file": record.meta.source_file or None,
-                                            "line": line, "wheel_id": record.meta.wheel_id,
-                                            "mileage_km": record.meta.mileage_km, **warning})
+                    kept.append({"file": record.meta.source_file or None, "line": line,
+                                 "wheel_id": record.meta.wheel_id,
+                                 "mileage_km": record.meta.mileage_km, **warning})
         counts.points += sum(r["n_points"] for r in rows)
         if batch_id is None:
             for row in rows:
@@ -569,21 +577,22 @@ def _existing_batch(session: Session, *, checksum: str | None = None,
 
 def _duplicate(session: Session, batch: db.ImportBatch) -> ImportResult:
     """The answer to a repeated import: nothing created, the first import's warnings."""
-    warnings: list[dict[str, Any]] = []
-    total = 0
+    counts = _Counts()
     for source, line, wheel, mileage, stored in session.execute(
             select(db.Measurement.source_file, db.Measurement.source_line,
                    db.Measurement.wheel_id, db.Measurement.mileage_km,
                    db.Measurement.warnings)
             .where(db.Measurement.batch_id == batch.id).order_by(db.Measurement.id)):
         for warning in stored or ():
-            total += 1
-            if len(warnings) < MAX_WARNINGS:
-                warnings.append({"file": source, "line": line, "wheel_id": wheel,
-                                 "mileage_km": mileage, **warning})
+            counts.warnings_total += 1
+            kept = counts.warnings if warning.get("level") == "warning" else counts.infos
+            if len(kept) < MAX_WARNINGS:
+                kept.append({"file": source, "line": line, "wheel_id": wheel,
+                             "mileage_km": mileage, **warning})
     return ImportResult(batch_id=batch.id, duplicate=True, file_name=batch.file_name,
                         records=batch.n_records, created=0, duplicates=batch.n_records,
-                        points=0, warnings=tuple(warnings), warnings_total=total)
+                        points=0, warnings=counts.listed(),
+                        warnings_total=counts.warnings_total)
 
 
 def iter_records(stream: BinaryIO, file_name: str, manifest: bytes | None,
@@ -656,7 +665,7 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
     return ImportResult(batch_id=batch.id, duplicate=False, file_name=file_name,
                         records=counts.records, created=counts.created,
                         duplicates=counts.duplicates, points=counts.points,
-                        warnings=tuple(counts.warnings), warnings_total=counts.warnings_total)
+                        warnings=counts.listed(), warnings_total=counts.warnings_total)
 
 
 def _abort(session: Session, raw_dir: Path, stored_files: list[rawfiles.StoredFile]) -> None:
