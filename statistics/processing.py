@@ -151,7 +151,7 @@ def process_profile(
         datum=datum,
         reference_check=check_reference(parameters, areas, reference_height,
                                         float(np.interp(0.0, grid, wear)),
-                                        aligned.rms_residual_mm),
+                                        aligned.rms_residual_mm, grid, wear),
     )
 
 

@@ -45,3 +45,14 @@ def test_material_above_the_reference_is_flagged() -> None:
     p = process_profile(y, z, alignment="datum")
     assert p.reference_check is not None and not p.reference_check.fits
     assert any("tread wear area" in r for r in p.reference_check.reasons)
+
+
+def test_a_stretch_of_material_above_the_reference_is_flagged_even_when_areas_balance() -> None:
+    # +0.5 mm over y = -25 … -5 (20 mm) and 0.4 mm of wear over y = 10 … 40: tread area
+    # about +2 mm², yet the raised stretch cannot be wear from S1002
+    y = np.linspace(-70.0, 60.0, 1301)
+    bump = 0.5 * ((y > -25.0) & (y < -5.0)) - 0.4 * ((y > 10.0) & (y < 40.0))
+    p = process_profile(y, s1002_height_mm(y) + bump, alignment="datum")
+    assert p.areas.tread_mm2 > -5.0
+    assert p.reference_check is not None and not p.reference_check.fits
+    assert any("above the reference over y" in r for r in p.reference_check.reasons)
