@@ -53,7 +53,7 @@ from wearcast.physics.curving import (
     curve_case,
     solve_curving_cases_or_none,
 )
-from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
+from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle, vehicle_preset
 from wearcast.physics.wear_distribution import (
@@ -659,7 +659,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         if progress is not None:
             progress(i + 1, st.n_steps, mileage[-1])
     prof = np.array(profiles)
-    params = [nominal_frame_flange_parameters(y, p) for p in prof]
+    params = [flange_parameters(y, p) for p in prof]  # EN 15313, from the worn tread
     r0_mm = veh.wheel_radius_m * 1000.0
     volumes = np.array([worn_volume_mm3(y, prof[0], p, r0_mm) for p in prof])
     rail_rate = np.mean(rail_rates, axis=0)

@@ -39,13 +39,14 @@ def _router_modules() -> list[Any]:
         models,
         planning,
         rails,
+        references,
         routes,
         simulations,
         wear_tables,
     )
 
     return [measurements, routes, wear_tables, models, simulations, coefficient_fits, rails,
-            planning, jobs, admin]
+            planning, references, jobs, admin]
 
 
 def create_app(settings: Settings | None = None, *, migrate: bool = True) -> FastAPI:

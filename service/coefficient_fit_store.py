@@ -219,8 +219,13 @@ def _measured_wear(session: Session, body: CoefficientFitIn) -> tuple[list, list
     m = measurement_store.get(session, body.measurement_id)
     if not m.y_mm:
         raise Unprocessable("measurement_id", f"measurement {m.id} has no profile points")
+    if m.reference_fits is False:
+        raise Unprocessable("measurement_id", f"measurement {m.id}'s shape does not fit its "
+                            f"reference {m.reference_profile} (flagged at import); the wear "
+                            "loop starts from S1002")
+    datum = (m.placement or {}).get("alignment") == "datum"  # keep a MiniProf wheel's datum
     try:
-        processed = process_profile(m.y_mm, m.z_mm)
+        processed = process_profile(m.y_mm, m.z_mm, alignment="datum" if datum else "free")
     except ValueError as exc:
         raise Unprocessable("measurement_id", f"measurement {m.id}: {exc}") from exc
     ok = np.isfinite(processed.wear_mm)

@@ -7,6 +7,16 @@ with a manifest, or a zip of these; :mod:`wearcast.service.readers`), processes 
 with ``session.execute(insert(...), rows)`` — no ORM object per row, points and wear curves as
 little-endian float32 blobs — so memory stays bounded however large the upload.
 
+Placement and warnings: a MiniProf profile (``ProfileRecord.instrument_datum``) is placed by
+the instrument's own datum and aligned to its reference by a vertical shift only
+(``process_profile(alignment="datum")``); other profiles by the free rigid fit. The stored
+points are always the file's. Each measurement keeps its warnings (header versus recomputed
+Sd/Sh/qR, reference mismatch, datum found or guessed, points dropped by cleaning) and the
+import answer lists them per file and line. A shape that does not fit its declared reference
+(:mod:`wearcast.statistics.reference_check`) is stored with ``reference_fits = False`` and
+without wear areas or wear curve, so it stays out of wear statistics until a reference that
+fits is given (:func:`apply_reference`).
+
 Idempotency: a batch is identified by the SHA-256 of its content (file, and manifest when
 given) and optionally by an ``Idempotency-Key``; importing the same content or key again
 creates nothing and returns the first batch with ``duplicate=True``. A measurement whose
@@ -26,7 +36,7 @@ import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
 from typing import Any, BinaryIO, NamedTuple, TypeAlias
@@ -38,14 +48,25 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
-from wearcast.service.errors import ApiError, Unprocessable
+from wearcast.service.errors import ApiError, NotFound, Unprocessable
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ParameterRecord, ProfileRecord
+from wearcast.service.reference_store import (
+    OWN_BASELINE,
+    ReferenceSpec,
+    is_own_baseline,
+    own_baseline_spec,
+    resolve_reference,
+)
 
 Record: TypeAlias = ProfileRecord | ParameterRecord
 Progress = Callable[[int], None]
 
 DEFAULT_CHUNK = 500
+#: Header Sd/Sh/qR farther than this [mm] from the recomputed ones are reported.
+HEADER_TOLERANCE_MM = 0.3
+#: At most this many warnings are listed in an import answer (all are stored).
+MAX_WARNINGS = 1000
 #: Chunks with at least this many new profiles are processed by a pool of worker processes;
 #: smaller ones (single posts, the example fleet, tests) stay in the calling process.
 PARALLEL_MIN_PROFILES = 256
@@ -62,9 +83,13 @@ class ImportResult:
     created: int
     duplicates: int
     points: int
+    warnings: tuple[dict[str, Any], ...] = ()
+    warnings_total: int = 0
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        out = dict(self.__dict__)
+        out["warnings"] = list(self.warnings)
+        return out
 
 
 def import_file_error(exc: ImportFileError) -> ApiError:
@@ -97,9 +122,29 @@ class _Registry:
         self.wheels: dict[str, tuple[str, str, int, str]] = {}
         self.vehicles: set[str] = set()
         self.routes: dict[str, str] = {}
+        self.references: dict[str, ReferenceSpec] = {}
+        self.own_wheels: set[str] = set()
         for route_id, name in session.execute(select(db.Route.id, db.Route.name)):
             self.routes[str(route_id)] = name
             self.routes[name] = name
+
+    def reference(self, record: ProfileRecord) -> ReferenceSpec:
+        """The record's declared reference, resolved once per name; the own baseline is
+        processed against S1002 first and re-referenced after the batch is stored."""
+        name = record.meta.reference_profile
+        if is_own_baseline(name):
+            name = "S1002"
+        spec = self.references.get(name)
+        if spec is None:
+            try:
+                spec = resolve_reference(self.session, name)
+            except Unprocessable as exc:
+                meta = record.meta
+                raise ImportFileError(meta.source_file, exc.reason,
+                                      line=record.manifest_line or meta.source_line,
+                                      field="reference_profile") from None
+            self.references[name] = spec
+        return spec
 
     def route_name(self, ref: str | None) -> str | None:
         return None if ref is None else self.routes.get(str(ref), str(ref))
@@ -144,14 +189,6 @@ class _Registry:
         self.session.execute(insert(db.Wheel), list(new_wheels.values()))
 
 
-def _check_reference(record: ProfileRecord) -> None:
-    meta = record.meta
-    if meta.reference_profile.upper() != "S1002":
-        raise ImportFileError(meta.source_file, f"reference profile {meta.reference_profile!r} "
-                              "is not supported (only S1002)", line=meta.source_line,
-                              field="reference_profile")
-
-
 class _Processed(NamedTuple):
     """What the measurements row keeps of a processed profile (small, so it pickles fast)."""
 
@@ -167,34 +204,66 @@ class _Processed(NamedTuple):
     sd_mm: float
     sh_mm: float
     qr_mm: float
+    reference: str = "S1002"
+    reference_fits: bool = True
+    reference_reasons: tuple[str, ...] = ()
+    placement: dict[str, Any] | None = None
+    n_raw: int = 0
+    n_removed: int = 0
+    cleaning_notes: tuple[str, ...] = ()
 
 
-def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray) -> _Processed | str:
+def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, spec: ReferenceSpec | None = None,
+                    datum: bool = False) -> _Processed | str:
     """The processed profile, or the reason it cannot be used.
 
-    Runs in worker processes too, so it returns the error as text instead of raising.
+    ``spec`` is the declared reference (default S1002); ``datum`` places the profile by the
+    instrument's datum instead of the free rigid fit. Runs in worker processes too, so it
+    returns the error as text instead of raising.
     """
+    from wearcast.service.reference_store import height_of
     from wearcast.statistics.processing import process_profile
     from wearcast.statistics.profile_parameters import flange_parameters
 
+    spec = spec if spec is not None else ReferenceSpec("S1002", "builtin")
     try:
-        p = process_profile(y_mm, z_mm)
+        p = process_profile(y_mm, z_mm, reference_height=height_of(spec),
+                            alignment="datum" if datum else "free")
     except ValueError as exc:
         return str(exc)
-    # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument), not of
-    # the profile aligned to the reference: the alignment's lateral shift would move Sd.
-    params = flange_parameters(p.cleaned.y_mm, p.cleaned.z_mm)
+    if datum:
+        params = p.parameters  # of the profile as placed on its datum (= as measured)
+    else:
+        # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument),
+        # not of the profile moved by the free fit: its lateral shift would move Sd.
+        params = flange_parameters(p.cleaned.y_mm, p.cleaned.z_mm)
     grid = np.asarray(p.grid_y_mm)
+    placement: dict[str, Any] = {"alignment": p.alignment}
+    if p.datum is not None:
+        d = p.datum
+        placement.update(
+            back_face_found=d.back_face_found,
+            back_face_y_mm=_finite_or_none(d.back_face_y_mm),
+            tape_circle_z_mm=_finite_or_none(d.tape_circle_z_mm),
+            tilt_back_face_rad=_finite_or_none(d.tilt_back_face_rad),
+            tilt_field_rad=_finite_or_none(d.tilt_field_rad),
+            tilt_applied_rad=d.tilt_applied_rad, notes=list(d.notes))
+    check = p.reference_check
+    assert check is not None
+    placement["rejected_areas_mm2"] = (None if check.fits else
+                                       [float(p.areas.flange_mm2), float(p.areas.tread_mm2)])
     return _Processed(np.asarray(p.wear_mm, dtype=np.float32), float(grid[0]),
                       float(grid[1] - grid[0]), float(p.areas.flange_mm2),
                       float(p.areas.tread_mm2), float(p.lateral_shift_mm),
                       float(p.vertical_shift_mm), float(p.rotation_rad),
                       float(p.rms_residual_mm), float(params.sd_mm), float(params.sh_mm),
-                      float(params.qr_mm))
+                      float(params.qr_mm), spec.name, check.fits, check.reasons, placement,
+                      int(np.asarray(y_mm).size), int(p.cleaned.n_removed), p.cleaned.notes)
 
 
-def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray]]) -> list[_Processed | str]:
-    return [_process_arrays(y, z) for y, z in profiles]
+def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray, ReferenceSpec | None, bool]]
+                   ) -> list[_Processed | str]:
+    return [_process_arrays(y, z, spec, datum) for y, z, spec, datum in profiles]
 
 
 _POOL: ProcessPoolExecutor | None = None
@@ -227,7 +296,8 @@ def _discard_pool() -> None:
         _POOL = None
 
 
-def _submit(records: list[ProfileRecord]) -> Callable[[], list[_Processed]]:
+def _submit(records: list[ProfileRecord], registry: _Registry | None = None
+            ) -> Callable[[], list[_Processed]]:
     """Start processing a chunk's profiles; the returned callable waits for the results.
 
     Large chunks go to the worker pool, so the caller can parse and insert meanwhile; a pool
@@ -235,9 +305,9 @@ def _submit(records: list[ProfileRecord]) -> Callable[[], list[_Processed]]:
     processing in this process. The callable raises the ImportFileError of the first unusable
     profile, naming its file and line.
     """
-    for record in records:
-        _check_reference(record)
-    arrays = [(r.y_mm, r.z_mm) for r in records]
+    specs = [registry.reference(r) if registry is not None else None for r in records]
+    arrays = [(r.y_mm, r.z_mm, spec, r.instrument_datum)
+              for r, spec in zip(records, specs, strict=True)]
     pool = _pool() if len(records) >= PARALLEL_MIN_PROFILES else None
     futures = []
     if pool is not None:
@@ -297,14 +367,11 @@ def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
                    reported_sd_mm=float(record.sd_mm), reported_sh_mm=float(record.sh_mm),
                    reported_qr_mm=float(record.qr_mm))
         return row
-    p = processed if processed is not None else _submit([record])()[0]
+    p = processed if processed is not None else _submit([record], registry)()[0]
     reported = record.instrument_parameters or {}
     row.update(
         kind="profile", n_points=int(len(record.y_mm)), y_mm=f32(record.y_mm),
-        z_mm=f32(record.z_mm), wear_mm=f32(p.wear_mm),
-        wear_grid_start_mm=p.grid_start_mm, wear_grid_step_mm=p.grid_step_mm,
-        flange_area_mm2=_finite_or_none(p.flange_area_mm2),
-        tread_area_mm2=_finite_or_none(p.tread_area_mm2),
+        z_mm=f32(record.z_mm), **_wear_columns(p),
         sd_mm=_finite_or_none(p.sd_mm), sh_mm=_finite_or_none(p.sh_mm),
         qr_mm=_finite_or_none(p.qr_mm),
         lateral_shift_mm=p.lateral_shift_mm, vertical_shift_mm=p.vertical_shift_mm,
@@ -313,8 +380,95 @@ def measurement_row(record: Record, batch_id: int | None, registry: _Registry,
         reported_sd_mm=_finite_or_none(reported.get("sd_mm")),
         reported_sh_mm=_finite_or_none(reported.get("sh_mm")),
         reported_qr_mm=_finite_or_none(reported.get("qr_mm")),
+        placement=p.placement,
+        warnings=measurement_warnings(record, p) or None,
     )
     return row
+
+
+def _wear_columns(p: _Processed) -> dict[str, Any]:
+    """Wear curve, areas and reference fit of a processed profile; a shape that does not
+    fit its reference keeps no wear curve or areas (excluded from wear statistics)."""
+    fits = bool(p.reference_fits)
+    return {
+        "wear_mm": f32(p.wear_mm) if fits else None,
+        "wear_grid_start_mm": p.grid_start_mm, "wear_grid_step_mm": p.grid_step_mm,
+        "flange_area_mm2": _finite_or_none(p.flange_area_mm2) if fits else None,
+        "tread_area_mm2": _finite_or_none(p.tread_area_mm2) if fits else None,
+        "reference_profile": p.reference, "reference_fits": fits,
+    }
+
+
+def _warning(code: str, level: str, message: str) -> dict[str, Any]:
+    return {"code": code, "level": level, "message": message}
+
+
+def _datum_header_notes(header: dict[str, str] | None) -> list[str]:
+    """What the file's own datum entries say (MiniProf ``Xoffset``/``Yoffset``, reference
+    points): the exported points already carry the offsets the instrument software applied,
+    so they are reported, not applied again."""
+    if not header:
+        return ["the file carries no datum offsets or reference points"]
+    out = []
+    offsets = {k: header[k] for k in ("Xoffset", "Yoffset") if k in header}
+    if offsets:
+        try:
+            nonzero = {k: float(v) for k, v in offsets.items() if float(v) != 0.0}
+        except ValueError:
+            nonzero = {}
+            out.append(f"unreadable datum offsets {offsets}")
+        if nonzero:
+            out.append("the file's datum offsets " + ", ".join(f"{k} = {v:g} mm" for k, v in
+                                                                nonzero.items())
+                       + " are taken as already applied to the exported points (check)")
+        else:
+            out.append("the file's datum offsets Xoffset/Yoffset are 0")
+    refs = sorted(k for k in header if k.startswith("RefPoint"))
+    if refs:
+        out.append(f"{len(refs)} instrument reference points in the header "
+                   f"({refs[0]} = {header[refs[0]]})")
+    return out
+
+
+def measurement_warnings(record: ProfileRecord, p: _Processed) -> list[dict[str, Any]]:
+    """What the import had to find, guess or drop for one profile (see module docstring)."""
+    out: list[dict[str, Any]] = []
+    header = record.header_parameters
+    if header is not None:
+        recomputed = {"sd_mm": p.sd_mm, "sh_mm": p.sh_mm, "qr_mm": p.qr_mm}
+        diffs = {k: float(header[k]) - v for k, v in recomputed.items() if math.isfinite(v)}
+        if any(abs(d) > HEADER_TOLERANCE_MM for d in diffs.values()):
+            what = ("the old-style template's placeholders" if header.get("placeholder")
+                    else "the instrument's values")
+            out.append(_warning("header_parameters", "warning", (
+                f"header Sd/Sh/qR {float(header['sd_mm']):.2f}/{float(header['sh_mm']):.2f}/"
+                f"{float(header['qr_mm']):.2f} mm ({what}) disagree with the points' "
+                f"{p.sd_mm:.2f}/{p.sh_mm:.2f}/{p.qr_mm:.2f} mm by "
+                + "/".join(f"{diffs.get(k, float('nan')):+.2f}" for k in recomputed)
+                + f" mm (tolerance {HEADER_TOLERANCE_MM:g} mm); the points' values are stored")))
+    if not p.reference_fits:
+        out.append(_warning("reference_mismatch", "warning", (
+            f"shape does not fit the declared reference {p.reference}: "
+            + "; ".join(p.reference_reasons) + ". Stored and flagged; wear areas and wear "
+            "curve are kept out of statistics until a reference is given "
+            "(PUT /v1/wheels/{wheel_id}/reference)")))
+    placement = p.placement or {}
+    if placement.get("alignment") == "datum":
+        found = placement.get("back_face_found")
+        notes = list(placement.get("notes") or [])
+        notes += _datum_header_notes(record.datum_header)
+        out.append(_warning("datum_found" if found else "datum_guessed",
+                            "info" if found else "warning", "; ".join(notes)))
+        out.append(_warning("wear_alignment", "info", (
+            f"wear taken against {p.reference} after a vertical shift of "
+            f"{p.vertical_shift_mm:+.2f} mm on the unworn flange back (lateral shift "
+            f"{p.lateral_shift_mm:.2f} mm, rotation {p.rotation_rad * 1e3:.2f} mrad, RMS "
+            f"{p.rms_residual_mm:.2f} mm); the stored points are not moved")))
+    if p.n_removed:
+        out.append(_warning("points_dropped", "info", (
+            f"cleaning dropped {p.n_removed} of {p.n_raw} points: "
+            + "; ".join(p.cleaning_notes))))
+    return out
 
 
 @dataclass
@@ -323,6 +477,14 @@ class _Counts:
     created: int = 0
     duplicates: int = 0
     points: int = 0
+    warnings: list[dict[str, Any]] = field(default_factory=list)
+    infos: list[dict[str, Any]] = field(default_factory=list)
+    warnings_total: int = 0
+
+    def listed(self) -> tuple[dict[str, Any], ...]:
+        """Warnings for the answer: level ``warning`` first, then ``info``, at most
+        ``MAX_WARNINGS``."""
+        return tuple((self.warnings + self.infos)[:MAX_WARNINGS])
 
 
 def store_records(session: Session, records: Iterable[Record], batch_id: int | None, *,
@@ -345,6 +507,19 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
         profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
         done = dict(zip(map(id, profiles), processed(), strict=True))
         rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
+        for record, row in zip(fresh, rows, strict=True):
+            if is_own_baseline(record.meta.reference_profile):
+                registry.own_wheels.add(record.meta.wheel_id)
+            for warning in row.get("warnings") or ():
+                counts.warnings_total += 1
+                # the answer lists warnings before infos, each in file order, up to the cap
+                kept = counts.warnings if warning["level"] == "warning" else counts.infos
+                if len(kept) < MAX_WARNINGS:
+                    line = (record.manifest_line if isinstance(record, ProfileRecord)
+                            and record.manifest_line is not None else record.meta.source_line)
+                    kept.append({"file": record.meta.source_file or None, "line": line,
+                                 "wheel_id": record.meta.wheel_id,
+                                 "mileage_km": record.meta.mileage_km, **warning})
         counts.points += sum(r["n_points"] for r in rows)
         if batch_id is None:
             for row in rows:
@@ -373,7 +548,7 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
             fresh.append(record)
         if fresh:
             registry.ensure_wheels(fresh)
-        handle = _submit([r for r in fresh if isinstance(r, ProfileRecord)])
+        handle = _submit([r for r in fresh if isinstance(r, ProfileRecord)], registry)
         if pending is not None:
             insert_rows(pending[0], pending[1])
             if progress is not None:
@@ -383,6 +558,9 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
         insert_rows(pending[0], pending[1])
         if progress is not None:
             progress(pending[2])
+    for wheel_id in sorted(registry.own_wheels):
+        session.flush()
+        apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
     return counts, new_ids
 
 
@@ -398,10 +576,24 @@ def _existing_batch(session: Session, *, checksum: str | None = None,
     return None
 
 
-def _duplicate(batch: db.ImportBatch) -> ImportResult:
+def _duplicate(session: Session, batch: db.ImportBatch) -> ImportResult:
+    """The answer to a repeated import: nothing created, the first import's warnings."""
+    counts = _Counts()
+    for source, line, wheel, mileage, stored in session.execute(
+            select(db.Measurement.source_file, db.Measurement.source_line,
+                   db.Measurement.wheel_id, db.Measurement.mileage_km,
+                   db.Measurement.warnings)
+            .where(db.Measurement.batch_id == batch.id).order_by(db.Measurement.id)):
+        for warning in stored or ():
+            counts.warnings_total += 1
+            kept = counts.warnings if warning.get("level") == "warning" else counts.infos
+            if len(kept) < MAX_WARNINGS:
+                kept.append({"file": source, "line": line, "wheel_id": wheel,
+                             "mileage_km": mileage, **warning})
     return ImportResult(batch_id=batch.id, duplicate=True, file_name=batch.file_name,
                         records=batch.n_records, created=0, duplicates=batch.n_records,
-                        points=0)
+                        points=0, warnings=counts.listed(),
+                        warnings_total=counts.warnings_total)
 
 
 def iter_records(stream: BinaryIO, file_name: str, manifest: bytes | None,
@@ -422,7 +614,7 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
     if idempotency_key is not None:
         found = _existing_batch(session, key=idempotency_key)
         if found is not None:
-            return _duplicate(found)
+            return _duplicate(session, found)
     file_sha, size = rawfiles.sha256_of_stream(stream)
     if size == 0:
         raise Unprocessable("file", f"{file_name} is empty")
@@ -432,7 +624,7 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
     checksum = digest.hexdigest()
     found = _existing_batch(session, checksum=checksum)
     if found is not None:
-        return _duplicate(found)
+        return _duplicate(session, found)
     stored_files: list[rawfiles.StoredFile] = []
     try:
         stored_files.append(rawfiles.store(raw_dir, stream, file_sha))
@@ -466,17 +658,78 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
         _abort(session, raw_dir, stored_files)
         found = _existing_batch(session, checksum=checksum, key=idempotency_key)
         if found is not None:  # a concurrent import of the same content won the race
-            return _duplicate(found)
+            return _duplicate(session, found)
         raise Unprocessable("file", f"{file_name} conflicts with stored data: {exc.orig}") from exc
     except BaseException:
         _abort(session, raw_dir, stored_files)
         raise
     return ImportResult(batch_id=batch.id, duplicate=False, file_name=file_name,
                         records=counts.records, created=counts.created,
-                        duplicates=counts.duplicates, points=counts.points)
+                        duplicates=counts.duplicates, points=counts.points,
+                        warnings=counts.listed(), warnings_total=counts.warnings_total)
 
 
 def _abort(session: Session, raw_dir: Path, stored_files: list[rawfiles.StoredFile]) -> None:
     session.rollback()
     for stored in stored_files:
         rawfiles.discard(raw_dir, stored)
+
+
+def apply_reference(session: Session, wheel_id: str, name: str, *, commit: bool = True
+                    ) -> dict[str, Any]:
+    """Re-take every profile measurement of a wheel against the reference ``name`` (a
+    catalogue name, an uploaded reference, or ``own`` for the wheel's first measurement):
+    wear curve, areas, reference fit and warnings are recomputed; the points are not
+    touched. Returns a summary per measurement."""
+    if session.get(db.Wheel, wheel_id) is None:
+        raise NotFound("wheel_id", f"wheel {wheel_id!r} is not stored")
+    if is_own_baseline(name):
+        found = own_baseline_spec(session, wheel_id)
+        if found is None:
+            raise Unprocessable("reference_profile", f"wheel {wheel_id!r} has no profile "
+                                "measurement to serve as its own baseline")
+        spec, baseline_id = found
+        stored_name = f"own:{baseline_id}"
+    else:
+        spec = resolve_reference(session, name)
+        stored_name = spec.name
+    rows = session.scalars(select(db.Measurement).where(
+        db.Measurement.wheel_id == wheel_id, db.Measurement.kind == "profile")
+        .order_by(db.Measurement.mileage_km)).all()
+    out = []
+    for m in rows:
+        y, z = from_f32(m.y_mm), from_f32(m.z_mm)
+        datum = bool((m.placement or {}).get("alignment") == "datum")
+        p = _process_arrays(np.asarray(y), np.asarray(z), spec, datum)
+        if isinstance(p, str):
+            raise Unprocessable("reference_profile", f"measurement {m.id} cannot be taken "
+                                f"against {stored_name}: {p}")
+        p = p._replace(reference=stored_name)
+        for key, value in _wear_columns(p).items():
+            setattr(m, key, value)
+        m.lateral_shift_mm, m.vertical_shift_mm = p.lateral_shift_mm, p.vertical_shift_mm
+        m.rotation_rad, m.rms_residual_mm = p.rotation_rad, p.rms_residual_mm
+        m.placement = p.placement
+        # what the import found in the file (header, datum, cleaning) stays; the reference
+        # fit and the wear alignment are taken anew
+        redone = ("reference_mismatch", "wear_alignment")
+        kept = [w for w in (m.warnings or []) if w.get("code") not in redone]
+        record = ProfileRecord(meta=_meta_stub(m), y_mm=np.asarray(y), z_mm=np.asarray(z))
+        m.warnings = kept + [w for w in measurement_warnings(record, p)
+                             if w["code"] in redone] or None
+        out.append({"measurement_id": m.id, "mileage_km": m.mileage_km,
+                    "reference_profile": stored_name, "reference_fits": m.reference_fits,
+                    "flange_area_mm2": m.flange_area_mm2, "tread_area_mm2": m.tread_area_mm2,
+                    "warnings": m.warnings or []})
+    if commit:
+        session.commit()
+    return {"wheel_id": wheel_id, "reference_profile": stored_name, "measurements": out}
+
+
+def _meta_stub(m: db.Measurement) -> Any:
+    from wearcast.service.readers.records import MeasurementMeta
+
+    wheel = m.wheel_id
+    return MeasurementMeta(wheel_id=wheel, vehicle_id="", bogie_type="motor", axle=1,
+                           side="left", mileage_km=m.mileage_km,
+                           reference_profile=m.reference_profile)

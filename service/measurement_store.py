@@ -52,6 +52,17 @@ def _as_text(value: Any) -> str:
     return str(value)
 
 
+def _as_bool(value: Any) -> bool:
+    if isinstance(value, bool):
+        return value
+    text = str(value).strip().lower()
+    if text in ("true", "1", "yes"):
+        return True
+    if text in ("false", "0", "no"):
+        return False
+    raise ValueError("not a boolean")
+
+
 M, W = db.Measurement, db.Wheel
 STANDARD_FIELDS: dict[str, tuple[Any, Callable[[Any], Any]]] = {
     "id": (M.id, _as_int),
@@ -70,6 +81,7 @@ STANDARD_FIELDS: dict[str, tuple[Any, Callable[[Any], Any]]] = {
     "reference_profile": (M.reference_profile, _as_text),
     "kind": (M.kind, _as_text),
     "source_file": (M.source_file, _as_text),
+    "reference_fits": (M.reference_fits, _as_bool),
 }
 RANGE_FIELDS = {"mileage_km_min": (M.mileage_km, ">="), "mileage_km_max": (M.mileage_km, "<="),
                 "measured_on_from": (M.measured_on, ">="), "measured_on_to": (M.measured_on, "<=")}

@@ -394,23 +394,71 @@ def _covariates(inputs: ModelInputs, route: RouteInputs,
 
 def compute_prediction(inputs: ModelInputs, route: RouteInputs, body: PredictIn
                        ) -> hybrid.Prediction:
+    assert body.bogie_type is not None and body.axle is not None and body.side is not None
     return run_prediction(inputs, route.route, bogie_type=body.bogie_type, axle=body.axle,
                           side=body.side, mileage_km=body.mileage_km,
                           covariates=_covariates(inputs, route, body.covariates))
 
 
+def _measured_prediction(inputs: ModelInputs, route: RouteInputs, body: PredictIn,
+                         start: WheelStart) -> tuple[PredictIn, hybrid.Prediction]:
+    """A prediction from a measured start: areas grow from the measured ones and Sd/Sh/qR
+    follow the measured values plus the model's changes (as reprofiling does); mileages
+    count from the start measurement. Returns the request with the wheel's position."""
+    import dataclasses
+
+    body = body.model_copy(update={"bogie_type": start.bogie_type, "axle": start.axle,
+                                   "side": start.side})
+    covariates = _covariates(inputs, route, body.covariates) or {}
+    for key, value in (start.covariates or {}).items():
+        covariates.setdefault(key, value)
+    result = run_prediction(inputs, route.route, bogie_type=start.bogie_type, axle=start.axle,
+                            side=start.side, mileage_km=[0.0, *body.mileage_km],
+                            start_areas_mm2=start.areas_mm2, covariates=covariates or None)
+    keep = slice(1, None)
+    changes: dict[str, Any] = {
+        name: np.asarray(getattr(result, name))[..., keep]
+        for name in ("mileage_km", "flange_area_mm2", "tread_area_mm2", "extrapolated")}
+    for name in ("wear_mm", "z_mm"):
+        changes[name] = np.asarray(getattr(result, name))[keep]
+    for name in ("sd_mm", "sh_mm", "qr_mm"):
+        values = np.asarray(getattr(result, name), dtype=float)
+        if start.parameters is not None:
+            values = values + (start.parameters[name] - values[0])
+        changes[name] = values[keep]
+    return body, dataclasses.replace(result, **changes)
+
+
+def _start_fields(start: WheelStart | None) -> dict[str, Any]:
+    if start is None:
+        return {"start_mileage_km": None, "start_measurement_id": None,
+                "start_parameters_mm": None, "start_notes": []}
+    return {"start_mileage_km": start.mileage_km, "start_measurement_id": start.measurement_id,
+            "start_parameters_mm": start.parameters, "start_notes": list(start.notes)}
+
+
 def predict(session: Session, model_id: int, body: PredictIn) -> PredictionOut:
     """Wear areas (P10/P50/P90), wear curve, worn profile and Sd/Sh/qR per mileage."""
     inputs, route = load_inputs(session, model_id, body.route_id, body.route)
+    if body.measured_start:
+        start = wheel_start(session, body)
+        body, result = _measured_prediction(inputs, route, body, start)
+        out = prediction_out(model_id, route.name, body, result)
+        return out.model_copy(update=_start_fields(start))
     return prediction_out(model_id, route.name, body, compute_prediction(inputs, route, body))
 
 
-def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: PredictIn
-                 ) -> bytes:
-    """:func:`predict`'s answer as JSON bytes (the :class:`PredictionOut` schema)."""
-    result = compute_prediction(inputs, route, body)
-    return orjson.dumps(_prediction_payload(model_id, route.name, body, result),
-                        option=orjson.OPT_SERIALIZE_NUMPY)
+def predict_json(inputs: ModelInputs, route: RouteInputs, model_id: int, body: PredictIn,
+                 start: WheelStart | None = None) -> bytes:
+    """:func:`predict`'s answer as JSON bytes (the :class:`PredictionOut` schema); ``start``
+    is the measured start state when the request names one."""
+    if start is not None:
+        body, result = _measured_prediction(inputs, route, body, start)
+    else:
+        result = compute_prediction(inputs, route, body)
+    payload = _prediction_payload(model_id, route.name, body, result)
+    payload.update(_start_fields(start))
+    return orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
 
 
 _reference_cache: LruCache[np.ndarray] = LruCache(8)
@@ -492,15 +540,15 @@ def prediction_out(model_id: int, route_name: str, body: PredictIn,
 
 
 def _latest_profile(session: Session, wheel_id: str) -> tuple[db.Wheel, db.Measurement]:
+    """The wheel and its latest profile measurement (with or without wear areas: a shape
+    flagged against its reference still has its measured Sd/Sh/qR)."""
     wheel = session.get(db.Wheel, wheel_id)
     if wheel is None:
         raise NotFound("wheel_id", f"no wheel {wheel_id!r}")
     latest = session.scalar(
         select(db.Measurement).where(db.Measurement.wheel_id == wheel_id,
-                                     db.Measurement.kind == "profile",
-                                     db.Measurement.flange_area_mm2.is_not(None),
-                                     db.Measurement.tread_area_mm2.is_not(None))
-        .order_by(db.Measurement.mileage_km.desc()).limit(1))
+                                     db.Measurement.kind == "profile")
+        .order_by(db.Measurement.mileage_km.desc(), db.Measurement.id.desc()).limit(1))
     if latest is None:
         raise Unprocessable("wheel_id", f"wheel {wheel_id!r} has no measured profile to start "
                             "from")
@@ -518,15 +566,78 @@ class WheelStart:
     measurement_id: int | None = None
     areas_mm2: dict[str, float] | None = None
     covariates: dict[str, Any] | None = None
+    #: measured Sd/Sh/qR [mm] the prediction starts from
+    parameters: dict[str, float] | None = None
+    notes: tuple[str, ...] = ()
 
 
-def wheel_start(session: Session | None, body: ReprofilingIn) -> WheelStart:
-    """The wheel's position from the request, or with ``wheel_id`` from storage (with its
-    latest measured profile as the start state); needs a session only with ``wheel_id``."""
-    if body.wheel_id is None:
+def _measured_state(sd: float | None, sh: float | None, qr: float | None,
+                    flange: float | None, tread: float | None, reference: str,
+                    fits: bool | None) -> tuple[dict[str, float] | None, dict[str, float],
+                                                tuple[str, ...]]:
+    """Start parameters, start areas and notes of a measured state."""
+    notes: list[str] = []
+    parameters = None
+    if None not in (sd, sh, qr) and all(math.isfinite(float(v)) for v in (sd, sh, qr)):  # type: ignore[arg-type]
+        parameters = {"sd_mm": float(sd), "sh_mm": float(sh), "qr_mm": float(qr)}  # type: ignore[arg-type]
+    else:
+        notes.append("the measurement has no complete Sd/Sh/qR: the model's own are used")
+    if flange is None or tread is None:
+        areas = {"flange": 0.0, "tread": 0.0}
+        why = ("its shape does not fit its reference " + reference if fits is False
+               else "it has no wear areas")
+        notes.append(f"wear areas start at 0 ({why}); Sd/Sh/qR start from the measured values")
+    else:
+        areas = {"flange": max(0.0, float(flange)), "tread": max(0.0, float(tread))}
+    return parameters, areas, tuple(notes)
+
+
+def _profile_start(body: ReprofilingIn | PredictIn) -> WheelStart:
+    """Start state of an uploaded profile: placed by its datum, wear against its reference."""
+    from wearcast.service.importing import _process_arrays
+    from wearcast.service.reference_store import ReferenceSpec
+
+    profile = body.profile
+    assert profile is not None
+    if len(profile.y_mm) != len(profile.z_mm):
+        raise Unprocessable("profile.z_mm", f"has {len(profile.z_mm)} values, y_mm "
+                            f"{len(profile.y_mm)}")
+    from wearcast.physics.profiles.references import canonical_s1002_name
+
+    name = canonical_s1002_name(profile.reference_profile)
+    if name is None:
+        raise Unprocessable("profile.reference_profile", "only the built-in S1002 family is "
+                            "accepted here; store the profile to use an uploaded reference")
+    p = _process_arrays(np.asarray(profile.y_mm, float), np.asarray(profile.z_mm, float),
+                        ReferenceSpec(name, "builtin"), True)
+    if isinstance(p, str):
+        raise Unprocessable("profile.y_mm", f"not a usable wheel profile: {p}")
+    fits = bool(p.reference_fits)
+    parameters, areas, notes = _measured_state(
+        p.sd_mm, p.sh_mm, p.qr_mm, p.flange_area_mm2 if fits else None,
+        p.tread_area_mm2 if fits else None, name, fits)
+    return WheelStart(str(body.bogie_type), int(body.axle or 1), str(body.side),
+                      float(profile.mileage_km), None, areas, None, parameters, notes)
+
+
+def wheel_start(session: Session | None, body: ReprofilingIn | PredictIn) -> WheelStart:
+    """The wheel's position from the request, or with ``wheel_id`` / ``measurement_id``
+    from storage (its latest / that measured profile as the start state: measured Sd/Sh/qR
+    and wear areas), or an uploaded ``profile``; needs a session only for stored starts."""
+    if body.profile is not None:
+        return _profile_start(body)
+    if body.wheel_id is None and body.measurement_id is None:
         return WheelStart(str(body.bogie_type), int(body.axle or 1), str(body.side))
     assert session is not None
-    wheel, latest = _latest_profile(session, body.wheel_id)
+    if body.measurement_id is not None:
+        latest = session.get(db.Measurement, body.measurement_id)
+        if latest is None:
+            raise NotFound("measurement_id", f"no measurement {body.measurement_id}")
+        wheel = session.get(db.Wheel, latest.wheel_id)
+        assert wheel is not None
+    else:
+        assert body.wheel_id is not None
+        wheel, latest = _latest_profile(session, body.wheel_id)
     for name, given, stored in (("bogie_type", body.bogie_type, wheel.bogie_type),
                                 ("axle", body.axle, wheel.axle),
                                 ("side", body.side, wheel.side)):
@@ -534,10 +645,12 @@ def wheel_start(session: Session | None, body: ReprofilingIn) -> WheelStart:
             raise Unprocessable(name, f"wheel {wheel.wheel_id!r} has {name} {stored!r}")
     covariates = {key: value for key in ("load_t", "running_mode", "instrument_id")
                   if (value := getattr(latest, key, None)) is not None}
+    parameters, areas, notes = _measured_state(
+        latest.sd_mm, latest.sh_mm, latest.qr_mm, latest.flange_area_mm2,
+        latest.tread_area_mm2, latest.reference_profile, latest.reference_fits)
     return WheelStart(
         wheel.bogie_type, int(wheel.axle), wheel.side, float(latest.mileage_km), latest.id,
-        {"flange": max(0.0, float(latest.flange_area_mm2 or 0.0)),
-         "tread": max(0.0, float(latest.tread_area_mm2 or 0.0))}, covariates)
+        areas, covariates, parameters, notes)
 
 
 class _Position(TypedDict):
@@ -548,6 +661,37 @@ class _Position(TypedDict):
     side: str
 
 
+def _wheel_hybrid(inputs: ModelInputs, route: RouteInputs, body: ReprofilingIn,
+                  start: WheelStart) -> tuple[hybrid.HybridModel, dict[str, float] | None]:
+    """The hybrid model of this wheel (an extended model made concrete for its covariates)
+    and its weighted measures P_s on the route."""
+    position: _Position = {"bogie_type": start.bogie_type, "axle": start.axle,
+                           "side": start.side}
+    measures = weighted_measures(inputs, route.route, **position)
+    model = inputs.model
+    if isinstance(model, ExtendedModel):
+        covariates = _covariates(inputs, route, body.covariates) or {}
+        for key, value in (start.covariates or {}).items():
+            covariates.setdefault(key, value)
+        model = wheel_model(model, route.route, inputs.table, covariates=covariates,
+                            **position)
+    return model, measures
+
+
+def parameter_corridor(inputs: ModelInputs, route: RouteInputs, body: ReprofilingIn,
+                       start: WheelStart, mileage_km: np.ndarray
+                       ) -> stat_reprofiling.ParameterCorridor:
+    """Predicted Sd/Sh/qR P10/P50/P90 from the wheel's start state (for pictures)."""
+    try:
+        model, measures = _wheel_hybrid(inputs, route, body, start)
+        return stat_reprofiling.parameter_corridor(
+            model, route.route, inputs.table, mileage_km, bogie_type=start.bogie_type,
+            axle=start.axle, side=start.side, start_areas=start.areas_mm2,
+            start_parameters=start.parameters, weighted_measures=measures)
+    except ValueError as exc:
+        raise _statistics_error(exc) from exc
+
+
 def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
                         body: ReprofilingIn, start: WheelStart) -> dict[str, Any]:
     """The :class:`ReprofilingOut` fields (plain floats; None where not finite)."""
@@ -555,18 +699,12 @@ def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
     position: _Position = {"bogie_type": start.bogie_type, "axle": start.axle,
                            "side": start.side}
     try:
-        measures = weighted_measures(inputs, route.route, **position)
-        model = inputs.model
-        if isinstance(model, ExtendedModel):
-            covariates = _covariates(inputs, route, body.covariates) or {}
-            for key, value in (start.covariates or {}).items():
-                covariates.setdefault(key, value)
-            model = wheel_model(model, route.route, inputs.table, covariates=covariates,
-                                **position)
+        model, measures = _wheel_hybrid(inputs, route, body, start)
         result = stat_reprofiling.reprofiling_mileage(
             model, route.route, inputs.table, **position,
             limits=limits if limits else stat_reprofiling.DEFAULT_LIMITS,
-            start_areas=start.areas_mm2, weighted_measures=measures)
+            start_areas=start.areas_mm2, weighted_measures=measures,
+            start_parameters=start.parameters)
     except ValueError as exc:
         raise _statistics_error(exc) from exc
     remaining = [result.mileage_p10_km, result.mileage_p50_km, result.mileage_p90_km]
@@ -584,6 +722,8 @@ def reprofiling_payload(inputs: ModelInputs, route: RouteInputs, model_id: int,
         "sh_mm": _none_if_nan(result.sh_mm), "qr_mm": _none_if_nan(result.qr_mm),
         "extrapolated": bool(result.extrapolated), "reason": result.reason,
         "limits": {k: float(v) for k, v in result.limits.items()},
+        "crossed_limits": dict(result.crossed_limits),
+        "start_parameters_mm": start.parameters, "start_notes": list(start.notes),
     }
 
 

@@ -160,6 +160,12 @@ class Measurement(Base):
     vertical_shift_mm: Mapped[float | None] = mapped_column(Float)
     rotation_rad: Mapped[float | None] = mapped_column(Float)
     rms_residual_mm: Mapped[float | None] = mapped_column(Float)
+    #: False when the shape does not fit ``reference_profile`` (wear areas then stay NULL).
+    reference_fits: Mapped[bool | None] = mapped_column(Boolean)
+    #: How the points were placed: datum found/guessed, tilt, alignment kind.
+    placement: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    #: Import warnings of this measurement: [{"code", "message"}].
+    warnings: Mapped[list[Any] | None] = mapped_column(JSON)
 
 
 class Route(Base):
@@ -307,6 +313,26 @@ class Rail(Base):
     reference: Mapped[str] = mapped_column(String(100), default="60E1")
     warnings: Mapped[list[Any]] = mapped_column(JSON, default=list)
     raw_path: Mapped[str | None] = mapped_column(String(200))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
+                                                    server_default=func.now())
+
+
+class ReferenceProfile(Base):
+    """A user-given reference (new) wheel profile: points in the wheel frame [mm] (float32
+    blobs), from a drawing or a measured new wheel; the S1002 family is built in
+    (:mod:`wearcast.physics.profiles.references`) and not stored."""
+
+    __tablename__ = "reference_profiles"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True)
+    description: Mapped[str | None] = mapped_column(String(500))
+    source: Mapped[str | None] = mapped_column(String(500))
+    n_points: Mapped[int] = mapped_column(Integer)
+    y_mm: Mapped[bytes] = mapped_column(LargeBinary)
+    z_mm: Mapped[bytes] = mapped_column(LargeBinary)
+    sd_mm: Mapped[float | None] = mapped_column(Float)
+    sh_mm: Mapped[float | None] = mapped_column(Float)
+    qr_mm: Mapped[float | None] = mapped_column(Float)
     created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
                                                     server_default=func.now())
 

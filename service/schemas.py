@@ -258,6 +258,11 @@ class MeasurementOut(BaseModel):
     vertical_shift_mm: float | None
     rotation_rad: float | None
     rms_residual_mm: float | None
+    reference_fits: bool | None = Field(None, description="false: the shape does not fit "
+                                        "reference_profile; no wear areas until one is given")
+    placement: dict[str, Any] | None = Field(None, description="datum found/guessed, tilt, "
+                                             "alignment kind")
+    warnings: list[dict[str, Any]] | None = None
     y_mm: list[float] | None = None
     z_mm: list[float] | None = None
 
@@ -277,6 +282,10 @@ class ImportOut(BaseModel):
     created: int = Field(description="measurements stored by this batch")
     duplicates: int = Field(description="measurements already present, skipped")
     points: int
+    warnings: list[dict[str, Any]] = Field(
+        default_factory=list, description="per file and line: code, level (info | warning), "
+        "message, wheel_id, mileage_km (at most 1000 listed)")
+    warnings_total: int = 0
 
 
 # --- models -----------------------------------------------------------------------------
@@ -326,10 +335,41 @@ class WheelPosition(RouteRef):
     side: Side
 
 
-class PredictIn(WheelPosition):
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=20000)
+    z_mm: list[float] = Field(min_length=20, max_length=20000)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
+class PredictIn(RouteRef):
+    bogie_type: BogieType | None = None
+    axle: Axle | None = None
+    side: Side | None = None
+    wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
+                                 "profile; mileage_km then counts from that measurement")
+    measurement_id: int | None = Field(None, description="start from this measurement")
+    profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     covariates: dict[str, Any] | None = Field(default=None, description=(
         "the wheel's covariates for an extended model (load_t, running_mode, ...)"))
     mileage_km: list[float] = Field(min_length=1, max_length=1000)
+
+    @model_validator(mode="after")
+    def _start(self) -> PredictIn:
+        starts = [self.wheel_id, self.measurement_id, self.profile]
+        if sum(v is not None for v in starts) > 1:
+            raise ValueError("give at most one of wheel_id, measurement_id, profile")
+        stored = self.wheel_id is not None or self.measurement_id is not None
+        if not stored and None in (self.bogie_type, self.axle, self.side):
+            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+        return self
+
+    @property
+    def measured_start(self) -> bool:
+        return any(v is not None for v in (self.wheel_id, self.measurement_id, self.profile))
 
     @field_validator("mileage_km")
     @classmethod
@@ -370,6 +410,10 @@ class PredictionOut(BaseModel):
     y_mm: list[float]
     reference_z_mm: list[float]
     points: list[PredictionAt]
+    start_mileage_km: float | None = None
+    start_measurement_id: int | None = None
+    start_parameters_mm: dict[str, float] | None = None
+    start_notes: list[str] = Field(default_factory=list)
 
 
 class Limits(Strict):
@@ -381,7 +425,10 @@ class Limits(Strict):
 class ReprofilingIn(Strict):
     route_id: int | str | None = None
     route: RouteSpec | None = None
-    wheel_id: str | None = None
+    wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
+                                 "profile (its Sd/Sh/qR and wear areas)")
+    measurement_id: int | None = Field(None, description="start from this measurement")
+    profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     bogie_type: BogieType | None = None
     axle: Axle | None = None
     side: Side | None = None
@@ -392,8 +439,12 @@ class ReprofilingIn(Strict):
     def _check(self) -> ReprofilingIn:
         if (self.route_id is None) == (self.route is None):
             raise ValueError("give either route_id or route (exactly one)")
-        if self.wheel_id is None and None in (self.bogie_type, self.axle, self.side):
-            raise ValueError("give wheel_id, or bogie_type, axle and side")
+        starts = [self.wheel_id, self.measurement_id, self.profile]
+        if sum(v is not None for v in starts) > 1:
+            raise ValueError("give at most one of wheel_id, measurement_id, profile")
+        stored = self.wheel_id is not None or self.measurement_id is not None
+        if not stored and None in (self.bogie_type, self.axle, self.side):
+            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
         return self
 
 
@@ -424,6 +475,12 @@ class ReprofilingOut(BaseModel):
     extrapolated: bool
     reason: str | None
     limits: dict[str, float]
+    crossed_limits: dict[str, float] = Field(
+        default_factory=dict, description="limits the measured start is already past, and by "
+        "how much [mm]; remaining_km is then 0")
+    start_parameters_mm: dict[str, float] | None = Field(
+        None, description="measured Sd/Sh/qR the prediction starts from")
+    start_notes: list[str] = Field(default_factory=list)
 
 
 # --- diagnosis ----------------------------------------------------------------------------

@@ -237,3 +237,64 @@ def align_to_reference(
         n_used=int(good.sum()),
         used_windows=used_windows,
     )
+
+
+def align_vertically(
+    y_mm: ArrayLike,
+    z_mm: ArrayLike,
+    reference_height: ReferenceHeight = s1002_height_mm,
+    *,
+    windows_mm: tuple[tuple[float, float], ...] = FIT_WINDOWS_MM,
+    max_iterations: int = 10,
+    tolerance_mm: float = 1e-4,
+) -> AlignedProfile:
+    """Lateral-datum-preserving alignment: a vertical shift only, no rotation.
+
+    The profile keeps the lateral position of the instrument's datum (the back face) and
+    is moved up or down so that its unworn windows (``windows_mm``: flange back and the
+    field-side end) lie on the reference in the least-squares sense, with Huber weights as in
+    :func:`align_to_reference` (normal distances, near-vertical reference parts left out).
+    Sd, Sh and qR are heights and widths relative to the profile's own tape circle, so this
+    shift leaves them unchanged.
+
+    Parameters
+    ----------
+    y_mm, z_mm : cleaned profile [mm], ascending y, placed on its datum
+    reference_height : reference z(y) [mm], NaN where undefined (default S1002)
+    windows_mm : lateral windows [mm] of unworn profile
+    max_iterations : IRLS steps at most
+    tolerance_mm : stop when the shift changes by less than this [mm]
+
+    Returns
+    -------
+    AlignedProfile with ``lateral_shift_mm = rotation_rad = 0``.
+    """
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    table = reference_table(reference_height)
+    mask, used_windows = _fit_mask(y, table, windows_mm)
+    slope = np.interp(y, table.y_mm, table.slope)
+    mask &= np.abs(slope) < _MAX_SLOPE
+    if int(mask.sum()) < 3:
+        raise ValueError("profile does not overlap its reference profile; cannot align")
+    yf, zf = y[mask], z[mask]
+    z_ref = np.interp(yf, table.y_mm, table.z_mm)
+    norm2 = 1.0 / (1.0 + slope[mask] ** 2)
+    gap = z_ref - zf  # vertical gap the shift should close
+    weights = np.ones_like(gap)
+    dz = 0.0
+    for _ in range(max_iterations):
+        new = float(np.sum(weights * norm2 * gap) / np.sum(weights * norm2))
+        residual = np.abs(zf + new - z_ref) * np.sqrt(norm2)
+        half = residual.size // 2
+        cutoff = 1.345 * max(1.4826 * float(np.partition(residual, half)[half]), 1e-3)
+        weights = np.minimum(1.0, cutoff / np.maximum(residual, 1e-300))
+        done = abs(new - dz) < tolerance_mm
+        dz = new
+        if done:
+            break
+    r = (zf + dz - z_ref) * np.sqrt(norm2)
+    return AlignedProfile(
+        y_mm=y.copy(), z_mm=z + dz, lateral_shift_mm=0.0, vertical_shift_mm=dz,
+        rotation_rad=0.0, rms_residual_mm=float(np.sqrt(np.mean(r * r))),
+        n_used=int(mask.sum()), used_windows=used_windows)

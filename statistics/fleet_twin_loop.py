@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
+from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
 from wearcast.physics.wear_laws import WearLaw
@@ -188,7 +188,7 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
         scale = np.where(areas[i] > 0, target / np.where(areas[i] > 0, areas[i], 1.0), 0.0)
         w = curves[i] * np.where(tread_mask, scale[0], scale[1])
         z_true_loop = s1002_height_mm(y_loop) - w
-        params = nominal_frame_flange_parameters(y_loop, z_true_loop)
+        params = flange_parameters(y_loop, z_true_loop)  # EN 15313, as the loop
         z_true = s1002_height_mm(y_nominal) - np.interp(y_nominal, y_loop, w)
         y, z = measure_profile(config, y_nominal, z_true, rng)
         for profile_effect in config.profile_effects:

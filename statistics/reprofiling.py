@@ -12,6 +12,13 @@ P10/P50/P90 come from the rate uncertainty of the calibration: the P10 mileage u
 high (90 %) rates, the P90 mileage the low (10 %) rates. When the wheel starts from a
 measured state, ``start_areas`` gives its measured areas; the remaining mileage counts from
 there (the wheel's equivalent mileage per region is A_r,0 / k_r).
+
+Starting from what was measured (``start_parameters``): a wheel whose measured Sd, Sh or qR
+is already past a limit has 0 km remaining, and the answer names the crossed limits and by
+how much. Otherwise the model's parameters are followed from the measured ones: the model
+gives how Sd/Sh/qR *change* from the start areas, the measured values give where they start
+(P(s) = P_measured + P_model(A_0 + k s) - P_model(A_0)); the limits are crossed when that
+sum crosses them.
 """
 
 from __future__ import annotations
@@ -353,6 +360,10 @@ class ReprofilingResult:
     rates_mm2_per_km: dict[str, float] = field(default_factory=dict)
     equivalent_mileage_km: dict[str, float] = field(default_factory=dict)
     limits: dict[str, float] = field(default_factory=dict)
+    #: limits the measured start state is already past, and by how much [mm] (> 0)
+    crossed_limits: dict[str, float] = field(default_factory=dict)
+    #: measured Sd/Sh/qR the prediction started from [mm] (empty: the model's own)
+    start_parameters: dict[str, float] = field(default_factory=dict)
 
     @property
     def reached(self) -> bool:
@@ -375,6 +386,8 @@ class ReprofilingResult:
             "rates_mm2_per_km": {k: num(v) for k, v in self.rates_mm2_per_km.items()},
             "equivalent_mileage_km": {k: num(v) for k, v in self.equivalent_mileage_km.items()},
             "limits": dict(self.limits),
+            "crossed_limits": dict(self.crossed_limits),
+            "start_parameters": dict(self.start_parameters),
         }
 
 
@@ -391,6 +404,7 @@ def reprofiling_mileage(
     horizon_km: float = DEFAULT_HORIZON_KM,
     n_grid: int = 32,
     weighted_measures: Mapping[str, float] | None = None,
+    start_parameters: Mapping[str, float] | None = None,
 ) -> ReprofilingResult:
     """First mileage at which Sd, Sh or qR crosses its limit, as P10/P50/P90.
 
@@ -404,6 +418,8 @@ def reprofiling_mileage(
     horizon_km : search horizon [km]; beyond it the limit counts as not reached
     n_grid : points of the geometric search grid before the refinement
     weighted_measures : P_s per region if known already (see ``hybrid.region_rates``)
+    start_parameters : measured ``sd_mm``, ``sh_mm``, ``qr_mm`` [mm] of the start state; the
+        prediction starts from them (module docstring); past a limit: 0 km remaining
 
     Returns
     -------
@@ -421,9 +437,25 @@ def reprofiling_mileage(
         if v is None or not math.isfinite(float(v)) or float(v) < 0:
             raise ValueError(f"start_areas.{r}: must be finite and >= 0")
         start[r] = float(v)
+    measured = _measured_start(start_parameters)
+    if measured:
+        crossed = crossed_limits(measured, lim)
+        if crossed:
+            return _already_crossed(measured, crossed, lim, start)
+        p0, _ = parameters_at_areas(model, np.array([start["flange"]]),
+                                    np.array([start["tread"]]))
+        offset = np.array([measured["sd_mm"], measured["sh_mm"], measured["qr_mm"]]) - p0[0]
+        if not np.all(np.isfinite(offset)):
+            raise ValueError("start_areas: the model gives no Sd/Sh/qR at the start areas")
+        search_limits = WheelLimits(sd_min_mm=lim.sd_min_mm - float(offset[0]),
+                                    sh_max_mm=lim.sh_max_mm - float(offset[1]),
+                                    qr_min_mm=lim.qr_min_mm - float(offset[2]))
+    else:
+        offset = np.zeros(3)
+        search_limits = lim
     _, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
                             quantiles=(0.9, 0.5, 0.1), weighted_measures=weighted_measures)
-    crossings = _first_crossings(model, start, rates, lim, horizon_km, n_grid)
+    crossings = _first_crossings(model, start, rates, search_limits, horizon_km, n_grid)
     median = crossings[1]
     reason = None
     if not math.isfinite(median.mileage_km):
@@ -443,13 +475,105 @@ def reprofiling_mileage(
         mileage_p50_km=median.mileage_km,
         mileage_p90_km=crossings[2].mileage_km,
         governing_limit=median.governing_limit,
-        sd_mm=median.sd_mm,
-        sh_mm=median.sh_mm,
-        qr_mm=median.qr_mm,
+        sd_mm=median.sd_mm + float(offset[0]),
+        sh_mm=median.sh_mm + float(offset[1]),
+        qr_mm=median.qr_mm + float(offset[2]),
         extrapolated=median.extrapolated,
         reason=reason,
         rates_mm2_per_km={r: float(rates[r][1]) for r in REGIONS},
         equivalent_mileage_km=equivalent,
-        limits={"sd_min_mm": lim.sd_min_mm, "sh_max_mm": lim.sh_max_mm,
-                "qr_min_mm": lim.qr_min_mm},
+        limits=_limit_dict(lim),
+        start_parameters=measured,
     )
+
+
+def _limit_dict(lim: WheelLimits) -> dict[str, float]:
+    return {"sd_min_mm": lim.sd_min_mm, "sh_max_mm": lim.sh_max_mm, "qr_min_mm": lim.qr_min_mm}
+
+
+def _measured_start(parameters: Mapping[str, float] | None) -> dict[str, float]:
+    if parameters is None:
+        return {}
+    out = {}
+    for key in ("sd_mm", "sh_mm", "qr_mm"):
+        value = parameters.get(key)
+        if value is None or not math.isfinite(float(value)):
+            raise ValueError(f"start_parameters.{key}: must be a finite number [mm]")
+        out[key] = float(value)
+    return out
+
+
+def crossed_limits(parameters: Mapping[str, float], limits: WheelLimits) -> dict[str, float]:
+    """Limits that measured Sd/Sh/qR [mm] are past, with the exceedance [mm] (> 0)."""
+    excess = {"sd": limits.sd_min_mm - parameters["sd_mm"],
+              "sh": parameters["sh_mm"] - limits.sh_max_mm,
+              "qr": limits.qr_min_mm - parameters["qr_mm"]}
+    return {name: float(v) for name, v in excess.items() if v > 0.0}
+
+
+def _already_crossed(measured: dict[str, float], crossed: dict[str, float],
+                     lim: WheelLimits, start: Mapping[str, float]) -> ReprofilingResult:
+    """The answer for a wheel measured past a limit: 0 km, which limits, by how much."""
+    governing = max(crossed, key=lambda name: crossed[name])
+    text = {"sd": ("Sd", "sd_mm", "<", lim.sd_min_mm), "sh": ("Sh", "sh_mm", ">", lim.sh_max_mm),
+            "qr": ("qR", "qr_mm", "<", lim.qr_min_mm)}
+    parts = [f"{text[n][0]} {measured[text[n][1]]:.2f} mm {text[n][2]} {text[n][3]:g} mm by "
+             f"{crossed[n]:.2f} mm" for n in crossed]
+    return ReprofilingResult(
+        mileage_p10_km=0.0, mileage_p50_km=0.0, mileage_p90_km=0.0,
+        governing_limit=governing, sd_mm=measured["sd_mm"], sh_mm=measured["sh_mm"],
+        qr_mm=measured["qr_mm"], extrapolated=False,
+        reason="the measured wheel is already past its limit(s): " + "; ".join(parts),
+        equivalent_mileage_km={r: math.nan for r in start}, limits=_limit_dict(lim),
+        crossed_limits=crossed, start_parameters=measured)
+
+
+@dataclass(frozen=True)
+class ParameterCorridor:
+    """Sd, Sh, qR [mm] along a mileage grid for the P10/P50/P90 rates.
+
+    ``parameters_mm`` has shape (3, n, 3): rate quantile (high = early, median, low = late)
+    x mileage x (Sd, Sh, qR); ``mileage_km`` (n,) counts from the start state.
+    """
+
+    mileage_km: np.ndarray
+    parameters_mm: np.ndarray
+    extrapolated: np.ndarray
+
+
+def parameter_corridor(
+    model: HybridModel,
+    route: Route,
+    table: pd.DataFrame | WearTable,
+    mileage_km: np.ndarray,
+    *,
+    bogie_type: str,
+    axle: int,
+    side: str,
+    start_areas: Mapping[str, float] | None = None,
+    start_parameters: Mapping[str, float] | None = None,
+    weighted_measures: Mapping[str, float] | None = None,
+) -> ParameterCorridor:
+    """The predicted Sd/Sh/qR band from a start state (as :func:`reprofiling_mileage`
+    follows it: measured parameters plus the model's changes), for pictures.
+
+    Parameters
+    ----------
+    mileage_km : (n,) mileages [km] from the start state, >= 0
+    start_areas, start_parameters : the measured start (see :func:`reprofiling_mileage`)
+    """
+    s = np.asarray(mileage_km, dtype=float)
+    if s.ndim != 1 or not np.all(np.isfinite(s)) or np.any(s < 0):
+        raise ValueError("mileage_km: must be finite mileages >= 0")
+    start = {r: float((start_areas or {}).get(r, 0.0) or 0.0) for r in REGIONS}
+    _, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
+                            quantiles=(0.9, 0.5, 0.1), weighted_measures=weighted_measures)
+    params, _, extra = _evaluate(model, start, rates, DEFAULT_LIMITS,
+                                 np.broadcast_to(s, (3, s.size)).copy())
+    measured = _measured_start(start_parameters)
+    if measured:
+        p0, _ = parameters_at_areas(model, np.array([start["flange"]]),
+                                    np.array([start["tread"]]))
+        params = params + (np.array([measured["sd_mm"], measured["sh_mm"], measured["qr_mm"]])
+                           - p0[0])
+    return ParameterCorridor(s, params, extra)

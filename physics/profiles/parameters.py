@@ -12,11 +12,13 @@ tape circle (back face at y = -70), z [mm] up towards the flange tip:
 
 For S1002 new (EN 13715) these are 32.50 / 28.00 / 10.80 mm.
 
-Measured profiles (``wearcast.statistics``) take the tape-circle height from the profile
-itself, as the instrument does. The wear loop (``physics.wear_loop``) and the loop twin report
-:func:`nominal_frame_flange_parameters`: heights from the nominal tape circle z = 0, the tip
-anywhere left of y = -25 mm and chord (linear) flank crossings, so tread wear at y = 0 does
-not enter Sh or the Sd height. Both are the one :func:`flange_parameters` with its options.
+Measured profiles (``wearcast.statistics``), the wear loop (``physics.wear_loop``) and the
+loop twin all take the tape-circle height from the (worn) profile itself, as EN 15313 and the
+instrument do: tread wear at y = 0 raises Sh and lifts the Sd point up the flank.
+:func:`nominal_frame_flange_parameters` (heights from the nominal tape circle z = 0, the tip
+anywhere left of y = -25 mm, chord crossings) is the convention the loop used before; it is
+the same :func:`flange_parameters` with other options, kept for comparisons (e.g. to show that
+wear never thickens the flange in the new profile's frame).
 """
 
 from __future__ import annotations

@@ -206,8 +206,18 @@ def _miniprof_records(data: bytes, member: str, display: str, manifest: _Manifes
         if meta.diameter_mm is None and part is None:
             updates["diameter_mm"] = miniprof_diameter_mm(mp.header)
         out.append(ProfileRecord(dataclasses.replace(meta, **updates), y_mm, z_mm,
-                                 mp.instrument_parameters))
+                                 mp.instrument_parameters,
+                                 header_parameters=None if mp.parts else mp.header_parameters,
+                                 instrument_datum=True, manifest_line=meta.source_line,
+                                 datum_header=_datum_header(mp.header)))
     return out
+
+
+def _datum_header(header: Mapping[str, str]) -> dict[str, str] | None:
+    """The header's datum entries: offsets and reference points, as printed."""
+    out = {k: v for k, v in header.items()
+           if k in ("Xoffset", "Yoffset", "WheelAdjustPoint") or k.startswith("RefPoint")}
+    return out or None
 
 
 def _check_zip_limits(infos: list[zipfile.ZipInfo], name: str, limits: ZipLimits) -> None:

@@ -79,7 +79,7 @@ def sniff_kind(header_columns: Sequence[str]) -> Literal["profile", "parameter"]
                      "(sd_mm, sh_mm, qr_mm)")
 
 
-def read_header(stream: IO[bytes], file_name: str) -> list[str]:
+def read_header(stream: IO[bytes], file_name: str, delimiter: str = ",") -> list[str]:
     """Consume and parse the header line of a CSV stream (names stripped, BOM removed)."""
     raw = stream.readline()
     if raw.startswith(_UTF8_BOM):
@@ -90,11 +90,12 @@ def read_header(stream: IO[bytes], file_name: str) -> list[str]:
         raise ImportFileError(file_name, "header is not UTF-8 text", line=1) from None
     if not text.strip():
         raise ImportFileError(file_name, "file is empty (no header line)", line=1)
-    return [name.strip() for name in next(csv.reader([text]))]
+    return [name.strip() for name in next(csv.reader([text], delimiter=delimiter))]
 
 
 def read_chunks(stream: IO[bytes], file_name: str, columns: Sequence[str],
-                text_columns: Sequence[str], chunk_rows: int
+                text_columns: Sequence[str], chunk_rows: int, *, delimiter: str = ",",
+                decimal: str = "."
                 ) -> Iterator[tuple[pd.DataFrame, np.ndarray]]:
     """Chunks of the CSV body (after the header) with each row's 1-based file line.
 
@@ -105,7 +106,7 @@ def read_chunks(stream: IO[bytes], file_name: str, columns: Sequence[str],
         stream, header=None, names=list(columns), index_col=False,
         dtype={name: "category" for name in text_columns}, keep_default_na=False,
         na_values=[""], skip_blank_lines=False, chunksize=chunk_rows, encoding="utf-8",
-        engine="c")
+        engine="c", sep=delimiter, decimal=decimal)
     next_line = 2
     try:
         with reader:

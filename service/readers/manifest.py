@@ -6,10 +6,16 @@ the file's ``[Profile2Points]``). The other columns are the metadata columns of 
 (DESIGN.md "Long CSV": ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km`` required,
 the optional ones and covariates). ``measured_on`` and ``instrument_id`` may be left empty:
 the import then takes them from the MiniProf header.
+
+Fields are separated by ``,`` or, as European spreadsheets write CSV, by ``;`` (then a decimal
+comma in numbers is read too); the separator is taken from the header line. ``side`` and
+``bogie_type`` accept the usual spellings (``L``/``R``, ``links``/``rechts``, ``M``/``T``,
+``Trieb``/``Lauf`` …; ``records.SPELLINGS``).
 """
 
 from __future__ import annotations
 
+import io
 from typing import BinaryIO
 
 import numpy as np
@@ -48,13 +54,19 @@ def read_manifest(stream: BinaryIO, file_name: str) -> dict[str, MeasurementMeta
     Raises ImportFileError for bad metadata (line and field named) and for a file listed twice.
     ``meta.source_file``/``source_line`` point at the manifest row.
     """
-    columns = read_header(stream, file_name)
+    data = stream.read()
+    first = data.split(b"\n", 1)[0]
+    delimiter = ";" if first.count(b";") > first.count(b",") else ","
+    decimal = "," if delimiter == ";" else "."
+    stream = io.BytesIO(data)
+    columns = read_header(stream, file_name, delimiter)
     check_header(columns, file_name, ("file", *REQUIRED_META_COLUMNS))
     text_columns, covariates = split_columns(columns, ("file",))
     text_columns = [*text_columns, "file"]
     out: dict[str, MeasurementMetaWithoutPoints] = {}
     lines_of: dict[str, int] = {}
-    for chunk, lines in read_chunks(stream, file_name, columns, text_columns, 50_000):
+    for chunk, lines in read_chunks(stream, file_name, columns, text_columns, 50_000,
+                                    delimiter=delimiter, decimal=decimal):
         files = code_column(chunk["file"], "file", _file_key, True, lines, file_name)
         mileage = numeric_column(chunk["mileage_km"], "mileage_km", lines, file_name,
                                  minimum=0.0)

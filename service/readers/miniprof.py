@@ -80,6 +80,9 @@ class MiniProfFile:
     instrument_parameters: dict[str, float] | None
     parts: tuple[MiniProfPart, ...] = ()
     is_rail: bool = False
+    #: Sd/Sh/qR [mm] as printed in the header, placeholders included (``placeholder`` True
+    #: for the old-style template's values), None when the header has none
+    header_parameters: dict[str, float | bool] | None = None
 
 
 def _decode(data: bytes) -> str:
@@ -195,6 +198,23 @@ def _instrument_parameters(header: dict[str, str]) -> dict[str, float] | None:
     if tuple(round(v, 2) for v in values) == OLD_STYLE_PLACEHOLDERS:
         return None
     return dict(zip(("sd_mm", "sh_mm", "qr_mm"), values, strict=True))
+
+
+def _printed_parameters(header: dict[str, str], layout: str) -> dict[str, float | bool] | None:
+    """Sd/Sh/qR as printed: ``Sd=``/``Sh=``/``qR=`` lines, or the old ``(Sd/Sh/qR)`` line."""
+    if layout == "old":
+        texts = _SPLIT.split(header.get("Sd/Sh/qR", "").strip())
+    else:
+        texts = [header.get(key, "") for key in ("Sd", "Sh", "qR")]
+    try:
+        values = [float(t) for t in texts if t]
+    except ValueError:
+        return None
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        return None
+    out: dict[str, float | bool] = dict(zip(("sd_mm", "sh_mm", "qr_mm"), values, strict=True))
+    out["placeholder"] = tuple(round(v, 2) for v in values) == OLD_STYLE_PLACEHOLDERS
+    return out
 
 
 def _regular(lines: list[str], file_name: str, check_count: bool
@@ -356,7 +376,8 @@ def parse_miniprof(data: bytes, file_name: str) -> MiniProfFile:
         file_name=file_name, layout=layout, header=header, x_mm=x, y_mm=y,
         measured_on=measured_on, side_hint=_side(header.get("Side")),
         instrument_serial=serial, instrument_parameters=parameters, parts=parts,
-        is_rail=_looks_like_rail(file_name, header, first))
+        is_rail=_looks_like_rail(file_name, header, first),
+        header_parameters=_printed_parameters(header, layout))
 
 
 def to_wheel_frame(mp: MiniProfFile, part: int | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -87,6 +87,17 @@ class ProfileRecord:
     y_mm: np.ndarray
     z_mm: np.ndarray
     instrument_parameters: dict[str, float] | None = None
+    #: Sd/Sh/qR [mm] as printed in the file's header, even template placeholders (keys
+    #: ``sd_mm, sh_mm, qr_mm`` and ``placeholder``: True for the old-style template's values)
+    header_parameters: dict[str, float | bool] | None = None
+    #: The points are in the instrument's own datum frame (back face, tape circle): placed by
+    #: it, never by a free fit (MiniProf files)
+    instrument_datum: bool = False
+    #: Line of the manifest row that described this file (MiniProf), for warnings
+    manifest_line: int | None = None
+    #: The instrument's datum entries of the header as printed (MiniProf ``Xoffset``,
+    #: ``Yoffset``, ``RefPoint1``…), reported with the placement
+    datum_header: dict[str, str] | None = None
 
 
 @dataclass(frozen=True)
@@ -126,6 +137,37 @@ def _enum(*allowed: str) -> Callable[[str], str]:
     return convert
 
 
+#: Usual spellings of side and bogie type (English, German, French, Italian, Spanish,
+#: abbreviations), compared after lower-casing and dropping dots, spaces, '-' and '_'.
+SPELLINGS: dict[str, dict[str, str]] = {
+    "side": {s: "left" for s in ("l", "left", "lh", "links", "li", "lft", "gauche", "g",
+                                 "sinistra", "sx", "izquierda", "izq", "leftwheel")}
+    | {s: "right" for s in ("r", "right", "rh", "rechts", "re", "rgt", "droite", "d",
+                            "destra", "dx", "derecha", "der", "rightwheel")},
+    "bogie_type": {s: "motor" for s in ("motor", "m", "mot", "motorbogie", "motored",
+                                        "motorised", "motorized", "powered", "power",
+                                        "driven", "trieb", "triebdrehgestell", "tdg",
+                                        "motrice", "moteur")}
+    | {s: "trailer" for s in ("trailer", "t", "trail", "trailerbogie", "unpowered",
+                              "nonpowered", "carrying", "lauf", "laufdrehgestell", "ldg",
+                              "porteur", "portante", "remorque")},
+}
+
+
+def _spelled(name: str) -> Callable[[str], str]:
+    """Converter accepting the usual spellings of ``name`` (``SPELLINGS``)."""
+    table = SPELLINGS[name]
+    allowed = sorted(set(table.values()))
+
+    def convert(value: str) -> str:
+        key = "".join(ch for ch in value.strip().lower() if ch not in " .-_")
+        if key not in table:
+            raise BadValue(f"{value!r} is not one of {', '.join(allowed)} (or a usual "
+                           f"spelling such as {', '.join(k for k in table if len(k) <= 6)})")
+        return table[key]
+    return convert
+
+
 def _axle(value: str) -> int:
     try:
         number = float(value)
@@ -147,8 +189,11 @@ def _iso_date(value: str) -> date:
 
 
 def _positive_float(value: str) -> float:
+    text = value.strip()
+    if text.count(",") == 1 and "." not in text:  # decimal comma (';'-separated files)
+        text = text.replace(",", ".")
     try:
-        number = float(value)
+        number = float(text)
     except ValueError:
         raise BadValue(f"{value!r} is not a number") from None
     if not math.isfinite(number) or number <= 0:
@@ -169,9 +214,9 @@ def _covariate(value: str) -> str | float:
 CONVERTERS: dict[str, Callable[[str], object]] = {
     "wheel_id": _text,
     "vehicle_id": _text,
-    "bogie_type": _enum("motor", "trailer"),
+    "bogie_type": _spelled("bogie_type"),
     "axle": _axle,
-    "side": _enum("left", "right"),
+    "side": _spelled("side"),
     "measured_on": _iso_date,
     "route_id": _text,
     "running_mode": _enum("lead", "mixed"),

@@ -68,11 +68,12 @@ def _database_url(request: Request) -> str:
 
 
 def _predict_loading(request: Request, model_id: int, body: PredictIn) -> Response:
-    """Predict with its inputs read from the database (runs in the threadpool)."""
+    """Predict with its inputs (and a measured start) read from the database (threadpool)."""
     database: Database = request.app.state.database
     with database.session_factory() as session:
         inputs, route = model_store.load_inputs(session, model_id, body.route_id, body.route)
-    return _bytes(model_store.predict_json(inputs, route, model_id, body))
+        start = model_store.wheel_start(session, body) if body.measured_start else None
+    return _bytes(model_store.predict_json(inputs, route, model_id, body, start))
 
 
 def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -> Response:
@@ -91,17 +92,20 @@ def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -
 # first request, a wheel's latest state) the database is read in the threadpool.
 @router.post("/models/{model_id}/predict", response_model=PredictionOut)
 async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
-    cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
-                                       body.route)
+    cached = None
+    if body.wheel_id is None and body.measurement_id is None:  # stored starts: always read
+        cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
+                                           body.route)
     if cached is None:
         return await run_in_threadpool(_predict_loading, request, model_id, body)
-    return _bytes(model_store.predict_json(*cached, model_id, body))
+    start = model_store.wheel_start(None, body) if body.profile is not None else None
+    return _bytes(model_store.predict_json(*cached, model_id, body, start))
 
 
 @router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
 async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> Response:
     cached = None
-    if body.wheel_id is None:  # a wheel's latest measurement may change: always read
+    if body.wheel_id is None and body.measurement_id is None:  # stored states: always read
         cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
                                            body.route)
     if cached is None:

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
 from wearcast.physics.wear_distribution import Smoothing
 from wearcast.physics.wear_laws import ArchardKTH, WearLaw
 from wearcast.physics.wear_loop import (
@@ -44,11 +45,20 @@ def test_progress_and_parameters(adaptive):
     sim, calls = adaptive
     assert [c[0] for c in calls] == [1, 2, 3] and all(c[1] == 3 for c in calls)
     assert [c[2] for c in calls] == pytest.approx(sim.mileage_km[1:].tolist())
-    # New S1002 (DESIGN.md): Sh 28.0, Sd 32.5, qR 10.8 mm; wear never thickens the flange.
+    # New S1002 (DESIGN.md): Sh 28.0, Sd 32.5, qR 10.8 mm.
     assert sim.sh_mm[0] == pytest.approx(28.0, abs=0.01)
     assert sim.sd_mm[0] == pytest.approx(32.5, abs=0.01)
     assert sim.qr_mm[0] == pytest.approx(10.8, abs=0.01)
-    assert np.all(np.diff(sim.sd_mm) <= 1e-9)
+    # EN 15313: the loop's Sh is taken from the worn tread at the tape circle, so it grows by
+    # the tread wear there (the flange tip does not wear here); Sd is measured 10 mm above
+    # that worn level, so tread wear may raise it (it did fall monotonically while the loop
+    # used the nominal frame z = 0). In the nominal frame wear never thickens the flange.
+    tape = int(np.argmin(np.abs(sim.y_mm)))
+    tip = np.max(sim.profiles_mm[:, sim.y_mm < -40.0], axis=1)
+    assert sim.sh_mm == pytest.approx(tip - sim.profiles_mm[:, tape], abs=0.01)
+    assert sim.sh_mm[-1] > sim.sh_mm[0]
+    nominal = [nominal_frame_flange_parameters(sim.y_mm, z).sd_mm for z in sim.profiles_mm]
+    assert np.all(np.diff(nominal) <= 1e-9)
     assert np.all(np.diff(sim.worn_volume_mm3) > 0)
     json.dumps(sim.to_dict())
 

@@ -130,3 +130,39 @@ def test_high_rail_wheel_is_governed_by_the_flange_and_tangent_track_by_the_trea
     assert right.governing_limit == "qr"
     assert left.mileage_p50_km > right.mileage_p50_km
     assert tangent.governing_limit == "sh" and tangent.rates_mm2_per_km["flange"] == 0.0
+
+
+def test_a_wheel_measured_past_a_limit_has_no_mileage_left():
+    measured = {"sd_mm": 30.0, "sh_mm": 28.4, "qr_mm": 5.43}  # qR below 6.5 mm
+    res = reprofiling_mileage(_model(), ROUTE, _table(), start_parameters=measured, **KW)
+    assert (res.mileage_p10_km, res.mileage_p50_km, res.mileage_p90_km) == (0.0, 0.0, 0.0)
+    assert res.governing_limit == "qr"
+    assert res.crossed_limits == pytest.approx({"qr": 6.5 - 5.43})
+    assert "qR 5.43 mm < 6.5 mm by 1.07 mm" in res.reason
+    two = reprofiling_mileage(_model(), ROUTE, _table(),
+                              start_parameters={"sd_mm": 21.0, "sh_mm": 36.5, "qr_mm": 7.0},
+                              **KW)
+    assert set(two.crossed_limits) == {"sd", "sh"} and two.governing_limit == "sd"
+
+
+def test_the_prediction_follows_the_measured_parameters():
+    model = _model()
+    base = reprofiling_mileage(model, ROUTE, _table(), **KW)
+    # the model's own parameters at the start: the same answer
+    from wearcast.statistics.hybrid import parameters_at_areas
+
+    p0, _ = parameters_at_areas(model, np.array([0.0]), np.array([0.0]))
+    same = dict(zip(("sd_mm", "sh_mm", "qr_mm"), p0[0].tolist(), strict=True))
+    again = reprofiling_mileage(model, ROUTE, _table(), start_parameters=same, **KW)
+    assert again.mileage_p50_km == pytest.approx(base.mileage_p50_km, rel=1e-6)
+    # a measured start 2 mm closer to the governing limit reaches it earlier, at a value on it
+    closer = dict(same)
+    key = {"sd": "sd_mm", "qr": "qr_mm", "sh": "sh_mm"}[base.governing_limit]
+    closer[key] += 2.0 if key == "sh_mm" else -2.0
+    early = reprofiling_mileage(model, ROUTE, _table(), start_parameters=closer, **KW)
+    assert early.mileage_p50_km < base.mileage_p50_km
+    limit = {"sd_mm": 22.0, "sh_mm": 36.0, "qr_mm": 6.5}[key]
+    assert getattr(early, key) == pytest.approx(limit, abs=0.05)
+    with pytest.raises(ValueError, match="start_parameters.qr_mm"):
+        reprofiling_mileage(model, ROUTE, _table(), start_parameters={"sd_mm": 30.0,
+                                                                      "sh_mm": 28.0}, **KW)
