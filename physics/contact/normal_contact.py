@@ -174,7 +174,9 @@ def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: 
     if s.size < 2:
         raise ValueError("patch: fewer than 2 locus samples across it")
     inc = np.diff(s) > 0
-    centre = int(np.argmin(np.abs(s)))
+    # the monotone run through the deepest sample of the patch (always interpenetrating)
+    deepest = int(region.samples[np.argmin(locus.gap_mm[row, region.samples])])
+    centre = int(np.clip(np.searchsorted(idx, deepest), 0, s.size - 1))
     keep_lo, keep_hi = centre, centre + 1
     while keep_lo > 0 and inc[keep_lo - 1] == inc[min(centre, inc.size - 1)]:
         keep_lo -= 1
