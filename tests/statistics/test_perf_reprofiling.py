@@ -9,7 +9,6 @@ crossing to within max(0.1 % of the mileage, 50 km) (``MILEAGE_RTOL``/``MILEAGE_
 from __future__ import annotations
 
 import itertools
-import time
 
 import numpy as np
 import pandas as pd
@@ -248,18 +247,3 @@ def test_given_weighted_measures_give_the_same_prediction(table):
     res = reprofiling.reprofiling_mileage(model, ROUTE, table, side="right",
                                           weighted_measures=p_s, **KW)
     assert res == reprofiling.reprofiling_mileage(model, ROUTE, table, side="right", **KW)
-
-
-def test_reprofiling_and_predict_are_fast(table):
-    # about 1 ms and 0.3 ms on an idle core (before vectorising: ~50 ms and ~30 ms on the
-    # example model); loose bounds for a shared 2-core machine
-    model = _model()
-    reprofiling_mileage(model, ROUTE, table, side="right", **KW)
-    t0 = time.perf_counter()
-    for _ in range(10):
-        reprofiling_mileage(model, ROUTE, table, side="right", **KW)
-    assert (time.perf_counter() - t0) / 10 < 0.015
-    t0 = time.perf_counter()
-    for _ in range(10):
-        predict(model, ROUTE, table, side="right", mileage_km=[5e4, 1e5, 2e5], **KW)
-    assert (time.perf_counter() - t0) / 10 < 0.010
