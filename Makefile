@@ -3,6 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
+TYPES  := .typecheck/wearcast
 HOST   ?= 127.0.0.1
 PORT   ?= 8000
 
@@ -18,15 +19,22 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/wearcast serve --host $(HOST) --port $(PORT) --load-example
 
-test: $(STAMP)
+test: lint
 	$(BIN)/python -m pytest
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -m ''
 
-lint: $(STAMP)
-	$(BIN)/ruff check physics statistics service tests benchmarks
-	$(BIN)/mypy physics statistics service
+# mypy sees the installed package layout (wearcast.physics -> physics/ ...) through a tree of
+# links, so every cross-module import is typed instead of resolving to Any.
+$(TYPES)/__init__.py:
+	mkdir -p $(TYPES)
+	for p in physics statistics service migrations; do ln -sfn ../../$$p $(TYPES)/$$p; done
+	touch $@
+
+lint: $(STAMP) $(TYPES)/__init__.py
+	$(BIN)/ruff check physics statistics service tests benchmarks examples docs
+	MYPYPATH=.typecheck $(BIN)/mypy -p wearcast.physics -p wearcast.statistics -p wearcast.service
 
 demo: $(STAMP)
 	$(BIN)/wearcast demo
@@ -35,4 +43,4 @@ bench: $(STAMP)
 	@for b in benchmarks/bench_*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) data .pytest_cache
+	rm -rf $(VENV) data .pytest_cache .typecheck
