@@ -316,10 +316,14 @@ def _diagnose(session: Session, out: Path, model_id: int,
                      for f in d.findings)
     echo(f"diagnosis of model {model_id} on {d.n_measurements} measurements "
          f"({d.n_groups} groups by {d.group_by}): verdict {d.verdict}")
-    if d.verdict != "none":
-        top = d.finding(d.verdict)
-        assert top is not None
+    top = d.finding(d.verdict)
+    if top is not None:
         echo(f"  {top.summary}")
+    elif d.verdict == "ambiguous":
+        echo(f"  candidates no tested margin separates: {', '.join(d.candidates)}")
+    for u in d.unexplained:
+        echo(f"  residual structure by {u['by']}: {100 * u['share_of_residual']:.1f} % of "
+             f"the residual (p = {u['p_value']:.3f})")
     echo(format_findings(findings))
     for code, reason in d.skipped.items():
         echo(f"  skipped {code}: {reason}")
