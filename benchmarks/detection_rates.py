@@ -17,10 +17,10 @@ from __future__ import annotations
 import sys
 import time
 
-from wearcast.statistics import fleet_twin as ft
-from wearcast.statistics import fleet_twin_alt as fa
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.discrepancy import diagnose
 
 TABLE = ft.synthetic_wear_table()

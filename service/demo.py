@@ -365,8 +365,8 @@ def _hidden_effect_demo(out: Path, echo: Callable[[str], None]) -> DemoDiagnosis
 
     from wearcast.service.app import create_app
     from wearcast.service.settings import Settings
-    from wearcast.statistics import fleet_twin as ft
-    from wearcast.statistics import twin_effects as te
+    from wearcast.statistics.generators import fleet_twin as ft
+    from wearcast.statistics.generators import twin_effects as te
 
     out.mkdir(parents=True, exist_ok=True)
     echo("hidden-effect example: fleet twin with motor-bogie treads wearing 1.3 x faster "

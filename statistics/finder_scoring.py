@@ -138,26 +138,43 @@ def area_design(data: cz.FinderData, features: Array) -> Array:
     return np.asarray((d * data.phi[:, :, None]).reshape(2 * n, 2 + k))
 
 
-def _fold_sse(design: Array, y: Array, folds_flat: NDArray[np.int64]) -> Array:
-    """(B,) held-out sum of squares of the least-squares fit of y (N, B) on design (N, p)."""
-    sse = np.zeros(y.shape[1])
-    for k in np.unique(folds_flat):
-        test = folds_flat == k
-        a = design[~test]
-        keep = np.any(a != 0, axis=1)
-        pinv = np.linalg.pinv(a[keep])
-        coef = pinv @ y[~test][keep]
-        sse += np.sum((y[test] - design[test] @ coef) ** 2, axis=0)
-    return sse
+def _fold_sse(design: Array, ys: Sequence[Array], yty: Sequence[Array],
+              slices: Sequence[slice]) -> Array:
+    """(B,) held-out sum of squares of the least-squares fit of y on ``design`` over folds.
+
+    Rows are sorted by fold (``slices``); ``ys``/``yty`` are each fold's y block (N_k, B)
+    and its column sums of squares. Normal equations from per-fold cross-products: the
+    training fit of fold k uses the totals minus fold k's own.
+    """
+    xs = [design[sl] for sl in slices]
+    # small products by einsum (single-threaded: no BLAS thread oversubscription)
+    xtx = [np.einsum("np,nq->pq", x, x) for x in xs]
+    xty = [np.einsum("np,nb->pb", x, y) for x, y in zip(xs, ys, strict=True)]
+    xtx_all, xty_all = sum(xtx), sum(xty)
+    sse = np.zeros(ys[0].shape[1])
+    for k in range(len(slices)):
+        beta = np.linalg.pinv(xtx_all - xtx[k]) @ (xty_all - xty[k])
+        sse += yty[k] - 2.0 * np.sum(beta * xty[k], axis=0) \
+            + np.sum(beta * (xtx[k] @ beta), axis=0)
+    return np.asarray(sse)
 
 
 def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Array,
                     folds_flat: NDArray[np.int64]) -> Array:
     """(n_alt, B) held-out relative gains 1 - SSE_alt / SSE_null on resampled datasets."""
-    before = _fold_sse(null_design, draws, folds_flat)
+    order = np.argsort(folds_flat, kind="stable")
+    f_sorted = folds_flat[order]
+    bounds = np.flatnonzero(np.diff(f_sorted)) + 1
+    starts = np.concatenate([[0], bounds])
+    ends = np.concatenate([bounds, [f_sorted.size]])
+    slices = [slice(int(a), int(b)) for a, b in zip(starts, ends, strict=True)]
+    y = draws[order]
+    ys = [y[sl] for sl in slices]
+    yty = [np.sum(b * b, axis=0) for b in ys]
+    before = _fold_sse(null_design[order], ys, yty, slices)
     out = np.empty((len(alt_designs), draws.shape[1]))
     for i, d in enumerate(alt_designs):
-        out[i] = 1.0 - _fold_sse(d, draws, folds_flat) / np.maximum(before, 1e-300)
+        out[i] = 1.0 - _fold_sse(d[order], ys, yty, slices) / np.maximum(before, 1e-300)
     return out
 
 

@@ -20,8 +20,8 @@ from fastapi.testclient import TestClient
 
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 
 @lru_cache(maxsize=16)
