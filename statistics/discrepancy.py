@@ -16,9 +16,13 @@ scores it out of sample and names a cause only when it is specific:
    signs) carry the baseline's nuisance variation and no effect; every cause is fitted and
    scored on them exactly as on the data. A cause's p-value is the share of resampled
    gains at least as large as its observed gain, adjusted across the catalogue by the
-   Westfall-Young max-T method (gains standardised by their own null distribution) on the same resamples (no asymptotic test, no assumed noise
-   distribution); the wear-curve shape cause is tested the same way on its coefficients;
-4. specificity: the cause with the largest significant and material gain must beat the
+   Westfall-Young max-T method (gains standardised by their own null distribution) on the
+   same resamples (no asymptotic test, no assumed noise distribution). The nuisance is
+   taken from the residuals of the baseline plus the leading candidate (so a real effect is
+   not resampled as nuisance), widened for the degrees of freedom that fit used; the
+   wear-curve shape cause is tested the same way on its coefficients;
+4. specificity: the cause with the largest significant (adjusted p < alpha) and material
+   (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a sign-flip
    randomisation test over the groups of the held-out error difference. If it does not,
    the verdict is ``ambiguous`` and lists the candidates;
@@ -71,7 +75,7 @@ from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_ta
 
 DEFAULT_ALPHA = 0.04
 DEFAULT_STRUCTURE_ALPHA = 0.01
-DEFAULT_MIN_RELATIVE_GAIN = 0.02
+DEFAULT_MIN_RELATIVE_GAIN = 0.005
 DEFAULT_N_NULL = 199
 MAX_CAUSES = 3
 
@@ -173,6 +177,15 @@ class Diagnosis:
                 "nuisance": _json(self.nuisance), "null_test": self.null_test}
 
 
+def _lubricated_share(flags: NDArray[np.bool_] | None, history: Any
+                      ) -> NDArray[np.float64] | None:
+    """Share of each measurement's mileage run lubricated (its route history)."""
+    if flags is None:
+        return None
+    x = flags.astype(float)
+    return np.asarray(history @ x) if history is not None else x
+
+
 def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
     uniq = np.unique(groups)
     rng = np.random.default_rng(seed)
@@ -207,7 +220,8 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         measure_index=MEASURES.index(model.measure),
         lead_share=leading_share(frame["axle"].to_numpy(), res.mode), mode=res.mode,
         left_right=res.left_right_shares, route=route,
-        lubricated=cz.lubrication_flags(frame, route, route_attributes),
+        lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
+                                     res.history),
         shape_res=shape, basis=basis,
     )
 
@@ -306,9 +320,16 @@ def diagnose(
     if k < 2:
         raise ValueError("measurements: need at least two wheels to score out of sample")
     folds = _folds(groups, k, seed)
+    everything = np.ones(data.n, dtype=bool)
+    null_fit = cz.NullArea().fit(data, everything)
+    data.set_robust_weights(data.e - data.phi * null_fit.log_scale_[None, :])
+    sw = np.sqrt(data.weights)
+
+    def loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(np.sum(data.weights * residual ** 2, axis=1))
+
     chosen = cz.CATALOGUE if causes is None else tuple(cz.cause_by_code(c) for c in causes)
     rng = np.random.default_rng(seed + 1)
-    everything = np.ones(data.n, dtype=bool)
     skipped: dict[str, str] = {}
     area: list[cz.Cause] = []
     shape_cause: cz.Cause | None = None
@@ -329,8 +350,12 @@ def diagnose(
         inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
         before = np.sum(fs.held_out_shape(coef, None, folds) ** 2, axis=1)
         after = np.sum(fs.held_out_shape(coef, inst, folds) ** 2, axis=1)
-        nm = fs.NuisanceModel.fit(coef - coef.mean(axis=0), np.ones_like(coef), vehicle, wheel)
-        draws = nm.draws(n_null, rng)
+        inst_codes = fs.codes_of(inst)
+        centred = coef.copy()
+        for i in np.unique(inst_codes):   # residuals of the per-instrument fit
+            centred[inst_codes == i] -= coef[inst_codes == i].mean(axis=0)
+        nm = fs.NuisanceModel.fit(centred, np.ones_like(coef), vehicle, wheel)
+        draws = nm.draws(n_null, rng, used_dof=int(inst_codes.max()))
         boot = fs.bootstrap_gains(_shape_design(data.n, None), [_shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
         shape_row = (_relative(before, after), boot[0])
@@ -348,22 +373,21 @@ def diagnose(
     step = 0
     while remaining and len(selected) < max_causes:
         base: cz.Cause = cz.Composite(tuple(selected)) if selected else cz.NullArea()
-        before = np.sum(fs.held_out(data, base, folds) ** 2, axis=1)
+        before = loss(fs.held_out(data, base, folds))
         rows = {}
         for c in remaining:
             est: cz.Cause = cz.Composite((*selected, c)) if selected else c
-            rows[c.code] = np.sum(fs.held_out(data, est, folds) ** 2, axis=1)
+            rows[c.code] = loss(fs.held_out(data, est, folds))
         full = base.fit(data, everything)
         residual = data.e - data.phi * (full.log_scale_[None, :]
                                         + full.log_factor(data, full.theta_))
-        nm = fs.NuisanceModel.fit(residual, data.phi, vehicle, wheel)
+        nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
         if step == 0:
             nuisance = {"log_rate_sd_by_region": {"flange": {}, "tread": {}}}
             for lvl, sds in nm.sd.items():
                 for j, r in enumerate(("flange", "tread")):
                     nuisance["log_rate_sd_by_region"][r][lvl] = float(sds[j])
             base_residual = residual
-        draws = nm.draws(n_null, rng)
         base_x = full.features(data, full.theta_)
         alt = []
         for c in remaining:
@@ -371,9 +395,18 @@ def diagnose(
             prepared.prepare(data, everything)
             alt.append(fs.area_design(data, np.concatenate(
                 [base_x, prepared.features(data, prepared.start())], axis=2)))
+        observed = np.array([_relative(before, rows[c.code]) for c in remaining])
+        # the nuisance is taken from the residuals of the baseline plus the leading
+        # candidate (its effect must not be resampled as nuisance), widened for the
+        # degrees of freedom that fit used
+        lead = remaining[int(np.argmax(observed))]
+        lead_fit = (cz.Composite((*selected, lead)) if selected else lead).fit(data, everything)
+        lead_res = data.e - data.phi * (lead_fit.log_scale_[None, :]
+                                        + lead_fit.log_factor(data, lead_fit.theta_))
+        nm_lead = fs.NuisanceModel.fit(sw * lead_res, sw * data.phi, vehicle, wheel)
+        draws = nm_lead.draws(n_null, rng, used_dof=len(lead_fit.theta_) - len(full.theta_))
         boot = fs.bootstrap_gains(fs.area_design(data, base_x), alt, draws,
                                   np.repeat(folds, 2))
-        observed = np.array([_relative(before, rows[c.code]) for c in remaining])
         codes = [c.code for c in remaining]
         if step == 0 and shape_row is not None:
             observed = np.append(observed, shape_row[0])
@@ -474,9 +507,7 @@ def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
 
 def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
            rng: np.random.Generator) -> bool:
-    if not (s.p_adj < alpha and s.gain >= min_gain):
-        return False
-    return _gain_interval(s, groups, n_boot, rng)[0] > 0
+    return bool(s.p_adj < alpha and s.gain >= min_gain)
 
 
 def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDArray[Any],
@@ -486,12 +517,13 @@ def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDAr
     factors = fs.structure_factors(data.frame, data.mileage_km)
     if not factors:
         return []
-    nm = fs.NuisanceModel.fit(residual, data.phi, vehicle, wheel)
+    sw = np.sqrt(data.weights)
+    nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
     draws = nm.draws(n_null, rng).reshape(data.n, 2, n_null)
     names = list(factors)
-    observed = np.array([float(fs.structure_share(residual, data.phi, factors[f])[0])
-                         for f in names])
-    null = np.vstack([fs.structure_share(draws, data.phi, factors[f]) for f in names])
+    observed = np.array([float(fs.structure_share(sw * residual, sw * data.phi,
+                                                  factors[f])[0]) for f in names])
+    null = np.vstack([fs.structure_share(draws, sw * data.phi, factors[f]) for f in names])
     p_raw, p_adj = fs.min_p(observed, null)
     out = []
     for i, name in enumerate(names):
@@ -575,7 +607,7 @@ def _findings(data: cz.FinderData, scored: Mapping[str, _Scored], selected: Sequ
                    f"(95 % CI {100 * lo:.1f} to {100 * hi:.1f} %)"
                    + (f"; 95 % intervals: {ci}" if ci else ""))
         significant = bool(s.p_adj < alpha)
-        material = bool(s.gain >= min_gain and lo > 0)
+        material = bool(s.gain >= min_gain)
         out.append(Finding(code, summary, evidence, extension, gain, significant and
                            (code in names or not names), material))
     return out

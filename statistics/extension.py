@@ -161,7 +161,8 @@ def apply_extension(model: HybridModel, finding: Finding) -> HybridModel | Exten
     """The model extended by a finding.
 
     ``wear_measure`` with a share of the other measure of 1 (within its 95 % interval)
-    gives a plain HybridModel with the other measure and c_s refitted; ``profile_misalignment`` corrects the data, not the rates: an ``ExtendedModel`` that
+    gives a plain HybridModel with the other measure and c_s refitted;
+    ``profile_misalignment`` corrects the data, not the rates: an ``ExtendedModel`` that
     predicts exactly as the base model and carries the per-instrument corrections
     (``correct_wear_curves``, ``correct_profile``); every other cause an ``ExtendedModel``.
     """

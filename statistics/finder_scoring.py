@@ -108,12 +108,20 @@ class NuisanceModel:
               "measurement": np.std(eps, axis=0).tolist()}
         return cls(v, w, ve, we, eps, wt, sd)
 
-    def draws(self, n_draws: int, rng: np.random.Generator) -> Array:
-        """(n * m, B) resampled residual datasets without any effect (module docstring)."""
+    def draws(self, n_draws: int, rng: np.random.Generator, used_dof: int = 0) -> Array:
+        """(n * m, B) resampled residual datasets without any effect (module docstring).
+
+        ``used_dof``: parameters of an effect fitted before the residuals were taken; the
+        vehicle and wheel effects are widened by sqrt(G / (G - used_dof)) for the variance
+        that fit absorbed.
+        """
         n, m = self.residual.shape
         vf = pd.Series(np.arange(n)).groupby(self.vehicle).first().to_numpy()
         wf = pd.Series(np.arange(n)).groupby(self.wheel).first().to_numpy()
         v_eff, w_eff = self.vehicle_effect[vf], self.wheel_effect[wf]
+        if used_dof:
+            v_eff = v_eff * np.sqrt(v_eff.shape[0] / max(v_eff.shape[0] - used_dof, 1))
+            w_eff = w_eff * np.sqrt(w_eff.shape[0] / max(w_eff.shape[0] - used_dof, 1))
         by_wheel = np.argsort(self.wheel, kind="stable")
         out = np.empty((n, m, n_draws))
         for b in range(n_draws):
@@ -129,13 +137,15 @@ class NuisanceModel:
 
 
 def area_design(data: cz.FinderData, features: Array) -> Array:
-    """(2n, 2 + k) design of the linearised area fit: phi (b_r + x theta), rows (i, region)."""
+    """(2n, 2 + k) design of the linearised area fit: phi (b_r + x theta), rows (i, region),
+    times the square root of the rows' robustness weights."""
     n, _, k = features.shape
     d = np.zeros((n, 2, 2 + k))
     d[:, 0, 0] = 1.0
     d[:, 1, 1] = 1.0
     d[:, :, 2:] = features
-    return np.asarray((d * data.phi[:, :, None]).reshape(2 * n, 2 + k))
+    w = np.sqrt(data.weights)[:, :, None]
+    return np.asarray((d * data.phi[:, :, None] * w).reshape(2 * n, 2 + k))
 
 
 def _fold_sse(design: Array, ys: Sequence[Array], yty: Sequence[Array],

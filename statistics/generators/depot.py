@@ -169,6 +169,7 @@ class DepotUnit:
 
 
 def default_depot_units() -> tuple[DepotUnit, ...]:
+    """Five units, 18 cars (10 MT, 8 TT); two units run in ``lead`` mode."""
     return (
         DepotUnit("N1", (DepotCar("N1a", "MT", ("ridge", "coast"), 15.0),
                          DepotCar("N1b", "TT", ("ridge",), 13.0),
@@ -183,6 +184,16 @@ def default_depot_units() -> tuple[DepotUnit, ...]:
                          DepotCar("N3c", "TT", ("ridge", "ridge_greased"), 12.5),
                          DepotCar("N3d", "MT", ("coast",), 14.5)),
                   "mixed", 360.0),
+        DepotUnit("N4", (DepotCar("N4a", "MT", ("ridge_greased", "ridge"), 16.0),
+                         DepotCar("N4b", "TT", ("coast",), 11.5),
+                         DepotCar("N4c", "MT", ("ridge",), 13.0),
+                         DepotCar("N4d", "TT", ("ridge_greased",), 14.0)),
+                  "mixed", 470.0),
+        DepotUnit("N5", (DepotCar("N5a", "MT", ("coast", "ridge_greased"), 17.5),
+                         DepotCar("N5b", "TT", ("ridge",), 12.0),
+                         DepotCar("N5c", "TT", ("ridge_greased", "coast"), 15.0),
+                         DepotCar("N5d", "MT", ("ridge_greased",), 13.5)),
+                  "lead", 400.0),
     )
 
 
@@ -207,7 +218,8 @@ class DepotConfig:
 @dataclass(frozen=True)
 class DepotFleet:
     """Generated campaign: ``measurements`` (one row per measurement, processed areas),
-    ``wear_curves`` (n, g) [mm] on the processing grid, ``profiles`` (long CSV) or None, routes, table."""
+    ``wear_curves`` (n, g) [mm] on the processing grid, ``profiles`` (long CSV) or None,
+    routes, table."""
 
     measurements: pd.DataFrame
     wear_curves: Array
