@@ -56,7 +56,6 @@ from wearcast.statistics.cause_base import (
 from wearcast.statistics.causes_calendar import (
     OMEGA_PER_DAY,
     SeasonalFriction,
-    life_ids,
     season_features,
 )
 from wearcast.statistics.causes_route import (
@@ -66,7 +65,7 @@ from wearcast.statistics.causes_route import (
     WearMeasure,
     shape_coefficients,
 )
-from wearcast.statistics.residuals import REGIONS
+from wearcast.statistics.residuals import REGIONS, life_ids
 
 
 class Traction(Cause):
@@ -184,8 +183,20 @@ class NonlinearProgression(Cause):
         return ["beta_flange_minus_1", "beta_tread_minus_1"]
 
     def features(self, data: FinderData, theta: Array) -> Array:
-        s = data.mileage_km
-        x = np.where(s > 0, np.log(np.maximum(s, 1e-9) / self.reference_mileage_km), 0.0)
+        """log(s / s_ref) centred within each wheel life (``residuals.life_ids``): the
+        exponent is estimated from how each wheel's wear grows, never from differences
+        between wheels (wheels turned early for fast wear leave only slow ones at high
+        mileage, which would mimic a decelerating wear). The saved extension applies the
+        uncentred power law (``ExtendedModel.predict``)."""
+        if "life_centred_log_s" not in data.cache:
+            s = data.mileage_km
+            pos = s > 0
+            x = np.where(pos, np.log(np.maximum(s, 1e-9)), 0.0)
+            life = life_ids(data.frame, s)
+            key = pd.Series(np.where(pos, life, "_"))
+            mean = pd.Series(x).groupby(key.to_numpy()).transform("mean").to_numpy()
+            data.cache["life_centred_log_s"] = np.where(pos, x - mean, 0.0)
+        x = data.cache["life_centred_log_s"]
         out = np.zeros((data.n, 2, 2))
         out[:, 0, 0] = x
         out[:, 1, 1] = x

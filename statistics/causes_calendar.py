@@ -45,7 +45,7 @@ def season_features(frame: pd.DataFrame, mileage_km: Array) -> Array | None:
     groups = pd.Series(np.arange(len(frame))).groupby(life).indices
     speeds: dict[Any, float] = {}
     for key, idx in groups.items():
-        idx = idx[np.lexsort((s[idx], day[idx]))]
+        idx = np.asarray(idx)[np.lexsort((s[idx], day[idx]))]
         dd, ds = np.diff(day[idx]), np.diff(s[idx])
         ok = (dd > 0) & (ds > 0)
         if ok.any():
@@ -54,7 +54,7 @@ def season_features(frame: pd.DataFrame, mileage_km: Array) -> Array | None:
     w = OMEGA_PER_DAY
     out = np.zeros((len(frame), 2))
     for key, idx in groups.items():
-        idx = idx[np.lexsort((s[idx], day[idx]))]
+        idx = np.asarray(idx)[np.lexsort((s[idx], day[idx]))]
         v = speeds.get(key, fleet_v)
         t_end = day[idx]
         start = t_end[0] - s[idx[0]] / max(v, 1e-9)

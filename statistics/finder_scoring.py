@@ -128,7 +128,7 @@ class NuisanceModel:
             vs = v_eff[rng.integers(0, v_eff.shape[0], v_eff.shape[0])][self.vehicle]
             ws = w_eff[rng.integers(0, w_eff.shape[0], w_eff.shape[0])][self.wheel]
             # each wheel's residuals permuted within the wheel, with random signs
-            shuffled = np.lexsort((rng.random(n), self.wheel))
+            shuffled = np.lexsort((np.asarray(rng.random(n)), self.wheel))
             eps = np.empty_like(self.residual)
             eps[by_wheel] = self.residual[shuffled]
             eps *= rng.choice((-1.0, 1.0), size=(n, 1))
@@ -231,7 +231,7 @@ def sign_flip_p(diff_by_group: Array, n_draws: int, rng: np.random.Generator) ->
 
 def group_sums(values: Array, groups: NDArray[Any]) -> Array:
     c = codes_of(groups)
-    return np.bincount(c, weights=values, minlength=int(c.max()) + 1)
+    return np.asarray(np.bincount(c, weights=values, minlength=int(c.max()) + 1), dtype=float)
 
 
 # --- residual structure outside the catalogue -------------------------------------------------

@@ -300,7 +300,7 @@ def route_history_weights(frame: pd.DataFrame, mileage_km: NDArray[np.float64]) 
     cols: list[int] = []
     vals: list[float] = []
     for idx in groups.values():
-        idx = idx[np.argsort(mileage_km[idx], kind="stable")]
+        idx = np.asarray(idx)[np.argsort(mileage_km[idx], kind="stable")]
         s = mileage_km[idx]
         inc = np.diff(np.concatenate([[0.0], s]))
         for j, k in enumerate(idx):

@@ -398,7 +398,7 @@ def _measure_wheel(cfg: DepotConfig, rng: np.random.Generator, unit: DepotUnit, 
                     meta.update(flange_area_mm2=fa, tread_area_mm2=ta)
                     curves.append(curve)
                     profs.append(prof.assign(wheel_id=wheel_id, mileage_km=mileage,
-                                             measured_on=meta["measured_on"]))
+                                             measured_on=str(meta["measured_on"])))
                 else:
                     noise = (0.25 + 0.03 * area) * rng.standard_t(3, size=2)
                     fa, ta = (float(max(area[j] + noise[j], 0.0)) for j in range(2))
