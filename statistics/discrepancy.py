@@ -722,6 +722,15 @@ def report_html(diagnosis: Diagnosis, figures_svg: Mapping[str, str]) -> str:
         "</head><body><h1>wearcast diagnosis</h1>"
         f"<p>Verdict: <b>{esc(diagnosis.verdict)}</b> ({diagnosis.n_measurements} measurements, "
         f"{diagnosis.n_groups} groups by {esc(diagnosis.group_by)})</p>"
+        + (f"<p>Runner-up: {esc(diagnosis.runner_up)}, margin "
+           f"{100 * (diagnosis.margin or 0.0):.1f} % of the baseline's held-out error "
+           f"(randomisation p = {diagnosis.margin_p_value:.3g})</p>"
+           if diagnosis.runner_up is not None and diagnosis.margin_p_value is not None else "")
+        + (f"<p>Candidates no tested margin separates: "
+           f"{esc(', '.join(diagnosis.candidates))}</p>" if diagnosis.candidates else "")
+        + "".join(f"<p>Residual structure outside the catalogue by {esc(u['by'])}: "
+                  f"{100 * u['share_of_residual']:.1f} % of the residual "
+                  f"(p = {u['p_value']:.3g})</p>" for u in diagnosis.unexplained)
         "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
         "<th>after</th><th>relative gain [95 % CI]</th><th>p (Holm)</th><th>reported</th></tr>"
         + "".join(rows) + "</table>"
