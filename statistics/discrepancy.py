@@ -731,8 +731,9 @@ def report_html(diagnosis: Diagnosis, figures_svg: Mapping[str, str]) -> str:
         + "".join(f"<p>Residual structure outside the catalogue by {esc(u['by'])}: "
                   f"{100 * u['share_of_residual']:.1f} % of the residual "
                   f"(p = {u['p_value']:.3g})</p>" for u in diagnosis.unexplained)
-        "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
-        "<th>after</th><th>relative gain [95 % CI]</th><th>p (Holm)</th><th>reported</th></tr>"
+        + "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
+        "<th>after</th><th>relative gain [95 % CI]</th><th>p (max-T)</th><th>reported</th>"
+        "</tr>"
         + "".join(rows) + "</table>"
         + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
         + f"<h2>Figures</h2>{figs}</body></html>")
