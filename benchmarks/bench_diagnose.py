@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import time
 
-from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics import hybrid
-from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 
 def main() -> None:

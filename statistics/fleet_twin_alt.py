@@ -1,4 +1,4 @@
-"""Moved to :mod:`wearcast.statistics.generators.fleet_twin_alt` (this name is kept as an alias)."""
+"""Moved to :mod:`wearcast.statistics.generators.fleet_twin_alt`; this name is an alias."""
 
 import sys
 

@@ -1,4 +1,4 @@
-"""Moved to :mod:`wearcast.statistics.generators.twin_effects` (this name is kept as an alias)."""
+"""Moved to :mod:`wearcast.statistics.generators.twin_effects`; this name is an alias."""
 
 import sys
 

@@ -1,8 +1,8 @@
 """Fleet twin with the wear loop as its truth (issue 5): measured profiles whose wear-curve
 shapes and areas over mileage come from :func:`wearcast.physics.wear_loop.simulate_wear`.
 
-:mod:`wearcast.statistics.generators.fleet_twin` makes its truth from the hybrid model itself (wear areas
-c_s P s and a family of hand-made shapes); a twin made that way cannot show what the hybrid
+:mod:`wearcast.statistics.generators.fleet_twin` makes its truth from the hybrid model itself
+(wear areas c_s P s and a family of hand-made shapes); a twin made that way cannot show what the hybrid
 model gets wrong. This module keeps the twin's fleet layout, scatter, effect hooks and
 measurement model (misalignment, noise normal to the surface, long-CSV frames), and replaces
 the truth by the contact-mechanics route the seeds use:
