@@ -2,8 +2,8 @@
 shapes and areas over mileage come from :func:`wearcast.physics.wear_loop.simulate_wear`.
 
 :mod:`wearcast.statistics.generators.fleet_twin` makes its truth from the hybrid model itself
-(wear areas c_s P s and a family of hand-made shapes); a twin made that way cannot show what the hybrid
-model gets wrong. This module keeps the twin's fleet layout, scatter, effect hooks and
+(wear areas c_s P s and a family of hand-made shapes); a twin made that way cannot show what
+the hybrid model gets wrong. This module keeps the twin's fleet layout, scatter, effect hooks and
 measurement model (misalignment, noise normal to the surface, long-CSV frames), and replaces
 the truth by the contact-mechanics route the seeds use:
 
