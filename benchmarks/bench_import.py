@@ -9,8 +9,8 @@ function (``wearcast.service.importing.import_upload``, not HTTP) into a fresh S
 database, and prints profiles/s, points/s and the child's peak RSS
 (``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so each size's memory is measured alone.
 
-The profiles are the fleet twin's (``wearcast.statistics.generators.fleet_twin``): a pool of realistic
-worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
+The profiles are the fleet twin's (``wearcast.statistics.generators.fleet_twin``): a pool of
+realistic worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
 """
 
 from __future__ import annotations
