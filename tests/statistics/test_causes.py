@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 
 from wearcast.statistics import causes as cz
-from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics import hybrid
-from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.discrepancy import build_data, diagnose
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 TABLE = ft.synthetic_wear_table()
 

@@ -1,6 +1,7 @@
 """The discrepancy finder on data from an independent generator (issue 4: not tuned to the twin).
 
-``wearcast.statistics.generators.fleet_twin_alt`` differs from ``fleet_twin`` in everything the finder
+``wearcast.statistics.generators.fleet_twin_alt`` differs from ``fleet_twin`` in everything the
+finder
 could have been tuned to: wear-curve shapes, scatter distributions (uniform wheel and vehicle
 factors, heteroscedastic area noise), fleet layout (3 units of 4/3/2 motor or trailer cars,
 unequal mileages, ~12 % missing measurements), its own routes and analytic wear measures,
@@ -18,9 +19,9 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import apply_extension, diagnose
+from wearcast.statistics.generators import fleet_twin_alt as fa
 
 
 def run_alt(effects: fa.AltEffects, seed: int = 0, n_boot: int = 400):

@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcast.statistics import hybrid
-from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import (
     ExtendedModel,
     apply_extension,
     diagnosis_figures,
     report_html,
 )
+from wearcast.statistics.generators import twin_effects as te
 
 _spec = importlib.util.spec_from_file_location(
     "_diagnose_helpers", Path(__file__).with_name("_diagnose_helpers.py"))

@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from wearcast.statistics.generators.fleet_twin import FleetConfig, TwinCurveClass, TwinRoute, UnitConfig
+from wearcast.statistics.generators.fleet_twin import (
+    FleetConfig,
+    TwinCurveClass,
+    TwinRoute,
+    UnitConfig,
+)
 from wearcast.statistics.generators.fleet_twin_loop import LoopTruth, generate_loop_fleet
 from wearcast.statistics.processing import process_profile
 

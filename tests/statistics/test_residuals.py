@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics import hybrid
+from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.residuals import (
     geometric_basis,
