@@ -140,7 +140,7 @@ class DemoDiagnosis:
     """What the demo's diagnosis found (``run_demo`` step 2)."""
 
     verdict: str
-    #: (cause, relative gain, 95 % CI low, high, Holm p, reported) per finding
+    #: (cause, relative gain, 95 % CI low, high, max-T adjusted p, reported) per finding
     findings: tuple[tuple[str, float, float, float, float, bool], ...]
     report: Path
     extended_model_id: int | None
@@ -291,8 +291,8 @@ def _pictures(out: Path, model_id: int, predictions: list[Any], database: Any,
 
 
 def format_findings(findings: tuple[tuple[str, float, float, float, float, bool], ...]) -> str:
-    """The demo's findings table: cause, held-out gain with its 95 % interval, Holm p."""
-    head = f"{'cause':<24}{'held-out gain [95 % CI]':<28}{'p (Holm)':>10}  reported"
+    """The demo's findings table: cause, held-out gain with its 95 % interval, adjusted p."""
+    head = f"{'cause':<24}{'held-out gain [95 % CI]':<28}{'p (max-T)':>10}  reported"
     lines = [head, "-" * len(head)]
     for cause, gain, lo, hi, p, reported in findings:
         band = f"{100 * gain:+.1f} % [{100 * lo:+.1f}, {100 * hi:+.1f}]"

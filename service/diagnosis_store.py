@@ -1,7 +1,8 @@
 """The discrepancy finder on stored data: gather a model's inputs, diagnose, save the extension.
 
 The finder is :func:`wearcast.statistics.discrepancy.diagnose` (residuals, the cause
-catalogue scored out of sample with grouped folds, Holm control, bootstrap gain); this module
+catalogue scored out of sample with grouped folds, tested against resampled nuisance-only
+datasets, margin over the runner-up); this module
 only collects what it reads from storage:
 
 * the measurements the request's ``filter`` selects (profiles with wear areas, default all),
