@@ -23,7 +23,7 @@ from wearcast.statistics.discrepancy import build_data, diagnose
 from wearcast.statistics.generators import depot as dp
 
 MODERATE = {
-    "traction": dp.DepotEffects(traction=1.2),
+    "traction": dp.DepotEffects(traction=1.3),
     "seasonal_friction": dp.DepotEffects(seasonal=0.3),
     "wear_measure": dp.DepotEffects(measure_blend=0.6),
     "running_direction": dp.DepotEffects(leading_share=0.7),
@@ -88,7 +88,7 @@ def test_depot_null_gives_none():
 def test_depot_effect_size_interval_covers_the_injected_multiplier():
     d = diagnosed("traction")
     ci = d.finding("traction").extension["intervals"]["tread_multiplier_motor"]
-    assert ci["ci95_low"] <= 1.2 <= ci["ci95_high"]
+    assert ci["ci95_low"] <= 1.3 <= ci["ci95_high"]
 
 
 @pytest.mark.slow
