@@ -453,10 +453,12 @@ def diagnose(
     if names:   # the verdict is the named cause with the largest relative gain
         top = max(names, key=lambda c: scored[c].gain)
         names = [top] + [c for c in names if c != top]
-    if candidates:
-        verdict = "ambiguous"
-    elif names:
+    # an ambiguous area step does not hide a named wear-curve (instrument) cause: an
+    # instrument's geometric error also distorts the areas it measures
+    if names:
         verdict = names[0]
+    elif candidates:
+        verdict = "ambiguous"
     else:
         verdict = "none"
 
@@ -489,7 +491,7 @@ def diagnose(
     return Diagnosis(verdict=verdict, findings=tuple(findings), skipped=skipped,
                      n_measurements=data.n, n_groups=int(np.unique(groups).size),
                      group_by=group_by, residuals=frame, covariates=covs, predictions=preds,
-                     selected=tuple(names) if verdict not in ("ambiguous",) else (),
+                     selected=tuple(names),
                      runner_up=runner_up, margin=margin, margin_p_value=margin_p,
                      candidates=tuple(candidates), unexplained=tuple(unexplained),
                      nuisance=nuisance, null_test=test)
