@@ -277,7 +277,8 @@ def _interval(value: float, se: float, groups: int, transform: Any = None) -> di
 
 
 def _levels(values: NDArray[Any]) -> list[str]:
-    return sorted({str(v) for v in values if pd.notna(v) and str(v) != ""})
+    uniq = pd.unique(pd.Series(values).dropna())
+    return sorted({str(v) for v in uniq if str(v) != ""})
 
 
 class NullArea(Cause):

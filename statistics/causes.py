@@ -118,10 +118,11 @@ class VehicleLoad(Cause):
 
     @staticmethod
     def _load(data: FinderData) -> Array | None:
-        col = data.column("load_t")
-        if col is None:
-            return None
-        return np.asarray(pd.to_numeric(col, errors="coerce").to_numpy(dtype=float))
+        if "load_t" not in data.cache:
+            col = data.column("load_t")
+            data.cache["load_t"] = None if col is None else np.asarray(
+                pd.to_numeric(col, errors="coerce").to_numpy(dtype=float))
+        return data.cache["load_t"]  # type: ignore[no-any-return]
 
     def skip_reason(self, data: FinderData) -> str | None:
         load = self._load(data)

@@ -469,6 +469,8 @@ def diagnose(
         if unexplained:
             verdict = "outside_catalogue"
 
+    for code in scored:
+        _covariate_codes(scored[code].cause, data)
     findings = _findings(data, scored, selected, names, vehicle, chosen, n_boot, groups,
                          alpha, min_relative_gain, rng)
     order = {c: i for i, c in enumerate(names)}
@@ -622,16 +624,23 @@ def _numeric(values: NDArray[Any]) -> NDArray[np.float64]:
     return pd.factorize(pd.Series(values).astype(str))[0].astype(float)
 
 
+def _covariate_codes(cause: cz.Cause, data: cz.FinderData) -> NDArray[np.float64]:
+    key = f"covariate_codes:{cause.code}"
+    if key not in data.cache:
+        data.cache[key] = _numeric(np.asarray(cause.covariate(data)))
+    return np.asarray(data.cache[key])
+
+
 def _confounded(cause: cz.Cause, chosen: Sequence[cz.Cause], data: cz.FinderData) -> list[str]:
-    """Other causes whose covariate is nearly collinear with this one's (|r| > 0.9)."""
-    x = _numeric(np.asarray(cause.covariate(data)))
+    """Other scored causes whose covariate is nearly collinear with this one's (|r| > 0.9)."""
+    x = _covariate_codes(cause, data)
     if np.std(x) == 0:
         return []
     out = []
     for other in chosen:
-        if other.code == cause.code or other.skip_reason(data) is not None:
+        if other.code == cause.code or f"covariate_codes:{other.code}" not in data.cache:
             continue
-        y = _numeric(np.asarray(other.covariate(data)))
+        y = _covariate_codes(other, data)
         if np.std(y) > 0 and abs(np.corrcoef(x, y)[0, 1]) > 0.9:
             out.append(other.code)
     return out

@@ -123,17 +123,17 @@ class NuisanceModel:
             v_eff = v_eff * np.sqrt(v_eff.shape[0] / max(v_eff.shape[0] - used_dof, 1))
             w_eff = w_eff * np.sqrt(w_eff.shape[0] / max(w_eff.shape[0] - used_dof, 1))
         by_wheel = np.argsort(self.wheel, kind="stable")
-        out = np.empty((n, m, n_draws))
-        for b in range(n_draws):
-            vs = v_eff[rng.integers(0, v_eff.shape[0], v_eff.shape[0])][self.vehicle]
-            ws = w_eff[rng.integers(0, w_eff.shape[0], w_eff.shape[0])][self.wheel]
-            # each wheel's residuals permuted within the wheel, with random signs
-            shuffled = np.lexsort((np.asarray(rng.random(n)), self.wheel))
-            eps = np.empty_like(self.residual)
-            eps[by_wheel] = self.residual[shuffled]
-            eps *= rng.choice((-1.0, 1.0), size=(n, 1))
-            out[:, :, b] = self.weight * (vs + ws) + eps
-        return out.reshape(n * m, n_draws)
+        # all draws at once: effects resampled across vehicles / wheels, each wheel's
+        # residuals permuted within the wheel (argsort of wheel code + uniform key) with
+        # random signs
+        vs = v_eff[rng.integers(0, v_eff.shape[0], (n_draws, v_eff.shape[0]))][:, self.vehicle]
+        ws = w_eff[rng.integers(0, w_eff.shape[0], (n_draws, w_eff.shape[0]))][:, self.wheel]
+        order = np.argsort(self.wheel[None, :] + rng.random((n_draws, n)), axis=1)
+        eps = np.empty((n_draws, n, m))
+        eps[:, by_wheel] = self.residual[order]
+        eps *= rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
+        out = self.weight[None, :, :] * (vs + ws) + eps
+        return np.ascontiguousarray(np.moveaxis(out, 0, -1)).reshape(n * m, n_draws)
 
 
 def area_design(data: cz.FinderData, features: Array) -> Array:
