@@ -75,7 +75,7 @@ from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_ta
 
 DEFAULT_ALPHA = 0.04
 DEFAULT_STRUCTURE_ALPHA = 0.01
-DEFAULT_MIN_RELATIVE_GAIN = 0.005
+DEFAULT_MIN_RELATIVE_GAIN = 0.01
 DEFAULT_N_NULL = 199
 MAX_CAUSES = 3
 
