@@ -511,7 +511,7 @@ def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
 
 def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
            rng: np.random.Generator) -> bool:
-    return bool(s.p_adj < alpha and s.gain >= min_gain)
+    return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
 
 
 def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDArray[Any],
@@ -532,7 +532,7 @@ def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDAr
     out = []
     for i, name in enumerate(names):
         excess = float(observed[i] - np.median(null[i]))
-        if p_adj[i] < alpha and excess >= min_share:
+        if p_adj[i] <= alpha and excess >= min_share:   # resampling p: reject at <= alpha
             out.append({"by": name, "share_of_residual": float(observed[i]),
                         "share_beyond_null": excess, "p_value": float(p_adj[i]),
                         "levels": fs.level_effects(residual, data.phi, factors[name],
@@ -610,7 +610,7 @@ def _findings(data: cz.FinderData, scored: Mapping[str, _Scored], selected: Sequ
                    f"{'down' if s.gain >= 0 else 'up'} {100 * abs(s.gain):.1f} % "
                    f"(95 % CI {100 * lo:.1f} to {100 * hi:.1f} %)"
                    + (f"; 95 % intervals: {ci}" if ci else ""))
-        significant = bool(s.p_adj < alpha)
+        significant = bool(s.p_adj <= alpha)
         material = bool(s.gain >= min_gain)
         out.append(Finding(code, summary, evidence, extension, gain, significant and
                            (code in names or not names), material))

@@ -113,3 +113,22 @@ def test_traction_interval_coverage_over_runs():
 def test_depot_detection_over_more_seeds(seed):
     for cause in ["none", *MODERATE]:
         assert diagnosed(cause, seed).verdict == cause
+
+
+def test_structure_outside_the_catalogue_is_reported_with_its_size():
+    # one instrument over-reads both wear areas by 25 % (a calibration error of its area
+    # computation, not a geometric one): no cause of the catalogue has this form, so the
+    # verdict must say where the residuals are structured and by how much, not 'none'
+    fleet, df, cal, model = case(dp.DepotEffects(), seed=4)
+    df = df.copy()
+    sel = df["instrument_id"].eq("DP-B").to_numpy()
+    for col in ("flange_area_mm2", "tread_area_mm2"):
+        df.loc[sel, col] *= 1.25
+    d = diagnose(model, df, None, fleet.routes, fleet.table,
+                 calibration_wheel_ids=set(df["wheel_id"][cal]),
+                 route_attributes=fleet.route_attributes, n_boot=300, n_null=99)
+    assert d.verdict == "outside_catalogue", [(f.cause, f.gain.relative) for f in d.findings]
+    top = d.unexplained[0]
+    assert top["by"] == "instrument" and top["p_value"] <= 0.01
+    level = next(lv for lv in top["levels"] if lv["level"] == "DP-B")
+    assert 10.0 < level["tread_rate_change_pct"] < 40.0
