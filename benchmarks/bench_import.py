@@ -9,8 +9,8 @@ function (``wearcast.service.importing.import_upload``, not HTTP) into a fresh S
 database, and prints profiles/s, points/s and the child's peak RSS
 (``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so each size's memory is measured alone.
 
-The profiles are the fleet twin's (``wearcast.statistics.fleet_twin``): a pool of realistic
-worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
+The profiles are the fleet twin's (``wearcast.statistics.generators.fleet_twin``): a pool of
+realistic worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ MILEAGES_PER_WHEEL = 6
 
 def _pool(points: int) -> list[tuple[str, list[str]]]:
     """(metadata after wheel_id/vehicle_id, y,z lines) for a pool of twin measurements."""
-    from wearcast.statistics import fleet_twin
+    from wearcast.statistics.generators import fleet_twin
 
     config = fleet_twin.example_fleet_config(seed=1, points_per_profile=points)
     twin = fleet_twin.generate_fleet(config)

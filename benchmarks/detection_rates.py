@@ -1,47 +1,45 @@
-"""Detection rates of the discrepancy finder: seeds x effects x strengths.
+"""Detection table of the discrepancy finder: cause x strength x generator, false alarms.
 
-Run: .venv/bin/python benchmarks/detection_rates.py [n_seeds] [--alt]   (default 5 seeds;
-~4 s per dataset). ``--alt`` runs the same sweep on the independent generator
-``fleet_twin_alt`` (3 units of 4/3/2 motor or trailer cars, ~12 % missing measurements,
-uniform wheel/vehicle scatter, heteroscedastic area noise, its own shapes and injections;
-calibration on unit U1's motor cars).
-Prints, per cause and strength, the share of seeds whose verdict names the cause; the
-false-positive rate on effect-free data; and the detection limit per cause = the weakest
-strength found in every seed. Noise: the twin's defaults (10 % per-wheel rate scatter, 3 %
-per-measurement area scatter, 0.015 mm profile noise, rigid misalignment), fleet of
-``twin_effects.scenario_config`` (96 wheels x 6 measurements), calibration on unit A motors.
+Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--generators twin,alt,depot]
+         [--causes traction,seasonal_friction,...] [--strengths all|moderate]
+(~20-40 s per dataset on a loaded 2-core machine; keep N small while developing).
+
+Generators (``wearcast.statistics.generators``):
+- ``twin``: the fleet twin the finder was first built on (4 units x 3 cars, 6 measurements
+  per wheel, processed profiles); calibration on unit A's motor bogies.
+- ``alt``: ``fleet_twin_alt`` (3 units of 4/3/2 motor or trailer cars, missing measurements,
+  uniform scatter, additive traction, running-in, linear load law, processed profiles);
+  calibration on unit U1's motor cars.
+- ``depot``: ``depot`` (calendar days, heavy-tailed heteroscedastic noise, random effects,
+  missed and repeated visits, reprofiling mid-series, route changes, mixed instruments;
+  areas with noise, profiles only for the instrument scale); calibration on unit N1's
+  motor bogies.
+Prints one line per (generator, cause, strength): the share of seeds whose verdict names the
+cause, and per generator the false-alarm rate (verdict other than ``none``) on effect-free
+data.
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
 import time
+from collections.abc import Callable
+from typing import Any
 
-from wearcast.statistics import fleet_twin as ft
-from wearcast.statistics import fleet_twin_alt as fa
+import pandas as pd
+
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
 from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.generators import depot as dp
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin_alt as fa
+from wearcast.statistics.generators import twin_effects as te
 
 TABLE = ft.synthetic_wear_table()
-# strengths from weak to strong (the moderate one used by the tests is marked *)
-SWEEP = {
-    "traction": [(m, (te.traction(m),), ()) for m in (1.05, 1.1, 1.2, 1.3)],
-    "running_direction": [(p, (te.running_direction(TABLE, p),), ())
-                          for p in (0.55, 0.6, 0.7, 0.8)],
-    "curve_asymmetry": [(q, (te.curve_asymmetry(TABLE, q),), ()) for q in (0.55, 0.6, 0.7)],
-    "flange_lubrication": [(m, (te.flange_lubrication(m),), ()) for m in (0.9, 0.8, 0.7, 0.5)],
-    "wear_measure": [("t_gamma", (te.wear_measure(TABLE),), ())],
-    "nonlinear_progression": [(b, (te.nonlinear_progression(b),), ())
-                              for b in (0.95, 0.9, 0.85, 0.75)],
-    "seasonal_friction": [(a, (te.seasonal_friction(a),), ()) for a in (0.1, 0.2, 0.3)],
-    "vehicle_load": [(g, (te.vehicle_load(g),), ()) for g in (0.5, 1.0, 1.5)],
-    "profile_misalignment": [(o, (), (te.flange_tread_offset("MP-2", o),))
-                             for o in (0.1, 0.2, 0.3)],
-}
 
 
-def verdict(we, pe, seed: int) -> str:
+def run_twin(effect: Any, seed: int) -> str:
+    we, pe = effect
     cfg = te.scenario_config(seed=seed, wear_effects=we, profile_effects=pe)
     df, curves = te.twin_measurements(ft.generate_fleet(cfg, TABLE))
     routes, attrs = te.scenario_routes(cfg)
@@ -52,27 +50,8 @@ def verdict(we, pe, seed: int) -> str:
                     calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
 
 
-# the alternative generator: (strength, AltEffects, None); last entry = the tests' strength
-ALT_SWEEP = {
-    "traction": [(m, fa.AltEffects(traction=m), None) for m in (1.1, 1.2, 1.3, 1.4)],
-    "running_direction": [(p, fa.AltEffects(leading_share=p), None)
-                          for p in (0.55, 0.6, 0.7, 0.8)],
-    "curve_asymmetry": [(q, fa.AltEffects(left_share=q), None) for q in (0.55, 0.6, 0.7)],
-    "flange_lubrication": [(m, fa.AltEffects(lubricated_flange=m), None)
-                           for m in (0.9, 0.8, 0.7, 0.5)],
-    "wear_measure": [("t_gamma", fa.AltEffects(true_measure="t_gamma"), None)],
-    "nonlinear_progression": [(c, fa.AltEffects(running_in=c), None)
-                              for c in (0.25, 0.5, 1.0)],
-    "seasonal_friction": [(a, fa.AltEffects(seasonal_amplitude=a), None)
-                          for a in (0.1, 0.2, 0.3)],
-    "vehicle_load": [(g, fa.AltEffects(load_exponent=g), None) for g in (0.5, 1.0, 1.5)],
-    "profile_misalignment": [(e, fa.AltEffects(instrument_scale=("LP-2", e)), None)
-                             for e in (0.0025, 0.005, 0.01)],
-}
-
-
-def verdict_alt(effects, _unused, seed: int) -> str:
-    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effects or fa.AltEffects(), seed=seed))
+def run_alt(effect: Any, seed: int) -> str:
+    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effect, seed=seed))
     df, curves = fleet.measurements, fleet.wear_curves
     cal = (df["unit"].eq("U1") & df["bogie_type"].eq("motor")).to_numpy()
     model = hybrid.calibrate(df[cal], fleet.routes, fleet.table, wear_curves_mm=curves[cal],
@@ -82,34 +61,98 @@ def verdict_alt(effects, _unused, seed: int) -> str:
                     calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
 
 
+def depot_case(effects: dp.DepotEffects, seed: int) -> tuple[Any, ...]:
+    fleet = dp.generate_depot_fleet(dp.DepotConfig(
+        effects=effects, seed=seed, profiles=effects.instrument_scale is not None))
+    df = fleet.measurements
+    cal = (df["unit"].eq("N1") & df["bogie_type"].eq("motor")).to_numpy()
+    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table,
+                             wear_curves_mm=fleet.wear_curves[cal], measure="tau_max",
+                             running_mode="mixed")
+    return fleet, df, cal, model
+
+
+def run_depot(effect: Any, seed: int) -> str:
+    fleet, df, cal, model = depot_case(effect, seed)
+    return diagnose(model, df, fleet.wear_curves, fleet.routes, fleet.table,
+                    route_attributes=fleet.route_attributes,
+                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
+
+
+# (strength, effect) from weak to strong; the last entry is the tests' moderate strength
+SWEEPS: dict[str, tuple[Callable[[Any, int], str], Any, dict[str, list[tuple[Any, Any]]]]] = {
+    "twin": (run_twin, ((), ()), {
+        "traction": [(m, ((te.traction(m),), ())) for m in (1.1, 1.2)],
+        "running_direction": [(p, ((te.running_direction(TABLE, p),), ())) for p in (0.6, 0.7)],
+        "curve_asymmetry": [(q, ((te.curve_asymmetry(TABLE, q),), ())) for q in (0.6, 0.7)],
+        "flange_lubrication": [(m, ((te.flange_lubrication(m),), ())) for m in (0.8, 0.7)],
+        "wear_measure": [("t_gamma", ((te.wear_measure(TABLE),), ()))],
+        "nonlinear_progression": [(b, ((te.nonlinear_progression(b),), ())) for b in (0.9, 0.85)],
+        "seasonal_friction": [(a, ((te.seasonal_friction(a),), ())) for a in (0.1, 0.2)],
+        "vehicle_load": [(g, ((te.vehicle_load(g),), ())) for g in (0.5, 1.0)],
+        "profile_misalignment": [(o, ((), (te.flange_tread_offset("MP-2", o),)))
+                                 for o in (0.1, 0.2)],
+    }),
+    "alt": (run_alt, fa.AltEffects(), {
+        "traction": [(m, fa.AltEffects(traction=m)) for m in (1.2, 1.3)],
+        "running_direction": [(p, fa.AltEffects(leading_share=p)) for p in (0.6, 0.7)],
+        "curve_asymmetry": [(q, fa.AltEffects(left_share=q)) for q in (0.6, 0.7)],
+        "flange_lubrication": [(m, fa.AltEffects(lubricated_flange=m)) for m in (0.8, 0.7)],
+        "wear_measure": [("t_gamma", fa.AltEffects(true_measure="t_gamma"))],
+        "nonlinear_progression": [(c, fa.AltEffects(running_in=c)) for c in (0.5, 1.0)],
+        "seasonal_friction": [(a, fa.AltEffects(seasonal_amplitude=a)) for a in (0.2, 0.3)],
+        "vehicle_load": [(g, fa.AltEffects(load_exponent=g)) for g in (1.0, 1.5)],
+        "profile_misalignment": [(e, fa.AltEffects(instrument_scale=("LP-2", e)))
+                                 for e in (0.005, 0.01)],
+    }),
+    "depot": (run_depot, dp.DepotEffects(), {
+        "traction": [(m, dp.DepotEffects(traction=m)) for m in (1.1, 1.2)],
+        "running_direction": [(p, dp.DepotEffects(leading_share=p)) for p in (0.6, 0.7)],
+        "curve_asymmetry": [(q, dp.DepotEffects(left_share=q)) for q in (0.6, 0.7)],
+        "flange_lubrication": [(m, dp.DepotEffects(greased_flange=m)) for m in (0.8, 0.6)],
+        "wear_measure": [(w, dp.DepotEffects(measure_blend=w)) for w in (0.3, 0.6)],
+        "nonlinear_progression": [(b, dp.DepotEffects(hardening=b)) for b in (0.9, 0.8)],
+        "seasonal_friction": [(a, dp.DepotEffects(seasonal=a)) for a in (0.15, 0.3)],
+        "vehicle_load": [(g, dp.DepotEffects(load_exponent=g)) for g in (1.0, 2.0)],
+        "profile_misalignment": [(e, dp.DepotEffects(instrument_scale=("DP-B", e)))
+                                 for e in (0.003, 0.006)],
+    }),
+}
+
+
 def main() -> None:
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    alt = "--alt" in sys.argv[1:]
-    n_seeds = int(args[0]) if args else 5
-    sweep = ALT_SWEEP if alt else SWEEP
-    run = verdict_alt if alt else verdict
-    print(f"generator: {'fleet_twin_alt' if alt else 'fleet_twin'}")
-    seeds = range(100, 100 + n_seeds)
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--generators", default="twin,alt,depot")
+    ap.add_argument("--causes", default="")
+    ap.add_argument("--strengths", default="all", choices=("all", "moderate"))
+    args = ap.parse_args()
+    seeds = range(100, 100 + args.seeds)
+    rows = []
     t0 = time.perf_counter()
-    null = [run((), (), s) for s in seeds]
-    fp = sum(v != "none" for v in null) / len(null)
-    print(f"null data: false-positive rate {fp:.0%} over {len(null)} seeds ({null})")
-    correct = total = 0
-    for cause, runs in sweep.items():
-        limit = None
-        for strength, we, pe in runs:
-            vs = [run(we, pe, s) for s in seeds]
-            rate = sum(v == cause for v in vs) / len(vs)
-            print(f"{cause:22s} strength {strength!s:8s} correct {rate:4.0%}  "
-                  f"({', '.join(sorted(set(vs)))})")
-            if rate == 1.0 and limit is None:
-                limit = strength
-        # the last (strongest) entry is the tests' moderate strength: count its verdicts
-        correct += sum(v == cause for v in vs)
-        total += len(vs)
-        print(f"{cause:22s} detection limit (all seeds correct): {limit}")
-    print(f"moderate strengths: {correct}/{total} correct verdicts ({correct / total:.0%}); "
-          f"{time.perf_counter() - t0:.0f} s")
+    for gen in args.generators.split(","):
+        run, null_effect, sweep = SWEEPS[gen]
+        null = [run(null_effect, s) for s in seeds]
+        fa_rate = sum(v != "none" for v in null) / len(null)
+        print(f"{gen:6s} null data: false-alarm rate {fa_rate:.0%} over {len(null)} seeds "
+              f"({', '.join(null)})", flush=True)
+        rows.append({"generator": gen, "cause": "none (false alarms)", "strength": "-",
+                     "rate": fa_rate, "n": len(null)})
+        for cause, runs in sweep.items():
+            if args.causes and cause not in args.causes.split(","):
+                continue
+            if args.strengths == "moderate":
+                runs = runs[-1:]
+            for strength, effect in runs:
+                vs = [run(effect, s) for s in seeds]
+                rate = sum(v == cause for v in vs) / len(vs)
+                print(f"{gen:6s} {cause:22s} strength {strength!s:8s} named {rate:4.0%}  "
+                      f"({', '.join(sorted(set(vs)))})", flush=True)
+                rows.append({"generator": gen, "cause": cause, "strength": strength,
+                             "rate": rate, "n": len(vs)})
+    print()
+    print(pd.DataFrame(rows).to_string(index=False))
+    print(f"{time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":

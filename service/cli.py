@@ -364,7 +364,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
             report.write_text(discrepancy.report_html(run.diagnosis, figures), encoding="utf-8")
     table = Table(title=f"model {model_id}: verdict [bold]{out.verdict}[/bold] "
                   f"({out.n_measurements} measurements, {out.n_groups} groups)")
-    for column in ("cause", "relative gain [95 % CI]", "p (Holm)", "reported", "summary"):
+    for column in ("cause", "relative gain [95 % CI]", "p (max-T)", "reported", "summary"):
         table.add_column(column)
     for f in out.findings:
         g = f.gain

@@ -140,7 +140,7 @@ class DemoDiagnosis:
     """What the demo's diagnosis found (``run_demo`` step 2)."""
 
     verdict: str
-    #: (cause, relative gain, 95 % CI low, high, Holm p, reported) per finding
+    #: (cause, relative gain, 95 % CI low, high, max-T adjusted p, reported) per finding
     findings: tuple[tuple[str, float, float, float, float, bool], ...]
     report: Path
     extended_model_id: int | None
@@ -291,8 +291,8 @@ def _pictures(out: Path, model_id: int, predictions: list[Any], database: Any,
 
 
 def format_findings(findings: tuple[tuple[str, float, float, float, float, bool], ...]) -> str:
-    """The demo's findings table: cause, held-out gain with its 95 % interval, Holm p."""
-    head = f"{'cause':<24}{'held-out gain [95 % CI]':<28}{'p (Holm)':>10}  reported"
+    """The demo's findings table: cause, held-out gain with its 95 % interval, adjusted p."""
+    head = f"{'cause':<24}{'held-out gain [95 % CI]':<28}{'p (max-T)':>10}  reported"
     lines = [head, "-" * len(head)]
     for cause, gain, lo, hi, p, reported in findings:
         band = f"{100 * gain:+.1f} % [{100 * lo:+.1f}, {100 * hi:+.1f}]"
@@ -316,10 +316,14 @@ def _diagnose(session: Session, out: Path, model_id: int,
                      for f in d.findings)
     echo(f"diagnosis of model {model_id} on {d.n_measurements} measurements "
          f"({d.n_groups} groups by {d.group_by}): verdict {d.verdict}")
-    if d.verdict != "none":
-        top = d.finding(d.verdict)
-        assert top is not None
+    top = d.finding(d.verdict)
+    if top is not None:
         echo(f"  {top.summary}")
+    elif d.verdict == "ambiguous":
+        echo(f"  candidates no tested margin separates: {', '.join(d.candidates)}")
+    for u in d.unexplained:
+        echo(f"  residual structure by {u['by']}: {100 * u['share_of_residual']:.1f} % of "
+             f"the residual (p = {u['p_value']:.3f})")
     echo(format_findings(findings))
     for code, reason in d.skipped.items():
         echo(f"  skipped {code}: {reason}")
@@ -361,8 +365,8 @@ def _hidden_effect_demo(out: Path, echo: Callable[[str], None]) -> DemoDiagnosis
 
     from wearcast.service.app import create_app
     from wearcast.service.settings import Settings
-    from wearcast.statistics import fleet_twin as ft
-    from wearcast.statistics import twin_effects as te
+    from wearcast.statistics.generators import fleet_twin as ft
+    from wearcast.statistics.generators import twin_effects as te
 
     out.mkdir(parents=True, exist_ok=True)
     echo("hidden-effect example: fleet twin with motor-bogie treads wearing 1.3 x faster "

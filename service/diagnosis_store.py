@@ -1,7 +1,8 @@
 """The discrepancy finder on stored data: gather a model's inputs, diagnose, save the extension.
 
 The finder is :func:`wearcast.statistics.discrepancy.diagnose` (residuals, the cause
-catalogue scored out of sample with grouped folds, Holm control, bootstrap gain); this module
+catalogue scored out of sample with grouped folds, tested against resampled nuisance-only
+datasets, margin over the runner-up); this module
 only collects what it reads from storage:
 
 * the measurements the request's ``filter`` selects (profiles with wear areas, default all),
@@ -159,6 +160,13 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
     diagnosis = run.diagnosis
     if diagnosis.verdict == "none":
         return None, "the verdict is 'none': no extension improves the model materially"
+    if diagnosis.verdict == "ambiguous":
+        return None, ("the verdict is 'ambiguous': no cause beats the runner-up by a tested "
+                      f"margin (candidates: {', '.join(diagnosis.candidates)})")
+    if diagnosis.verdict == "outside_catalogue":
+        return None, ("the verdict is 'outside_catalogue': the residuals are structured ("
+                      + ", ".join(u["by"] for u in diagnosis.unexplained)
+                      + ") but no cause of the catalogue explains them")
     finding = diagnosis.finding(diagnosis.verdict)
     assert finding is not None
     extended = discrepancy.apply_extension(run.model, finding)
@@ -210,6 +218,9 @@ def diagnosis_out(session: Session, model_id: int, run: DiagnosisRun,
     return DiagnosisOut(
         model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
         n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
+        selected=d["selected"], runner_up=d["runner_up"], margin=d["margin"],
+        margin_p_value=d["margin_p_value"], candidates=d["candidates"],
+        unexplained=d["unexplained"], nuisance=d["nuisance"], null_test=d["null_test"],
         excluded=run.excluded,
         saved_model=None if saved is None else model_store.model_out(session, saved),
         save_reason=save_reason)

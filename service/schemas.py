@@ -528,6 +528,19 @@ class DiagnosisOut(BaseModel):
     n_measurements: int
     n_groups: int
     group_by: str
+    selected: list[str] = Field(default_factory=list, description=(
+        "causes named by forward selection, the verdict first"))
+    runner_up: str | None = Field(default=None, description="the best other cause")
+    margin: float | None = Field(default=None, description=(
+        "the verdict's held-out gain over the runner-up, relative to the baseline's error"))
+    margin_p_value: float | None = None
+    candidates: list[str] = Field(default_factory=list, description=(
+        "verdict 'ambiguous': the causes no tested margin separates"))
+    unexplained: list[dict[str, Any]] = Field(default_factory=list, description=(
+        "verdict 'outside_catalogue': residual structure by wheel position, route, date, "
+        "mileage or instrument, with its size"))
+    nuisance: dict[str, Any] = Field(default_factory=dict)
+    null_test: str = ""
     excluded: dict[str, int] = Field(default_factory=dict, description=(
         "measurements left out, by reason"))
     saved_model: ModelOut | None = None

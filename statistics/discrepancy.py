@@ -1,27 +1,41 @@
 """The discrepancy finder: what the calibrated model gets wrong, the cause, the gain.
 
-``diagnose`` fits every extension of the catalogue (:mod:`wearcast.statistics.causes`) and
-scores it out of sample:
+``diagnose`` fits every extension of the catalogue (:mod:`wearcast.statistics.causes`),
+scores it out of sample and names a cause only when it is specific:
 
 1. residuals of the calibrated model per measurement and region (log-area residuals) and of
    the wear-curve shape (:mod:`wearcast.statistics.residuals`);
 2. K-fold cross-validation with folds grouped by vehicle (by wheel when fewer than 5
-   vehicles), never by row: each extension and the null extension (the model with its
-   per-region scale refitted) are fitted on K-1 folds and their squared log residuals
-   computed on the held-out fold;
-3. per test group (vehicle when the cause's covariate is constant within vehicles, else
-   wheel): the held-out error difference null - extension; a one-sided t-test on these,
-   Holm-adjusted across the catalogue; the relative gain 1 - after/before with a 95 %
-   percentile bootstrap over the same groups;
-4. verdict: among causes with Holm p < alpha, relative gain >= ``min_relative_gain`` and a
-   bootstrap interval above 0, the one with the largest relative gain; else ``"none"``.
-
-Nested or confounded causes: a cause whose covariate is (nearly) collinear with another's at
-the level both vary on (e.g. load differing only between motor and trailer cars vs traction;
-one instrument per route vs that route's lubrication) is flagged in its evidence
-(``confounded_with``); the scoring then prefers the extension that explains more of the
-held-out error, which separates them only when their signatures differ (traction changes
-treads of motor bogies, load both regions of heavy vehicles).
+   vehicles), never by row: each extension and the baseline (the model with its per-region
+   scale refitted) are fitted on K-1 folds and their squared working residuals computed on
+   the held-out fold; the relative gain is 1 - after / before, with a 95 % interval from a
+   bootstrap over the groups;
+3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
+   per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
+   (effects across vehicles and wheels, residuals permuted within each wheel with random
+   signs) carry the baseline's nuisance variation and no effect; every cause is fitted and
+   scored on them exactly as on the data. A cause's p-value is the share of resampled
+   gains at least as large as its observed gain, adjusted across the catalogue by the
+   Westfall-Young max-T method (gains standardised by their own null distribution) on the
+   same resamples (no asymptotic test, no assumed noise distribution). The nuisance is
+   taken from the residuals of the baseline plus the leading candidate (so a real effect is
+   not resampled as nuisance), widened for the degrees of freedom that fit used; the
+   wear-curve shape cause is tested the same way on its coefficients;
+4. specificity: the cause with the largest significant (adjusted p < alpha) and material
+   (relative gain >= ``min_relative_gain``) gain must beat the
+   runner-up (the next best cause) by a margin that is itself tested: a sign-flip
+   randomisation test over the groups of the held-out error difference. If it does not,
+   the verdict is ``ambiguous`` and lists the candidates;
+5. several causes at once: forward selection; after a cause is named it joins the baseline
+   and the remaining causes are scored, resampled and tested again against it, each
+   reported with its own gain;
+6. outside the catalogue: when no cause is named but the residuals are structured by wheel
+   position, route, calendar quarter, mileage or instrument (tested against the same
+   resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
+   size instead of ``none``;
+7. effect sizes (multipliers, exponents, shares) with 95 % intervals from the
+   vehicle-clustered (sandwich) covariance of the fit, Student t with groups - 1 degrees of
+   freedom.
 
 Pure: no I/O. Figures are matplotlib SVG strings.
 """
@@ -32,16 +46,23 @@ import html
 import io
 import math
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass, field, replace
-from typing import Any, cast
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
-from scipy import stats
 
 from wearcast.statistics import causes as cz
-from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
+from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics.extension import (
+    ExtendedModel,
+    _json,
+    apply_extension,
+    correct_profile,
+    correct_wear_curves,
+)
+from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.residuals import (
     geometric_basis,
     leading_share,
@@ -52,18 +73,25 @@ from wearcast.statistics.residuals import (
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table
 
-DEFAULT_ALPHA = 0.05
-DEFAULT_MIN_RELATIVE_GAIN = 0.05
+DEFAULT_ALPHA = 0.04
+DEFAULT_STRUCTURE_ALPHA = 0.01
+DEFAULT_MIN_RELATIVE_GAIN = 0.01
+DEFAULT_N_NULL = 199
+MAX_CAUSES = 3
+
+__all__ = ["Diagnosis", "ExtendedModel", "Finding", "Gain", "apply_extension", "build_data",
+           "correct_profile", "correct_wear_curves", "diagnose", "diagnosis_figures",
+           "report_html"]
 
 
 @dataclass(frozen=True)
 class Gain:
-    """Held-out error before (null extension) and after (the cause's extension).
+    """Held-out error before (the baseline) and after (the cause's extension).
 
     before_error, after_error : mean squared held-out residual per measurement (log-area
-        residual summed over both regions, or wear-curve shape residual [mm²·points])
+        working residual summed over both regions, or wear-curve shape residual [mm²·points])
     relative : 1 - after / before; ci95_low, ci95_high : bootstrap interval over groups
-    calibrated_error : held-out error of the model exactly as calibrated (area metric)
+    calibrated_error : error of the model exactly as calibrated (area metric)
     metric : 'log_area' or 'wear_curve_shape'
     """
 
@@ -99,7 +127,17 @@ class Finding:
 
 @dataclass(frozen=True)
 class Diagnosis:
-    """Result of ``diagnose``: verdict (cause code or 'none'), findings ranked by gain."""
+    """Result of ``diagnose``.
+
+    verdict : a cause code, ``none``, ``ambiguous`` (candidates listed) or
+        ``outside_catalogue`` (structure in ``unexplained``)
+    selected : causes named by forward selection, in order (the verdict first)
+    runner_up, margin, margin_p_value : the best other cause, the verdict's held-out gain
+        over it (relative to the baseline's error) and the margin's randomisation p-value
+    candidates : the causes the verdict could not separate (``ambiguous``)
+    unexplained : residual structure outside the catalogue, with its size
+    nuisance : the baseline's per-vehicle, per-wheel and per-measurement standard deviations
+    """
 
     verdict: str
     findings: tuple[Finding, ...]
@@ -111,45 +149,41 @@ class Diagnosis:
     covariates: dict[str, list[Any]] = field(default_factory=dict, repr=False, compare=False)
     predictions: dict[str, list[list[float]]] = field(default_factory=dict, repr=False,
                                                       compare=False)
+    selected: tuple[str, ...] = ()
+    runner_up: str | None = None
+    margin: float | None = None
+    margin_p_value: float | None = None
+    candidates: tuple[str, ...] = ()
+    unexplained: tuple[dict[str, Any], ...] = ()
+    nuisance: dict[str, Any] = field(default_factory=dict)
+    null_test: str = ""
 
     def finding(self, cause: str) -> Finding | None:
         return next((f for f in self.findings if f.cause == cause), None)
 
     @property
     def reported(self) -> tuple[Finding, ...]:
-        """Findings with a significant and material gain (the verdict first)."""
-        return tuple(f for f in self.findings if f.significant and f.material)
+        """Findings of the causes named by forward selection (the verdict first)."""
+        return tuple(f for c in self.selected for f in self.findings if f.cause == c)
 
     def to_dict(self) -> dict[str, Any]:
         return {"verdict": self.verdict, "findings": [f.to_dict() for f in self.findings],
                 "skipped": dict(self.skipped), "n_measurements": self.n_measurements,
-                "n_groups": self.n_groups, "group_by": self.group_by}
+                "n_groups": self.n_groups, "group_by": self.group_by,
+                "selected": list(self.selected), "runner_up": self.runner_up,
+                "margin": _json(self.margin), "margin_p_value": _json(self.margin_p_value),
+                "candidates": list(self.candidates),
+                "unexplained": [_json(u) for u in self.unexplained],
+                "nuisance": _json(self.nuisance), "null_test": self.null_test}
 
 
-def _json(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return {str(k): _json(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json(value.tolist())
-    if isinstance(value, np.generic):
-        return _json(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
+def _lubricated_share(flags: NDArray[np.bool_] | None, history: Any
+                      ) -> NDArray[np.float64] | None:
+    """Share of each measurement's mileage run lubricated (its route history)."""
+    if flags is None:
         return None
-    return value
-
-
-def _holm(p: Sequence[float]) -> NDArray[np.float64]:
-    p_arr = np.asarray(p, dtype=float)
-    order = np.argsort(p_arr)
-    m = p_arr.size
-    adj = np.empty(m)
-    running = 0.0
-    for rank, i in enumerate(order):
-        running = max(running, min(1.0, (m - rank) * p_arr[i]))
-        adj[i] = running
-    return adj
+    x = flags.astype(float)
+    return np.asarray(history @ x) if history is not None else x
 
 
 def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
@@ -186,127 +220,44 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         measure_index=MEASURES.index(model.measure),
         lead_share=leading_share(frame["axle"].to_numpy(), res.mode), mode=res.mode,
         left_right=res.left_right_shares, route=route,
-        lubricated=cz.lubrication_flags(frame, route, route_attributes),
+        lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
+                                     res.history),
         shape_res=shape, basis=basis,
     )
 
 
-def _cv_rows(data: cz.FinderData, cause: cz.Cause, folds: NDArray[np.int64],
-             residuals: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
-    """Held-out per-row error of a cause (or null) over the folds.
+@dataclass
+class _Scored:
+    """One cause scored at one step of the forward selection."""
 
-    When ``residuals`` is given ((n, 2) for the area metric, (n, 3) for the shape metric) it
-    is filled with the held-out signed residuals (log-area residuals per region, or the
-    basis coefficients of the remaining wear-curve shape residual).
-    """
-    out = np.empty(data.n)
-    for k in np.unique(folds):
-        test = folds == k
-        fit = cause.fit(data, ~test)
-        if cause.metric == "shape":
-            corr = cause.correction(data, fit)  # type: ignore[attr-defined]
-            rows = cz.shape_row_sse(data, corr)
-            if residuals is not None:
-                assert data.shape_res is not None
-                coef, *_ = np.linalg.lstsq(data.basis.T, (data.shape_res[test] - corr[test]).T,
-                                           rcond=None)
-                residuals[test] = coef.T
-        else:
-            pred = cause.predict(data, fit)
-            rows = cz.row_sse(data, pred)
-            if residuals is not None:
-                residuals[test] = cz.log_residual(data.measured, pred, data.floor)[test]
-        out[test] = rows[test]
-    return out
+    cause: cz.Cause
+    before: NDArray[np.float64]            # (n,) held-out error of the step's baseline
+    after: NDArray[np.float64]             # (n,) held-out error with the cause added
+    gain: float
+    p_raw: float = 1.0
+    p_adj: float = 1.0
+    step: int = 0
+    metric: str = "area"
 
 
-def design_effect(values: NDArray[np.float64], vehicle: NDArray[Any],
-                  covariate: NDArray[Any] | None = None) -> tuple[float, int]:
-    """Design effect of wheels clustered in vehicles for a wheel-level mean.
-
-    values : (n_wheels,) the per-wheel quantity being tested (held-out error differences)
-    vehicle : (n_wheels,) vehicle of each wheel
-    covariate : (n_wheels,) the cause's covariate (constant within vehicles); its systematic
-        part (level means, or a quadratic in a numeric covariate) is removed first, so that
-        only the random between-vehicle variation counts as clustering
-
-    One-way ANOVA by vehicle: rho = (MSB - MSW) / (MSB + (m0 - 1) MSW) (Donner 1986, with
-    the between-vehicle degrees of freedom reduced by the covariate's parameters) and
-    deff = 1 + (m0 - 1) rho. Returns (deff, n_vehicles).
-    """
-    v = np.asarray(values, dtype=float)
-    n_w = v.size
-    v_codes, v_inv = np.unique(np.asarray(vehicle).astype(str), return_inverse=True)
-    g = v_codes.size
-    q = 1
-    x = np.ones((n_w, 1))
-    if covariate is not None:
-        num = pd.to_numeric(pd.Series(covariate), errors="coerce")
-        if num.notna().all() and num.nunique() > 4:
-            z = (num.to_numpy(float) - num.mean()) / max(float(num.std()), 1e-12)
-            x = np.column_stack([np.ones(n_w), z, z * z])
-        else:
-            codes = pd.factorize(pd.Series(covariate).astype(str))[0]
-            x = np.eye(codes.max() + 1)[codes]
-        q = x.shape[1]
-    if g - q < 1 or n_w <= g:
-        return float(n_w) / max(g, 1), g
-    coef, *_ = np.linalg.lstsq(x, v, rcond=None)
-    e = v - x @ coef
-    m_g = np.bincount(v_inv, minlength=g).astype(float)
-    m0 = (n_w - np.sum(m_g ** 2) / n_w) / (g - 1)
-    mean_g = np.bincount(v_inv, weights=e, minlength=g) / m_g
-    msb = np.sum(m_g * mean_g ** 2) / (g - q)
-    msw = np.sum((e - mean_g[v_inv]) ** 2) / (n_w - g)
-    den = msb + (m0 - 1) * msw
-    rho = float(np.clip((msb - msw) / den, 0.0, 1.0)) if den > 0 else 1.0
-    return float(1.0 + (m0 - 1.0) * rho), g
+def _relative(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
+    return float(1.0 - after.sum() / max(before.sum(), 1e-300))
 
 
-def _pvalue(before: NDArray[np.float64], after: NDArray[np.float64], wheel: NDArray[Any],
-            vehicle: NDArray[Any], covariate: NDArray[Any] | None) -> tuple[float, str]:
-    """One-sided p-value that the extension lowers the held-out error, and how it was got.
-
-    Wheel-level causes (``covariate`` None): paired t-test over wheels. Vehicle-level causes
-    (covariate constant within vehicles): the wheel-level test with its variance inflated by
-    the design effect of the error differences' vehicle clustering (``design_effect``) and
-    degrees of freedom n_wheels / deff - 1, never fewer than n_vehicles - 1: with strongly
-    clustered wheels this is the vehicle-level test, with independent wheels the wheel-level
-    one.
-    """
-    uniq, inv = np.unique(wheel, return_inverse=True)
-    # a weighted bincount is float64 (the stubs type every bincount as intp)
-    d = cast(NDArray[np.float64],
-             np.bincount(inv, weights=before - after, minlength=uniq.size))
-    if uniq.size < 2 or np.std(d) == 0:
-        return 1.0, "no variation"
-    deff, g = 1.0, 0
-    if covariate is not None:
-        first = pd.Series(np.arange(inv.size)).groupby(inv).first().to_numpy()
-        deff, g = design_effect(d, np.asarray(vehicle)[first], np.asarray(covariate)[first])
-    se = np.std(d, ddof=1) / np.sqrt(uniq.size) * np.sqrt(deff)
-    df = max(float(max(g - 1, 1)), min(uniq.size - 1.0, uniq.size / deff - 1.0))
-    p = float(stats.t.sf(float(np.mean(d) / se), df))
-    if covariate is not None:
-        how = (f"one-sided t-test over {uniq.size} wheels of held-out error differences, "
-               f"variance x design effect {deff:.2f} for {g} vehicles (df {df:.1f}), "
-               "Holm-adjusted")
-    else:
-        how = (f"one-sided paired t-test over {uniq.size} wheel_id groups of held-out error "
-               "differences, Holm-adjusted")
-    return p, how
+def _whitened_shape(data: cz.FinderData) -> NDArray[np.float64]:
+    """Shape coefficients scaled so that their squared norm is the curve-space error."""
+    gram = data.basis @ data.basis.T
+    chol = np.linalg.cholesky(gram + 1e-12 * np.eye(gram.shape[0]))
+    return np.asarray(cz.shape_coefficients(data) @ chol)
 
 
-def _vehicle_level(values: NDArray[Any], vehicle: NDArray[Any]) -> bool:
-    s = pd.Series(values.astype(str)).groupby(vehicle).nunique()
-    return bool((s <= 1).all())
-
-
-def _numeric(values: NDArray[Any]) -> NDArray[np.float64]:
-    v = pd.to_numeric(pd.Series(values), errors="coerce")
-    if v.notna().all():
-        return v.to_numpy(dtype=float)
-    return pd.factorize(pd.Series(values).astype(str))[0].astype(float)
+def _shape_design(n: int, instrument: NDArray[Any] | None) -> NDArray[np.float64]:
+    codes = np.zeros(n, dtype=np.int64) if instrument is None else fs.codes_of(instrument)
+    levels = int(codes.max()) + 1
+    d = np.zeros((n, 3, levels * 3))
+    for j in range(3):
+        d[np.arange(n), j, codes * 3 + j] = 1.0
+    return d.reshape(n * 3, levels * 3)
 
 
 def diagnose(
@@ -323,6 +274,9 @@ def diagnose(
     min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
     n_folds: int = 5,
     n_boot: int = 1000,
+    n_null: int = DEFAULT_N_NULL,
+    structure_alpha: float = DEFAULT_STRUCTURE_ALPHA,
+    max_causes: int = MAX_CAUSES,
     seed: int = 0,
 ) -> Diagnosis:
     """Find what the calibrated model gets wrong, name the cause and measure the gain.
@@ -333,16 +287,21 @@ def diagnose(
     measurements_df : one row per measurement (``residuals.model_residuals`` lists the
         columns): the wheels not used in calibration and, ideally, the calibration wheels too
         (flagged via ``calibration_wheel_ids``; every extension refits its scale, so they
-        inform the extension without favouring it)
+        inform the extension without favouring it). Optional ``reprofiled_on`` dates help the
+        season; a wheel whose mileage falls between dated measurements was reprofiled.
     wear_curves : (n, g) measured wear curves [mm] on the model's grid, or None (then
         ``profile_misalignment`` is skipped)
     routes_by_name : Route per route name used in the ``route``/``route_id`` column
     table : curve-radius table (both measures for ``wear_measure``)
     route_attributes : attributes per route name (``flange_lubrication``, ...)
     causes : cause codes to try (default: the whole catalogue)
-    alpha : family-wise error rate (Holm) across the causes tried
+    alpha : family-wise error rate of naming a cause (max-T over the catalogue) and level of
+        the margin test
     min_relative_gain : smallest relative reduction of the held-out error that counts
-    n_folds, n_boot, seed : cross-validation folds, bootstrap resamples, random seed
+    n_folds, n_boot, n_null, seed : folds, bootstrap resamples of the gain interval,
+        resampled null datasets, random seed
+    structure_alpha : level of the outside-the-catalogue structure test
+    max_causes : most causes forward selection names
 
     Returns
     -------
@@ -361,317 +320,330 @@ def diagnose(
     if k < 2:
         raise ValueError("measurements: need at least two wheels to score out of sample")
     folds = _folds(groups, k, seed)
+    everything = np.ones(data.n, dtype=bool)
+    null_fit = cz.NullArea().fit(data, everything)
+    data.set_robust_weights(data.e - data.phi * null_fit.log_scale_[None, :])
+    sw = np.sqrt(data.weights)
+
+    def loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(np.sum(data.weights * residual ** 2, axis=1))
+
     chosen = cz.CATALOGUE if causes is None else tuple(cz.cause_by_code(c) for c in causes)
-    null_area = _cv_rows(data, cz.NullArea(), folds)
-    calibrated_rows = cz.row_sse(data, data.base)
-    null_shape = None
+    rng = np.random.default_rng(seed + 1)
     skipped: dict[str, str] = {}
-    scored: list[tuple[cz.Cause, NDArray[np.float64], NDArray[np.float64], NDArray[Any]]] = []
+    area: list[cz.Cause] = []
+    shape_cause: cz.Cause | None = None
     for cause in chosen:
         reason = cause.skip_reason(data)
         if reason is not None:
             skipped[cause.code] = reason
-            continue
-        if cause.metric == "shape":
-            if null_shape is None:
-                null_shape = _cv_rows(data, cz.NullShape(), folds)
-            before = null_shape
+        elif cause.metric == "shape":
+            shape_cause = cause
         else:
-            before = null_area
-        after = _cv_rows(data, cause, folds)
-        level = vehicle if _vehicle_level(cause.covariate(data), vehicle) else wheel
-        scored.append((cause, before, after, level))
-    rng = np.random.default_rng(seed + 1)
-    raw_p, results = [], []
-    for cause, before, after, level in scored:
-        uniq, inv = np.unique(level, return_inverse=True)
-        b_g = np.bincount(inv, weights=before, minlength=uniq.size)
-        a_g = np.bincount(inv, weights=after, minlength=uniq.size)
-        p, how = _pvalue(before, after, wheel, vehicle,
-                         np.asarray(cause.covariate(data)) if level is vehicle else None)
-        idx = rng.integers(0, uniq.size, size=(n_boot, uniq.size))
-        rel_boot = 1.0 - a_g[idx].sum(axis=1) / np.maximum(b_g[idx].sum(axis=1), 1e-300)
-        lo, hi = np.percentile(rel_boot, [2.5, 97.5])
-        n = before.size
-        rel = 1.0 - after.sum() / max(before.sum(), 1e-300)
-        gain = Gain(before_error=float(before.sum() / n), after_error=float(after.sum() / n),
-                    relative=float(rel), ci95_low=float(lo), ci95_high=float(hi),
-                    calibrated_error=float(calibrated_rows.sum() / n),
-                    metric="wear_curve_shape" if cause.metric == "shape" else "log_area")
-        raw_p.append(p)
-        results.append((cause, gain, p, how))
-    adj = _holm(raw_p) if raw_p else np.array([])
-    findings, preds = [], {}
+            area.append(cause)
+
+    # the wear-curve shape cause: per-instrument mean signature vs one common signature
+    shape_row: tuple[float, NDArray[np.float64]] | None = None
+    scored: dict[str, _Scored] = {}
+    if shape_cause is not None:
+        coef = _whitened_shape(data)
+        inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
+        before = np.sum(fs.held_out_shape(coef, None, folds) ** 2, axis=1)
+        after = np.sum(fs.held_out_shape(coef, inst, folds) ** 2, axis=1)
+        inst_codes = fs.codes_of(inst)
+        centred = coef.copy()
+        for i in np.unique(inst_codes):   # residuals of the per-instrument fit
+            centred[inst_codes == i] -= coef[inst_codes == i].mean(axis=0)
+        nm = fs.NuisanceModel.fit(centred, np.ones_like(coef), vehicle, wheel)
+        draws = nm.draws(n_null, rng, used_dof=int(inst_codes.max()))
+        boot = fs.bootstrap_gains(_shape_design(data.n, None), [_shape_design(data.n, inst)],
+                                  draws, np.repeat(folds, 3))
+        shape_row = (_relative(before, after), boot[0])
+        scored[shape_cause.code] = _Scored(shape_cause, before, after, shape_row[0],
+                                           metric="shape")
+
+    # forward selection over the area causes
+    selected: list[cz.Cause] = []
+    remaining = list(area)
+    runner_up: str | None = None
+    margin = margin_p = None
+    candidates: list[str] = []
+    nuisance: dict[str, Any] = {}
+    base_residual = None
+    step = 0
+    while remaining and len(selected) < max_causes:
+        base: cz.Cause = cz.Composite(tuple(selected)) if selected else cz.NullArea()
+        before = loss(fs.held_out(data, base, folds))
+        rows = {}
+        for c in remaining:
+            est: cz.Cause = cz.Composite((*selected, c)) if selected else c
+            rows[c.code] = loss(fs.held_out(data, est, folds))
+        full = base.fit(data, everything)
+        residual = data.e - data.phi * (full.log_scale_[None, :]
+                                        + full.log_factor(data, full.theta_))
+        nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
+        if step == 0:
+            nuisance = {"log_rate_sd_by_region": {"flange": {}, "tread": {}}}
+            for lvl, sds in nm.sd.items():
+                for j, r in enumerate(("flange", "tread")):
+                    nuisance["log_rate_sd_by_region"][r][lvl] = float(sds[j])
+            base_residual = residual
+        base_x = full.features(data, full.theta_)
+        alt = []
+        for c in remaining:
+            prepared = cz.Composite((c,))
+            prepared.prepare(data, everything)
+            alt.append(fs.area_design(data, np.concatenate(
+                [base_x, prepared.features(data, prepared.start())], axis=2)))
+        observed = np.array([_relative(before, rows[c.code]) for c in remaining])
+        # the nuisance is taken from the residuals of the baseline plus the leading
+        # candidate (its effect must not be resampled as nuisance), widened for the
+        # degrees of freedom that fit used
+        lead = remaining[int(np.argmax(observed))]
+        lead_fit = (cz.Composite((*selected, lead)) if selected else lead).fit(data, everything)
+        lead_res = data.e - data.phi * (lead_fit.log_scale_[None, :]
+                                        + lead_fit.log_factor(data, lead_fit.theta_))
+        nm_lead = fs.NuisanceModel.fit(sw * lead_res, sw * data.phi, vehicle, wheel)
+        draws = nm_lead.draws(n_null, rng, used_dof=len(lead_fit.theta_) - len(full.theta_))
+        boot = fs.bootstrap_gains(fs.area_design(data, base_x), alt, draws,
+                                  np.repeat(folds, 2))
+        codes = [c.code for c in remaining]
+        if step == 0 and shape_row is not None:
+            observed = np.append(observed, shape_row[0])
+            boot = np.vstack([boot, shape_row[1][None, :]])
+            codes.append(shape_cause.code)  # type: ignore[union-attr]
+        p_raw, p_adj = fs.min_p(observed, boot)
+        for i, code in enumerate(codes):
+            if code in rows:
+                scored[code] = _Scored(next(c for c in remaining if c.code == code), before,
+                                       rows[code], float(observed[i]), float(p_raw[i]),
+                                       float(p_adj[i]), step)
+            else:
+                s = scored[code]
+                s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
+        eligible = [c for c in remaining if _named(scored[c.code], alpha, min_relative_gain,
+                                                   groups, n_boot, rng)]
+        if not eligible:
+            break
+        best = max(eligible, key=lambda c: scored[c.code].gain)
+        others = [c for c in remaining if c is not best]
+        if others:
+            runner = max(others, key=lambda c: scored[c.code].gain)
+            diff = fs.group_sums(rows[runner.code] - rows[best.code], groups)
+            p_m = fs.sign_flip_p(diff, 4000, rng)
+            m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
+                                                                             1e-300))
+            if step == 0:
+                runner_up, margin, margin_p = runner.code, m, p_m
+            if p_m >= alpha:
+                if step == 0:
+                    candidates = [best.code] + [
+                        c.code for c in others
+                        if fs.sign_flip_p(fs.group_sums(rows[c.code] - rows[best.code], groups),
+                                          4000, rng) >= alpha]
+                break
+        selected.append(best)
+        remaining.remove(best)
+        step += 1
+
+    names = [c.code for c in selected]
+    if shape_cause is not None and _named(scored[shape_cause.code], alpha, min_relative_gain,
+                                          groups, n_boot, rng):
+        names.append(shape_cause.code)
+    if names:   # the verdict is the named cause with the largest relative gain
+        top = max(names, key=lambda c: scored[c].gain)
+        names = [top] + [c for c in names if c != top]
+    # an ambiguous area step does not hide a named wear-curve (instrument) cause: an
+    # instrument's geometric error also distorts the areas it measures
+    if names:
+        verdict = names[0]
+    elif candidates:
+        verdict = "ambiguous"
+    else:
+        verdict = "none"
+
+    unexplained: list[dict[str, Any]] = []
+    if verdict == "none" and base_residual is not None:
+        unexplained = _structure(data, base_residual, vehicle, wheel, n_null, rng,
+                                 structure_alpha, min_relative_gain)
+        if unexplained:
+            verdict = "outside_catalogue"
+
+    for code in scored:
+        _covariate_codes(scored[code].cause, data)
+    findings = _findings(data, scored, selected, names, vehicle, chosen, n_boot, groups,
+                         alpha, min_relative_gain, rng)
+    order = {c: i for i, c in enumerate(names)}
+    findings.sort(key=lambda f: (order.get(f.cause, len(order)), -f.gain.relative))
+    preds: dict[str, list[list[float]]] = {}
     covs: dict[str, list[Any]] = {}
-    for (cause, gain, p, how), p_adj in zip(results, adj, strict=True):
-        full = cause.fit(data, np.ones(data.n, dtype=bool))
-        significant = bool(p_adj < alpha)
-        material = bool(gain.relative >= min_relative_gain and gain.ci95_low > 0)
-        cov = cause.covariate(data)
-        covs[cause.code] = [_json(v) for v in np.asarray(cov).tolist()]
+    for cause in chosen:
+        if cause.code in skipped:
+            continue
+        covs[cause.code] = [_json(v) for v in np.asarray(cause.covariate(data)).tolist()]
         if cause.metric != "shape":
-            preds[cause.code] = cause.predict(data, full).tolist()
-        evidence = {
-            "p_value": p_adj, "p_value_raw": p, "test": how,
-            "effect_size": _effect_size(cause, full), "subgroup": _subgroup(cause, data),
-            "interval": {"relative_gain_ci95": [gain.ci95_low, gain.ci95_high]},
-            "confounded_with": _confounded(cause, chosen, data, vehicle),
-        }
-        if cause.metric != "shape" and cause.covariate_name in frame.columns \
-                and frame[cause.covariate_name].nunique() <= 20:
-            evidence["residual_by_level"] = residual_structure(
-                frame, cause.covariate_name).to_dict(orient="records")
-        extension = {"cause": cause.code, "parameters": full.params,
-                     "log_scale": {"flange": float(full.log_scale[0]),
-                                   "tread": float(full.log_scale[1])},
-                     "explanation": cause.explanation, "needs": list(cause.needs)}
-        summary = (f"{cause.describe(full)}; held-out error "
-                   f"{'down' if gain.relative >= 0 else 'up'} {100 * abs(gain.relative):.1f} % "
-                   f"(95 % CI {100 * gain.ci95_low:.1f} to {100 * gain.ci95_high:.1f} %)")
-        findings.append(Finding(cause.code, summary, evidence, extension, gain, significant,
-                                material))
-    findings.sort(key=lambda f: (not (f.significant and f.material), -f.gain.relative))
-    verdict = findings[0].cause if findings and findings[0].significant \
-        and findings[0].material else "none"
-    preds["none"] = cz.NullArea().predict(data, cz.NullArea().fit(
-        data, np.ones(data.n, dtype=bool))).tolist()
+            preds[cause.code] = cause.fit(data, everything).predict(data).tolist()
+    preds["none"] = cz.NullArea().fit(data, everything).predict(data).tolist()
     preds["calibrated"] = data.base.tolist()
     preds["measured"] = data.measured.tolist()
+    test = (f"held-out gain vs {n_null} datasets resampled from the baseline's nuisance model "
+            "(vehicle and wheel log-scale effects, residuals permuted within wheels), "
+            "Westfall-Young max-T across the catalogue; margin over the runner-up by a "
+            f"sign-flip test over {np.unique(groups).size} {group_by} groups")
     return Diagnosis(verdict=verdict, findings=tuple(findings), skipped=skipped,
                      n_measurements=data.n, n_groups=int(np.unique(groups).size),
-                     group_by=group_by, residuals=frame, covariates=covs, predictions=preds)
+                     group_by=group_by, residuals=frame, covariates=covs, predictions=preds,
+                     selected=tuple(names),
+                     runner_up=runner_up, margin=margin, margin_p_value=margin_p,
+                     candidates=tuple(candidates), unexplained=tuple(unexplained),
+                     nuisance=nuisance, null_test=test)
 
 
-def _effect_size(cause: cz.Cause, fit: cz.Fit) -> dict[str, Any]:
-    p = dict(fit.params)
-    if cause.code == "profile_misalignment":
-        return p["instruments"]
-    return p
+def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
+                   rng: np.random.Generator) -> tuple[float, float]:
+    b_g = fs.group_sums(s.before, groups)
+    a_g = fs.group_sums(s.after, groups)
+    idx = rng.integers(0, b_g.size, size=(n_boot, b_g.size))
+    rel = 1.0 - a_g[idx].sum(axis=1) / np.maximum(b_g[idx].sum(axis=1), 1e-300)
+    lo, hi = np.percentile(rel, [2.5, 97.5])
+    return float(lo), float(hi)
 
 
-def _subgroup(cause: cz.Cause, data: cz.FinderData) -> str:
-    subgroups = {
-        "traction": "tread of motor bogies vs other bogies",
-        "running_direction": "axle 1 vs axle 2 per running mode",
-        "curve_asymmetry": "left vs right wheels per curved route",
-        "flange_lubrication": "flanges on lubricated vs dry routes",
-        "wear_measure": "all wheel positions (ratio of the two measures)",
-        "nonlinear_progression": "mileage since reprofiling",
-        "seasonal_friction": "season of the running interval",
-        "vehicle_load": "vehicles by load_t",
-        "profile_misalignment": "wear curves per instrument_id",
-    }
-    return subgroups.get(cause.code, "")
+def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
+           rng: np.random.Generator) -> bool:
+    return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
 
 
-def _confounded(cause: cz.Cause, chosen: Sequence[cz.Cause], data: cz.FinderData,
-                vehicle: NDArray[Any]) -> list[str]:
-    """Other causes whose covariate is nearly collinear with this one's (|r| > 0.9)."""
-    x = _numeric(np.asarray(cause.covariate(data)))
+def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDArray[Any],
+               wheel: NDArray[Any], n_null: int, rng: np.random.Generator, alpha: float,
+               min_share: float) -> list[dict[str, Any]]:
+    """Residual structure outside the catalogue (``finder_scoring.structure_scan``)."""
+    factors = fs.structure_factors(data.frame, data.mileage_km)
+    if not factors:
+        return []
+    sw = np.sqrt(data.weights)
+    nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
+    draws = nm.draws(n_null, rng).reshape(data.n, 2, n_null)
+    names = list(factors)
+    observed = np.array([float(fs.structure_share(sw * residual, sw * data.phi,
+                                                  factors[f])[0]) for f in names])
+    null = np.vstack([fs.structure_share(draws, sw * data.phi, factors[f]) for f in names])
+    p_raw, p_adj = fs.min_p(observed, null)
+    out = []
+    for i, name in enumerate(names):
+        excess = float(observed[i] - np.median(null[i]))
+        if p_adj[i] <= alpha and excess >= min_share:   # resampling p: reject at <= alpha
+            out.append({"by": name, "share_of_residual": float(observed[i]),
+                        "share_beyond_null": excess, "p_value": float(p_adj[i]),
+                        "levels": fs.level_effects(residual, data.phi, factors[name],
+                                                   ("flange", "tread"))})
+    out.sort(key=lambda u: -u["share_beyond_null"])
+    return out
+
+
+_SUBGROUPS = {
+    "traction": "tread of motor bogies vs other bogies",
+    "running_direction": "axle 1 vs axle 2 per running mode",
+    "curve_asymmetry": "left vs right wheels per curved route",
+    "flange_lubrication": "flanges on lubricated vs dry routes",
+    "wear_measure": "all wheel positions (ratio of the two measures)",
+    "nonlinear_progression": "mileage since reprofiling",
+    "seasonal_friction": "season of the running intervals",
+    "vehicle_load": "vehicles by load_t",
+    "profile_misalignment": "wear curves per instrument_id",
+}
+
+
+def _findings(data: cz.FinderData, scored: Mapping[str, _Scored], selected: Sequence[cz.Cause],
+              names: Sequence[str], vehicle: NDArray[Any], chosen: Sequence[cz.Cause],
+              n_boot: int, groups: NDArray[Any], alpha: float, min_gain: float,
+              rng: np.random.Generator) -> list[Finding]:
+    everything = np.ones(data.n, dtype=bool)
+    joint: dict[str, cz.Cause] = {}
+    if selected:
+        comp = cz.Composite(tuple(selected)).fit(data, everything, cluster=vehicle)
+        assert isinstance(comp, cz.Composite)
+        joint = {m.code: m for m in comp.members}
+    calibrated = float(np.sum(data.e ** 2) / data.n)
+    out = []
+    for code, s in scored.items():
+        est = joint.get(code) or s.cause.fit(data, everything, cluster=vehicle)
+        lo, hi = _gain_interval(s, groups, n_boot, rng)
+        n = data.n
+        gain = Gain(before_error=float(s.before.sum() / n), after_error=float(s.after.sum() / n),
+                    relative=s.gain, ci95_low=lo, ci95_high=hi, calibrated_error=calibrated,
+                    metric="wear_curve_shape" if s.metric == "shape" else "log_area")
+        params = est.public()
+        if code == "wear_measure":
+            w = est.intervals().get("share_other_measure") if hasattr(est, "intervals") \
+                else None
+            if w is not None and w["ci95_low"] <= 1.0 <= w["ci95_high"]:
+                params.update(c_s_flange=float(data.c_s[0] * np.exp(est.log_scale_[0])),
+                              c_s_tread=float(data.c_s[1] * np.exp(est.log_scale_[1])))
+        intervals = est.intervals()
+        evidence: dict[str, Any] = {
+            "p_value": s.p_adj, "p_value_raw": s.p_raw,
+            "test": ("held-out gain against resampled nuisance-only datasets, "
+                     "Westfall-Young max-T across the catalogue"
+                     + (f" (forward-selection step {s.step + 1}: baseline includes "
+                        f"{', '.join(c.code for c in selected[:s.step])})" if s.step else "")),
+            "effect_size": params.get("instruments", params) if code == "profile_misalignment"
+            else params,
+            "intervals": intervals,
+            "subgroup": _SUBGROUPS.get(code, ""),
+            "interval": {"relative_gain_ci95": [lo, hi]},
+            "confounded_with": _confounded(s.cause, chosen, data),
+            "step": s.step + 1,
+        }
+        if s.metric != "shape" and s.cause.covariate_name in data.frame.columns \
+                and data.frame[s.cause.covariate_name].nunique() <= 20:
+            evidence["residual_by_level"] = residual_structure(
+                data.frame, s.cause.covariate_name).to_dict(orient="records")
+        extension = {"cause": code, "parameters": params,
+                     "log_scale": {"flange": float(est.log_scale_[0]),
+                                   "tread": float(est.log_scale_[1])},
+                     "intervals": intervals,
+                     "explanation": s.cause.explanation, "needs": list(s.cause.needs)}
+        ci = "; ".join(f"{k} {v['value']:.3g} [{v['ci95_low']:.3g}, {v['ci95_high']:.3g}]"
+                       for k, v in intervals.items() if math.isfinite(v["ci95_low"]))
+        summary = (f"{est.describe()}; held-out error "
+                   f"{'down' if s.gain >= 0 else 'up'} {100 * abs(s.gain):.1f} % "
+                   f"(95 % CI {100 * lo:.1f} to {100 * hi:.1f} %)"
+                   + (f"; 95 % intervals: {ci}" if ci else ""))
+        significant = bool(s.p_adj <= alpha)
+        material = bool(s.gain >= min_gain)
+        out.append(Finding(code, summary, evidence, extension, gain, significant and
+                           (code in names or not names), material))
+    return out
+
+
+def _numeric(values: NDArray[Any]) -> NDArray[np.float64]:
+    v = pd.to_numeric(pd.Series(values), errors="coerce")
+    if v.notna().all():
+        return np.asarray(v.to_numpy(dtype=float))
+    return pd.factorize(pd.Series(values).astype(str))[0].astype(float)
+
+
+def _covariate_codes(cause: cz.Cause, data: cz.FinderData) -> NDArray[np.float64]:
+    key = f"covariate_codes:{cause.code}"
+    if key not in data.cache:
+        data.cache[key] = _numeric(np.asarray(cause.covariate(data)))
+    return np.asarray(data.cache[key])
+
+
+def _confounded(cause: cz.Cause, chosen: Sequence[cz.Cause], data: cz.FinderData) -> list[str]:
+    """Other scored causes whose covariate is nearly collinear with this one's (|r| > 0.9)."""
+    x = _covariate_codes(cause, data)
     if np.std(x) == 0:
         return []
     out = []
     for other in chosen:
-        if other.code == cause.code or other.skip_reason(data) is not None:
+        if other.code == cause.code or f"covariate_codes:{other.code}" not in data.cache:
             continue
-        y = _numeric(np.asarray(other.covariate(data)))
+        y = _covariate_codes(other, data)
         if np.std(y) > 0 and abs(np.corrcoef(x, y)[0, 1]) > 0.9:
             out.append(other.code)
     return out
-
-
-# --- the extended model -----------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class ExtendedModel:
-    """A hybrid model with one fitted extension of the catalogue.
-
-    ``rate_factors`` gives the per-region multiplier of the base model's rate for one wheel
-    (its covariates); ``for_wheel`` returns a plain HybridModel whose c_s carries that factor,
-    so ``hybrid.predict`` and ``reprofiling.reprofiling_mileage`` work unchanged;
-    ``predict`` adds the mileage dependence of ``nonlinear_progression``.
-    """
-
-    base: HybridModel
-    cause: str
-    parameters: dict[str, Any]
-    log_scale: dict[str, float]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"kind": "extended", "base": self.base.to_dict(), "cause": self.cause,
-                "parameters": _json(self.parameters), "log_scale": dict(self.log_scale)}
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> ExtendedModel:
-        return cls(HybridModel.from_dict(data["base"]), str(data["cause"]),
-                   dict(data["parameters"]), {k: float(v) for k, v in
-                                              data["log_scale"].items()})
-
-    def correct_wear_curves(self, frame: pd.DataFrame, curves_mm: Any) -> NDArray[np.float64]:
-        """``profile_misalignment`` only: measured wear curves on the base model's grid with
-        each instrument's geometric error removed (module ``correct_wear_curves``)."""
-        return correct_wear_curves(self, frame, curves_mm, grid_y_mm=self.base.grid_y_mm,
-                                   split_y_mm=self.base.split_y_mm)
-
-    def correct_profile(self, instrument_id: str, y_mm: Any, z_mm: Any
-                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``profile_misalignment`` only: a raw profile's points corrected (module
-        ``correct_profile``)."""
-        return correct_profile(self, instrument_id, y_mm, z_mm, split_y_mm=self.base.split_y_mm)
-
-    def rate_factors(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
-                     axle: int, side: str, covariates: Mapping[str, Any] | None = None
-                     ) -> dict[str, float]:
-        """Multiplier of the base rate per region for one wheel (scale included)."""
-        cov = dict(covariates or {})
-        f = {r: math.exp(self.log_scale.get(r, 0.0)) for r in ("flange", "tread")}
-        p = self.parameters
-        if self.cause == "traction" and bogie_type == "motor":
-            f["tread"] *= float(p["tread_multiplier_motor"])
-        elif self.cause == "flange_lubrication" and _truthy(
-                cov.get("flange_lubrication", cov.get("lubricated", False))):
-            f["flange"] *= float(p["flange_multiplier_lubricated"])
-        elif self.cause == "vehicle_load" and cov.get("load_t") is not None:
-            f = {r: v * (float(cov["load_t"]) / float(p["load_ref_t"])) ** float(p["gamma"])
-                 for r, v in f.items()}
-        elif self.cause in ("running_direction", "curve_asymmetry"):
-            frame = pd.DataFrame([{"wheel_id": "w", "bogie_type": bogie_type, "axle": axle,
-                                   "side": side, "mileage_km": 1.0, "route": route.name,
-                                   "flange_area_mm2": 1.0, "tread_area_mm2": 1.0,
-                                   "running_mode": cov.get("running_mode",
-                                                           self.base.running_mode)}])
-            data = build_data(self.base, frame, None, {route.name: route}, table)
-            cause = cz.cause_by_code(self.cause)
-            theta = {k.split("_", 3)[-1]: float(v)
-                     for k, v in p.items()}
-            fit = cz.Fit(dict(p), np.zeros(2), theta)
-            ext = cause.predict(data, fit)[0]
-            base = data.base[0]
-            for j, r in enumerate(("flange", "tread")):
-                f[r] *= float(ext[j] / base[j]) if base[j] > 0 else 1.0
-        return f
-
-    def for_wheel(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
-                  axle: int, side: str, covariates: Mapping[str, Any] | None = None
-                  ) -> HybridModel:
-        """A plain HybridModel whose rates equal the extended model's for this wheel."""
-        f = self.rate_factors(route, table, bogie_type=bogie_type, axle=axle, side=side,
-                              covariates=covariates)
-        m = self.base
-        return replace(m, flange=replace(m.flange, c_s=m.flange.c_s * f["flange"]),
-                       tread=replace(m.tread, c_s=m.tread.c_s * f["tread"]))
-
-    def predict(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
-                axle: int, side: str, mileage_km: Any,
-                covariates: Mapping[str, Any] | None = None) -> Prediction:
-        """``hybrid.predict`` with the extension (areas A = k s, or k s_ref (s/s_ref)^beta)."""
-        m = self.for_wheel(route, table, bogie_type=bogie_type, axle=axle, side=side,
-                           covariates=covariates)
-        out = predict(m, route, table, bogie_type=bogie_type, axle=axle, side=side,
-                      mileage_km=mileage_km)
-        if self.cause != "nonlinear_progression":
-            return out
-        s = out.mileage_km
-        s_ref = float(self.parameters["reference_mileage_km"])
-        g = {r: np.where(s > 0, (np.maximum(s, 1e-9) / s_ref)
-                         ** (float(self.parameters[f"beta_{r}"]) - 1.0), 1.0)
-             for r in ("flange", "tread")}
-        fa = out.flange_area_mm2 * g["flange"][None, :]
-        ta = out.tread_area_mm2 * g["tread"][None, :]
-        median = out.quantiles.index(0.5)
-        wear, z, params, extra = profile_at_areas(m, fa[median], ta[median])
-        return replace(out, flange_area_mm2=fa, tread_area_mm2=ta, wear_mm=wear, z_mm=z,
-                       sd_mm=params[:, 0], sh_mm=params[:, 1], qr_mm=params[:, 2],
-                       extrapolated=extra)
-
-
-def _truthy(v: Any) -> bool:
-    if isinstance(v, str):
-        return v.strip().lower() in ("true", "yes", "on", "1", "y", "lubricated")
-    return bool(v)
-
-
-def apply_extension(model: HybridModel, finding: Finding) -> HybridModel | ExtendedModel:
-    """The model extended by a finding.
-
-    ``wear_measure`` gives a plain HybridModel with the other measure and refitted c_s;
-    ``profile_misalignment`` corrects the data, not the rates: an ``ExtendedModel`` that
-    predicts exactly as the base model and carries the per-instrument corrections
-    (``correct_wear_curves``, ``correct_profile``); every other cause an ``ExtendedModel``.
-    """
-    ext = finding.extension
-    params = dict(ext["parameters"])
-    if finding.cause == "wear_measure":
-        return replace(model, measure=str(params["measure"]),
-                       flange=replace(model.flange, c_s=float(params["c_s_flange"])),
-                       tread=replace(model.tread, c_s=float(params["c_s_tread"])))
-    if finding.cause == "profile_misalignment":
-        # the wear model itself is right; what the extension carries is the per-instrument
-        # geometric correction of the measurements (``correct_wear_curves``,
-        # ``correct_profile``); its rates are the base model's (no scale change)
-        return ExtendedModel(model, finding.cause, params, {"flange": 0.0, "tread": 0.0})
-    return ExtendedModel(model, finding.cause, params, dict(ext["log_scale"]))
-
-
-def _instrument_corrections(extension: Finding | ExtendedModel | Mapping[str, Any]
-                            ) -> dict[str, dict[str, float]]:
-    if isinstance(extension, Finding):
-        params = extension.extension["parameters"]
-    elif isinstance(extension, ExtendedModel):
-        params = extension.parameters
-    else:
-        params = extension.get("parameters", extension)
-    corr = params.get("corrections")
-    if corr is None:
-        raise ValueError("extension: not a profile_misalignment extension with corrections")
-    return {str(k): {n: float(x) for n, x in v.items()} for k, v in corr.items()}
-
-
-def correct_wear_curves(extension: Finding | ExtendedModel | Mapping[str, Any],
-                        frame: pd.DataFrame, curves_mm: Any, *, grid_y_mm: Any,
-                        split_y_mm: float = -30.0) -> NDArray[np.float64]:
-    """Measured wear curves with each instrument's fitted geometric error removed [mm].
-
-    extension : the ``profile_misalignment`` finding, the saved ExtendedModel or its
-        parameters (``corrections`` per instrument relative to the reference instrument)
-    frame : one row per curve with ``instrument_id``; curves_mm : (n, g) on ``grid_y_mm``
-
-    w_corrected = w - (e y z' + d_f z' [y < split] + d_s z') with the instrument's lateral
-    scale error e, flange-tread offset d_f and lateral shift d_s (residuals.geometric_basis,
-    seed 000 §IV.A). Instruments without a correction are returned unchanged.
-    """
-    corr = _instrument_corrections(extension)
-    curves = np.array(curves_mm, dtype=float, copy=True)
-    basis = geometric_basis(grid_y_mm, split_y_mm)
-    if curves.ndim != 2 or curves.shape[1] != basis.shape[1]:
-        raise ValueError(f"curves: must have shape (n, {basis.shape[1]}) on grid_y_mm")
-    if "instrument_id" not in frame.columns or len(frame) != curves.shape[0]:
-        raise ValueError("frame: needs instrument_id and one row per curve")
-    inst = frame["instrument_id"].astype(str).to_numpy()
-    names = cz.ProfileMisalignment.basis_names
-    for name, c in corr.items():
-        coef = np.array([c[k] for k in names])
-        curves[inst == name] -= coef @ basis
-    return curves
-
-
-def correct_profile(extension: Finding | ExtendedModel | Mapping[str, Any], instrument_id: str,
-                    y_mm: Any, z_mm: Any, *, split_y_mm: float = -30.0
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """A measured profile's points with the instrument's fitted geometric error undone [mm].
-
-    Inverse of the error model of ``correct_wear_curves``: y <- y - d_s - d_f [y < split],
-    then y <- y / (1 + e) about the tape circle; z unchanged. Align and process the
-    corrected points as usual (``processing.process_profile``).
-    """
-    corr = _instrument_corrections(extension).get(str(instrument_id))
-    y = np.asarray(y_mm, dtype=float)
-    z = np.asarray(z_mm, dtype=float)
-    if corr is None:
-        return y.copy(), z.copy()
-    y = y - corr["lateral_shift_mm"]
-    y = np.where(y < split_y_mm, y - corr["flange_offset_mm"], y)
-    return y / (1.0 + corr["lateral_scale"]), z.copy()
 
 
 # --- figures and report -----------------------------------------------------------------------
@@ -761,8 +733,18 @@ def report_html(diagnosis: Diagnosis, figures_svg: Mapping[str, str]) -> str:
         "</head><body><h1>wearcast diagnosis</h1>"
         f"<p>Verdict: <b>{esc(diagnosis.verdict)}</b> ({diagnosis.n_measurements} measurements, "
         f"{diagnosis.n_groups} groups by {esc(diagnosis.group_by)})</p>"
-        "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
-        "<th>after</th><th>relative gain [95 % CI]</th><th>p (Holm)</th><th>reported</th></tr>"
+        + (f"<p>Runner-up: {esc(diagnosis.runner_up)}, margin "
+           f"{100 * (diagnosis.margin or 0.0):.1f} % of the baseline's held-out error "
+           f"(randomisation p = {diagnosis.margin_p_value:.3g})</p>"
+           if diagnosis.runner_up is not None and diagnosis.margin_p_value is not None else "")
+        + (f"<p>Candidates no tested margin separates: "
+           f"{esc(', '.join(diagnosis.candidates))}</p>" if diagnosis.candidates else "")
+        + "".join(f"<p>Residual structure outside the catalogue by {esc(u['by'])}: "
+                  f"{100 * u['share_of_residual']:.1f} % of the residual "
+                  f"(p = {u['p_value']:.3g})</p>" for u in diagnosis.unexplained)
+        + "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
+        "<th>after</th><th>relative gain [95 % CI]</th><th>p (max-T)</th><th>reported</th>"
+        "</tr>"
         + "".join(rows) + "</table>"
         + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
         + f"<h2>Figures</h2>{figs}</body></html>")

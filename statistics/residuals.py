@@ -126,6 +126,9 @@ class ModelResiduals:
     measured_mm2, predicted_mm2 : (n, 2) wear areas [mm²]
     floor_mm2 : (2,) area floor a0 per region [mm²]
     left_right_shares : (n, 2) the route's left / right curve shares
+    history : ``route_history_weights`` (None when no wheel changed route): when a wheel's
+        route changed within a life, its parts and shares are the mileage-weighted mix of
+        the routes of its intervals
     """
 
     frame: pd.DataFrame
@@ -135,6 +138,7 @@ class ModelResiduals:
     predicted_mm2: NDArray[np.float64]
     floor_mm2: NDArray[np.float64]
     left_right_shares: NDArray[np.float64]
+    history: Any = None
 
     @property
     def log_residual(self) -> NDArray[np.float64]:
@@ -220,6 +224,10 @@ def model_residuals(
                                               region=region, measure=measure)
             cache[key] = (block, curve_shares(route))
         parts[i], shares[i] = cache[key][0], cache[key][1]
+    history = route_history_weights(df, df["mileage_km"].to_numpy(dtype=float))
+    if history is not None:   # wear accrued on the routes of the life's earlier intervals
+        parts = np.asarray(history @ parts.reshape(n, -1)).reshape(parts.shape)
+        shares = np.asarray(history @ shares)
     lead = leading_share(df["axle"].to_numpy(), mode)
     p = weighted_measure(parts, lead, MEASURES.index(model.measure))
     mileage = df["mileage_km"].to_numpy()
@@ -239,7 +247,73 @@ def model_residuals(
                                 / np.maximum(mileage, 1e-9), 0.0),
         in_calibration=df["wheel_id"].isin(calib).to_numpy(),
     )
-    return ModelResiduals(frame, parts, mode, measured, predicted, floor, shares)
+    return ModelResiduals(frame, parts, mode, measured, predicted, floor, shares, history)
+
+
+def day_numbers(values: pd.Series) -> NDArray[np.float64] | None:
+    """Days since 1970-01-01 of parseable dates; None when any date is missing."""
+    dates = pd.to_datetime(values, errors="coerce")
+    if dates.isna().any():
+        return None
+    return np.asarray((dates - pd.Timestamp("1970-01-01")).dt.total_seconds().to_numpy()
+                      / 86400.0, dtype=float)
+
+
+def life_ids(frame: pd.DataFrame, mileage_km: NDArray[np.float64]) -> NDArray[Any]:
+    """Per measurement, the wheel's life since its last reprofiling: ``wheel_id`` plus a
+    counter that increases whenever the mileage since reprofiling falls (a reprofiling in
+    the middle of a series; rows ordered by date when dated, else by mileage)."""
+    wheel = frame["wheel_id"].astype(str).to_numpy()
+    day = day_numbers(frame["measured_on"]) if "measured_on" in frame.columns else None
+    key = day if day is not None else np.arange(len(frame), dtype=float)
+    order = np.lexsort((mileage_km, key, wheel))
+    life = np.zeros(len(frame), dtype=np.int64)
+    prev_w, prev_s, count = None, -1.0, 0
+    for i in order:
+        if wheel[i] != prev_w:
+            prev_w, prev_s, count = wheel[i], -1.0, 0
+        elif mileage_km[i] < prev_s - 1e-6:
+            count += 1
+        life[i] = count
+        prev_s = mileage_km[i]
+    return np.array([f"{w}#{c}" for w, c in zip(wheel, life, strict=True)], dtype=object)
+
+
+def route_history_weights(frame: pd.DataFrame, mileage_km: NDArray[np.float64]) -> Any:
+    """Sparse (n, n) matrix H with rows summing to 1: measurement k's wear accrued over its
+    life's intervals (``life_ids``), interval i (between the life's measurements i-1 and i,
+    in mileage order) on the route recorded at measurement i; H[k, i] = Delta s_i / s_k.
+
+    A vehicle that changed route between reprofiling and a measurement wore partly on its
+    earlier route; route-dependent quantities of row k are H[k] @ (per-row values). None
+    when no life changes route (H would be the identity).
+    """
+    from scipy import sparse
+
+    rcol = route_column(frame)
+    route = frame[rcol].astype(str).to_numpy()
+    lives = life_ids(frame, mileage_km)
+    groups = pd.Series(np.arange(len(frame))).groupby(lives).indices
+    if all(len(set(route[idx])) == 1 for idx in groups.values()):
+        return None
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    for idx in groups.values():
+        idx = np.asarray(idx)[np.argsort(mileage_km[idx], kind="stable")]
+        s = mileage_km[idx]
+        inc = np.diff(np.concatenate([[0.0], s]))
+        for j, k in enumerate(idx):
+            if s[j] <= 0:
+                rows.append(int(k))
+                cols.append(int(k))
+                vals.append(1.0)
+                continue
+            rows += [int(k)] * (j + 1)
+            cols += [int(i) for i in idx[:j + 1]]
+            vals += list(inc[:j + 1] / s[j])
+    n = len(frame)
+    return sparse.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
 def weighted_measure(parts: NDArray[np.float64], lead_share: ArrayLike, measure_index: int,

@@ -10,8 +10,8 @@ import pytest
 from typer.testing import CliRunner
 
 from wearcast.service.cli import app
-from wearcast.statistics import fleet_twin as ft
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 
 @pytest.fixture

@@ -20,8 +20,8 @@ from fastapi.testclient import TestClient
 
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 
 @lru_cache(maxsize=16)
@@ -96,6 +96,15 @@ def test_api_names_hidden_cause(tmp_path, cause):
     assert 0 < top["gain"]["ci95_low"] <= top["gain"]["relative"] <= top["gain"]["ci95_high"]
     assert set(top) >= {"cause", "summary", "evidence", "extension", "gain"}
     assert body["excluded"] == {}
+    # specificity: the verdict beat the runner-up by a tested margin; its effect sizes carry
+    # 95 % intervals; the null test and the nuisance model are reported
+    assert body["selected"][0] == cause and body["candidates"] == []
+    assert "max-T" in body["null_test"] and body["nuisance"]
+    if cause != "profile_misalignment":   # the wear-curve cause has no area runner-up
+        assert body["runner_up"] not in (None, cause) and body["margin"] > 0
+        assert body["margin_p_value"] < 0.05
+        assert all(v["ci95_low"] <= v["value"] <= v["ci95_high"]
+                   for v in top["extension"]["intervals"].values())
 
 
 def test_api_null_data_gives_none(tmp_path):

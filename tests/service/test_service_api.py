@@ -25,7 +25,7 @@ with warnings.catch_warnings():
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 C_S = {"tread": 1.5e-6, "flange": 6.0e-6}
 

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from wearcast.service.cli import app
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 
 @pytest.fixture

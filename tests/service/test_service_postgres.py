@@ -21,7 +21,7 @@ from sqlalchemy.engine import make_url
 
 from wearcast.service.models_db import Base
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")

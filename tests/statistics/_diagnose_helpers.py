@@ -6,10 +6,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
 from wearcast.statistics.discrepancy import Diagnosis, diagnose
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 TABLE = ft.synthetic_wear_table()
 

@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
 from wearcast.statistics.discrepancy import (
     ExtendedModel,
-    _holm,
     apply_extension,
     diagnosis_figures,
     report_html,
 )
+from wearcast.statistics.generators import twin_effects as te
 
 _spec = importlib.util.spec_from_file_location(
     "_diagnose_helpers", Path(__file__).with_name("_diagnose_helpers.py"))
@@ -28,9 +28,28 @@ if "_diagnose_helpers" not in sys.modules:
     _spec.loader.exec_module(helpers)
 
 
-def test_holm_adjustment_matches_hand_computation():
-    # p = (0.01, 0.04, 0.03): sorted 0.01*3, 0.03*2, 0.04*1 -> 0.03, 0.06, 0.06 (monotone)
-    assert _holm([0.01, 0.04, 0.03]).tolist() == pytest.approx([0.03, 0.06, 0.06])
+def test_max_t_adjustment_and_sign_flip():
+    rng = np.random.default_rng(0)
+    null = rng.normal(size=(3, 999))
+    null[2] *= 5.0                       # a flexible candidate with a wide null
+    raw, adj = fs.min_p(np.array([4.0, 0.0, 4.0]), null)
+    assert raw[0] < 0.01 and adj[0] < 0.01      # far beyond its own null
+    assert raw[1] > 0.3 and adj[1] >= raw[1]
+    assert adj[2] > 0.2                  # the same gain is ordinary for the wide candidate
+    assert fs.sign_flip_p(np.ones(10), 0, rng) == pytest.approx(1 / 1024)
+    assert fs.sign_flip_p(np.array([1.0, -1.0] * 5), 0, rng) > 0.4
+
+
+def test_nuisance_draws_keep_the_vehicle_and_wheel_variation():
+    rng = np.random.default_rng(1)
+    vehicle = np.repeat(np.arange(12), 40)
+    wheel = np.repeat(np.arange(96), 5)
+    r = (np.repeat(rng.normal(0, 0.2, 12), 40) + np.repeat(rng.normal(0, 0.1, 96), 5)
+         + rng.normal(0, 0.05, 480))[:, None]
+    nm = fs.NuisanceModel.fit(r, np.ones_like(r), vehicle, wheel)
+    d = nm.draws(50, rng).reshape(480, 1, 50)
+    veh_means = np.array([[d[vehicle == v, 0, b].mean() for v in range(12)] for b in range(50)])
+    assert 0.1 < veh_means.std(axis=1).mean() < 0.3
 
 
 def test_traction_extension_predicts_motor_treads_faster():

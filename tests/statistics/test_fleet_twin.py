@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE_DIR = REPO / "service" / "example_fleet"

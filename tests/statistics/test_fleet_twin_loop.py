@@ -3,8 +3,13 @@
 import numpy as np
 import pytest
 
-from wearcast.statistics.fleet_twin import FleetConfig, TwinCurveClass, TwinRoute, UnitConfig
-from wearcast.statistics.fleet_twin_loop import LoopTruth, generate_loop_fleet
+from wearcast.statistics.generators.fleet_twin import (
+    FleetConfig,
+    TwinCurveClass,
+    TwinRoute,
+    UnitConfig,
+)
+from wearcast.statistics.generators.fleet_twin_loop import LoopTruth, generate_loop_fleet
 from wearcast.statistics.processing import process_profile
 
 ROUTE = TwinRoute("loop-line", (TwinCurveClass(None, None, 0.0, 70.0, 0.6),

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from wearcast.physics.wear_tables import wear_table_for_route
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 
 
 @pytest.fixture(scope="module")

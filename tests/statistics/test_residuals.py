@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics import hybrid
-from wearcast.statistics import twin_effects as te
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.residuals import (
     geometric_basis,
     leading_share,

@@ -1,0 +1,369 @@
+"""Base of the discrepancy finder's causes: the data they read, the estimator class, the
+linearised least squares on the log-area residual and its cluster-robust covariance.
+
+See :mod:`wearcast.statistics.causes` for the catalogue.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from wearcast.statistics.residuals import REGIONS
+
+Array = NDArray[np.float64]
+Mask = NDArray[np.bool_]
+
+__all__ = ["REGIONS"]
+
+
+@dataclass(frozen=True)
+class FinderData:
+    """Everything the causes read, per measurement (n rows).
+
+    frame : validated measurements with residual columns (see ``residuals.ModelResiduals``)
+    measured, base : (n, 2) measured and model-predicted areas [mm²] (flange, tread)
+    floor : (2,) area floor [mm²]; mileage_km : (n,) [km]
+    c_s : (2,) calibration factors of the model; parts : route measures by part
+    measure_index : index of the model's measure in ``wear_tables.MEASURES``
+    lead_share : (n,) nominal leading share; mode : (n,) running mode per row
+    left_right : (n, 2) the route's left / right curve shares
+    route : (n,) route names; lubricated : (n,) share of the mileage run lubricated (0/1
+        without route changes) or None when no attribute is known
+    shape_res : (n, g) wear-curve shape residuals [mm] or None; basis : (3, g)
+    """
+
+    frame: pd.DataFrame
+    measured: Array
+    base: Array
+    floor: Array
+    mileage_km: Array
+    c_s: Array
+    parts: Array
+    measure_index: int
+    lead_share: Array
+    mode: NDArray[Any]
+    left_right: Array
+    route: NDArray[Any]
+    lubricated: NDArray[Any] | None
+    shape_res: Array | None
+    basis: Array
+    cache: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def n(self) -> int:
+        return int(self.measured.shape[0])
+
+    def column(self, name: str) -> pd.Series | None:
+        return self.frame[name] if name in self.frame.columns else None
+
+    @property
+    def e(self) -> Array:
+        """(n, 2) log residual of the measured against the base model's areas."""
+        if "e" not in self.cache:
+            m = np.clip(self.measured, 0.0, None)
+            p = np.clip(self.base, 0.0, None)
+            self.cache["e"] = np.asarray(np.log((m + self.floor) / (p + self.floor)))
+        return np.asarray(self.cache["e"])
+
+    @property
+    def phi(self) -> Array:
+        """(n, 2) d e / d log(rate) at the base prediction: A_pred / (A_pred + a0)."""
+        if "phi" not in self.cache:
+            p = np.clip(self.base, 0.0, None)
+            self.cache["phi"] = np.asarray(p / (p + self.floor[None, :]))
+        return np.asarray(self.cache["phi"])
+
+    @property
+    def weights(self) -> Array:
+        """(n, 2) robustness weights of the rows (``set_robust_weights``; 1 by default)."""
+        w = self.cache.get("weights")
+        return np.ones((self.n, 2)) if w is None else np.asarray(w)
+
+    def set_robust_weights(self, residual: Array, k: float = 2.0) -> None:
+        """Huber weights min(1, k s / |r|) from a baseline residual (n, 2), s = 1.4826 MAD
+        per region: heavy-tailed measurements (outliers, a route change the model does not
+        know) count with bounded influence in every fit, score and resample."""
+        r = np.asarray(residual, dtype=float)
+        s = 1.4826 * np.median(np.abs(r - np.median(r, axis=0)), axis=0)
+        c = k * np.maximum(s, 1e-9)
+        self.cache["weights"] = np.minimum(1.0, c[None, :] / np.maximum(np.abs(r), 1e-12))
+
+    def season(self) -> Array | None:
+        """``season_features`` of the data, computed once."""
+        if "season" not in self.cache:
+            from wearcast.statistics.causes_calendar import season_features
+
+            self.cache["season"] = season_features(self.frame, self.mileage_km)
+        return self.cache["season"]  # type: ignore[no-any-return]
+
+
+# --- linear algebra of the working residual -----------------------------------------------
+
+def solve(data: FinderData, target: Array, features: Array, rows: Mask,
+          weights: Array | None = None) -> tuple[Array, Array]:
+    """Least squares of ``target`` (n, 2) on phi (b_r + x theta) over ``rows``.
+
+    features : (n, 2, k). Returns (b (2,), theta (k,)).
+    """
+    n, _, k = features.shape
+    ph = data.phi
+    design = np.zeros((n, 2, 2 + k))
+    design[:, 0, 0] = 1.0
+    design[:, 1, 1] = 1.0
+    design[:, :, 2:] = features
+    design = design * ph[:, :, None]
+    x = design[rows].reshape(-1, 2 + k)
+    y = target[rows].reshape(-1)
+    weights = data.weights if weights is None else weights
+    if weights is not None:
+        w = np.sqrt(weights[rows].reshape(-1))
+        x, y = x * w[:, None], y * w
+    keep = np.any(x != 0, axis=1)
+    coef, *_ = np.linalg.lstsq(x[keep], y[keep], rcond=None)
+    return coef[:2], coef[2:]
+
+
+def cluster_covariance(data: FinderData, residual: Array, features: Array,
+                       cluster: NDArray[Any]) -> Array:
+    """Cluster-robust (vehicle) covariance of (b, theta) of ``solve`` (CR1, Liang-Zeger).
+
+    residual : (n, 2) working residual after the fit; features : (n, 2, k).
+    """
+    n, _, k = features.shape
+    design = np.zeros((n, 2, 2 + k))
+    design[:, 0, 0] = 1.0
+    design[:, 1, 1] = 1.0
+    design[:, :, 2:] = features
+    design = design * data.phi[:, :, None]
+    sw = np.sqrt(data.weights).reshape(-1)
+    x = design.reshape(-1, 2 + k) * sw[:, None]
+    u = residual.reshape(-1) * sw
+    codes = np.repeat(pd.factorize(pd.Series(cluster).astype(str))[0], 2)
+    g = int(codes.max()) + 1
+    bread = np.linalg.pinv(x.T @ x)
+    scores = np.zeros((g, 2 + k))
+    np.add.at(scores, codes, x * u[:, None])
+    meat = scores.T @ scores
+    p = 2 + k
+    corr = g / max(g - 1, 1) * (x.shape[0] - 1) / max(x.shape[0] - p, 1)
+    return np.asarray(corr * bread @ meat @ bread)
+
+
+# --- the estimator base class -----------------------------------------------------------------
+
+class Cause:
+    """Base class: a model extension g(theta) with a plain-language explanation.
+
+    Fitted attributes (set by ``fit`` on a copy): ``theta_`` (k,), ``log_scale_`` (2,),
+    ``cov_`` ((2 + k) x (2 + k) cluster-robust covariance of (b, theta) or None),
+    ``n_groups_`` (clusters behind ``cov_``).
+    """
+
+    code: ClassVar[str] = ""
+    needs: ClassVar[tuple[str, ...]] = ()
+    explanation: ClassVar[str] = ""
+    metric: ClassVar[str] = "area"          # 'area' (log-area residual) or 'shape' (wear curve)
+    covariate_name: ClassVar[str] = ""
+    linear: ClassVar[bool] = True           # g linear in theta (closed-form fit)
+    gauss_newton_steps: ClassVar[int] = 3
+
+    theta_: Array
+    log_scale_: Array
+    cov_: Array | None = None
+    n_groups_: int = 0
+
+    # -- to override
+    def skip_reason(self, data: FinderData) -> str | None:
+        raise NotImplementedError
+
+    def prepare(self, data: FinderData, rows: Mask) -> None:
+        """Set data-derived constants (reference load, mileage, groups) before a fit."""
+
+    def start(self) -> Array:
+        """Nominal theta (no effect)."""
+        return np.zeros(len(self.param_names()))
+
+    def param_names(self) -> list[str]:
+        raise NotImplementedError
+
+    def features(self, data: FinderData, theta: Array) -> Array:
+        """(n, 2, k) derivative of the log rate factor by theta (at ``theta``)."""
+        raise NotImplementedError
+
+    def log_factor(self, data: FinderData, theta: Array) -> Array:
+        """(n, 2) exact log rate factor g(theta) (default: linear, features @ theta)."""
+        return np.asarray(np.einsum("nrk,k->nr", self.features(data, theta), theta))
+
+    def clip(self, theta: Array) -> Array:
+        return theta
+
+    def public(self) -> dict[str, Any]:
+        """JSON-able fitted parameters (what the saved extension carries)."""
+        return {k: float(v) for k, v in zip(self.param_names(), self.theta_, strict=True)}
+
+    def intervals(self) -> dict[str, dict[str, float]]:
+        """95 % intervals of the effect sizes: {name: {value, ci95_low, ci95_high}}."""
+        return {k: _interval(v, self._se(i), self.n_groups_)
+                for i, (k, v) in enumerate(zip(self.param_names(), self.theta_, strict=True))}
+
+    def describe(self) -> str:
+        return ""
+
+    def from_params(self, params: Mapping[str, Any]) -> Cause:
+        """A fitted copy from saved public parameters (inverse of ``public``)."""
+        raise NotImplementedError
+
+    # -- shared
+    def covariate(self, data: FinderData) -> NDArray[Any]:
+        """The covariate the residuals are plotted against."""
+        col = data.column(self.covariate_name)
+        return np.asarray(col if col is not None else np.zeros(data.n))
+
+    def _se(self, i: int) -> float:
+        if self.cov_ is None:
+            return float("nan")
+        return float(np.sqrt(max(self.cov_[2 + i, 2 + i], 0.0)))
+
+    def fit(self, data: FinderData, rows: Mask, offset: Array | None = None,
+            cluster: NDArray[Any] | None = None) -> Cause:
+        """Fit on ``rows``; ``offset`` (n, 2) is the log factor of causes already in the
+        model (forward selection). ``cluster`` (n,) gives the cluster-robust ``cov_``."""
+        est = copy.copy(self)
+        est.prepare(data, rows)
+        target = data.e - data.phi * (0.0 if offset is None else offset)
+        theta = est.start()
+        steps = 1 if est.linear else est.gauss_newton_steps
+        b = np.zeros(2)
+        for _ in range(steps):
+            x = est.features(data, theta)
+            g = est.log_factor(data, theta) if not est.linear else 0.0
+            b, delta = solve(data, target - data.phi * g, x, rows)
+            theta = est.clip(theta + delta if not est.linear else delta)
+        if not est.linear:  # final scale at the clipped theta
+            b, _ = solve(data, target - data.phi * est.log_factor(data, theta),
+                         np.zeros((data.n, 2, 0)), rows)
+        est.theta_, est.log_scale_ = np.asarray(theta, dtype=float), b
+        if cluster is not None:
+            x = est.features(data, theta)
+            res = (target - data.phi * (b[None, :] + est.log_factor(data, theta)))
+            res = np.where(rows[:, None], res, 0.0)
+            xr = np.where(rows[:, None, None], x, 0.0)
+            est.cov_ = cluster_covariance(data, res, xr, cluster)
+            est.n_groups_ = int(pd.Series(np.asarray(cluster)[rows]).nunique())
+        return est
+
+    def predict(self, data: FinderData) -> Array:
+        """Predicted (n, 2) areas [mm²] of the extended model, scales included."""
+        g = self.log_factor(data, self.theta_)
+        return np.asarray(data.base * np.exp(self.log_scale_[None, :] + g))
+
+
+def _interval(value: float, se: float, groups: int, transform: Any = None) -> dict[str, float]:
+    from scipy import stats
+
+    t = float(stats.t.ppf(0.975, max(groups - 1, 1))) if groups else float("nan")
+    lo, hi = value - t * se, value + t * se
+    f = transform or (lambda v: v)
+    a, b = float(f(lo)), float(f(hi))
+    return {"value": float(f(value)), "ci95_low": min(a, b), "ci95_high": max(a, b),
+            "std_error": float(se)}
+
+
+def _levels(values: NDArray[Any]) -> list[str]:
+    uniq = pd.unique(pd.Series(values).dropna())
+    return sorted({str(v) for v in uniq if str(v) != ""})
+
+
+class NullArea(Cause):
+    """No extension: the model with its per-region scale refitted (the comparison baseline)."""
+
+    code = "none"
+
+    def skip_reason(self, data: FinderData) -> str | None:
+        return None
+
+    def param_names(self) -> list[str]:
+        return []
+
+    def features(self, data: FinderData, theta: Array) -> Array:
+        return np.zeros((data.n, 2, 0))
+
+    def from_params(self, params: Mapping[str, Any]) -> Cause:
+        est = copy.copy(self)
+        est.theta_, est.log_scale_ = np.zeros(0), np.zeros(2)
+        return est
+
+
+class Composite(Cause):
+    """Several area causes at once (forward selection): g = sum of the members' g, one
+    log-scale per region; ``members_`` are the fitted members after ``fit``."""
+
+    code = "composite"
+
+    def __init__(self, members: tuple[Cause, ...]) -> None:
+        self.members = members
+        self.sizes: list[int] = []
+
+    def skip_reason(self, data: FinderData) -> str | None:
+        return None
+
+    @property
+    def linear(self) -> bool:  # type: ignore[override]
+        return all(m.linear for m in self.members)
+
+    def prepare(self, data: FinderData, rows: Mask) -> None:
+        self.members = tuple(copy.copy(m) for m in self.members)
+        for m in self.members:
+            m.prepare(data, rows)
+        self.sizes = [len(m.param_names()) for m in self.members]
+
+    def _split(self, theta: Array) -> list[Array]:
+        return np.split(np.asarray(theta, dtype=float), np.cumsum(self.sizes)[:-1]) \
+            if self.sizes else []
+
+    def param_names(self) -> list[str]:
+        return [f"{m.code}.{k}" for m in self.members for k in m.param_names()]
+
+    def start(self) -> Array:
+        parts = [m.start() for m in self.members]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def clip(self, theta: Array) -> Array:
+        parts = [m.clip(t) for m, t in zip(self.members, self._split(theta), strict=True)]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def features(self, data: FinderData, theta: Array) -> Array:
+        parts = [m.features(data, t) for m, t in zip(self.members, self._split(theta),
+                                                     strict=True)]
+        return np.concatenate(parts, axis=2) if parts else np.zeros((data.n, 2, 0))
+
+    def log_factor(self, data: FinderData, theta: Array) -> Array:
+        out = np.zeros((data.n, 2))
+        for m, t in zip(self.members, self._split(theta), strict=True):
+            out += m.log_factor(data, t)
+        return out
+
+    def fit(self, data: FinderData, rows: Mask, offset: Array | None = None,
+            cluster: NDArray[Any] | None = None) -> Cause:
+        est = super().fit(data, rows, offset, cluster)
+        assert isinstance(est, Composite)
+        fitted = []
+        start = 0
+        for m, k in zip(est.members, est.sizes, strict=True):
+            f = copy.copy(m)
+            f.theta_, f.log_scale_ = est.theta_[start:start + k], est.log_scale_
+            if est.cov_ is not None:
+                idx = np.r_[0, 1, 2 + start + np.arange(k)]
+                f.cov_ = est.cov_[np.ix_(idx, idx)]
+                f.n_groups_ = est.n_groups_
+            fitted.append(f)
+            start += k
+        est.members = tuple(fitted)
+        return est

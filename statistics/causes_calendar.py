@@ -1,0 +1,136 @@
+"""Calendar-true seasonal friction: the season of the days each measurement's wear accrued.
+
+Part of the discrepancy finder's catalogue (:mod:`wearcast.statistics.causes`).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from wearcast.statistics.cause_base import Cause, FinderData, _interval
+from wearcast.statistics.residuals import day_numbers as _day_numbers
+from wearcast.statistics.residuals import life_ids
+
+Array = NDArray[np.float64]
+OMEGA_PER_DAY = 2.0 * np.pi / 365.25
+
+
+def season_features(frame: pd.DataFrame, mileage_km: Array) -> Array | None:
+    """Calendar-true season features (n, 2): the mileage-weighted mean of (cos wt, sin wt)
+    over the days each measurement's wear accrued, w = 2 pi / 365.25 days.
+
+    For every life of a wheel (``life_ids``) the measurements are taken in date order and
+    each interval between consecutive measurements contributes its mileage increment times
+    the mean of cos/sin over its own dates (mileage uniform within an interval, so irregular
+    intervals and changing daily mileages are followed). The first interval starts at the
+    reprofiling: the ``reprofiled_on`` column when given, else its mileage divided by the
+    life's median km/day (the fleet's median when the life has a single measurement).
+    Repeated measurements (same date and mileage) add nothing. None without dates.
+    """
+    if "measured_on" not in frame.columns:
+        return None
+    day = _day_numbers(frame["measured_on"])
+    if day is None:
+        return None
+    s = np.asarray(mileage_km, dtype=float)
+    life = life_ids(frame, s)
+    reprofiled = _day_numbers(frame["reprofiled_on"]) if "reprofiled_on" in frame.columns \
+        else None
+    groups = pd.Series(np.arange(len(frame))).groupby(life).indices
+    speeds: dict[Any, float] = {}
+    for key, idx in groups.items():
+        idx = np.asarray(idx)[np.lexsort((s[idx], day[idx]))]
+        dd, ds = np.diff(day[idx]), np.diff(s[idx])
+        ok = (dd > 0) & (ds > 0)
+        if ok.any():
+            speeds[key] = float(np.median(ds[ok] / dd[ok]))
+    fleet_v = float(np.median(list(speeds.values()))) if speeds else 500.0
+    w = OMEGA_PER_DAY
+    out = np.zeros((len(frame), 2))
+    for key, idx in groups.items():
+        idx = np.asarray(idx)[np.lexsort((s[idx], day[idx]))]
+        v = speeds.get(key, fleet_v)
+        t_end = day[idx]
+        start = t_end[0] - s[idx[0]] / max(v, 1e-9)
+        if reprofiled is not None and np.isfinite(reprofiled[idx[0]]):
+            start = float(reprofiled[idx[0]])
+        t_start = np.concatenate([[start], t_end[:-1]])
+        inc = np.diff(np.concatenate([[0.0], s[idx]]))
+        inc = np.maximum(inc, 0.0)
+        dur = t_end - t_start
+        long_ = dur >= 1.0
+        cos_m = np.where(long_, (np.sin(w * t_end) - np.sin(w * t_start))
+                         / (w * np.where(long_, dur, 1.0)), np.cos(w * t_end))
+        sin_m = np.where(long_, (np.cos(w * t_start) - np.cos(w * t_end))
+                         / (w * np.where(long_, dur, 1.0)), np.sin(w * t_end))
+        total = np.cumsum(inc)
+        safe = np.where(total > 0, total, 1.0)
+        out[idx, 0] = np.where(total > 0, np.cumsum(inc * cos_m) / safe, 0.0)
+        out[idx, 1] = np.where(total > 0, np.cumsum(inc * sin_m) / safe, 0.0)
+    return out
+
+
+class SeasonalFriction(Cause):
+    code = "seasonal_friction"
+    needs = ("measured_on",)
+    covariate_name = "measured_on"
+    explanation = ("Rail-wheel friction, and with it the wear rate, follows the season (leaves, "
+                   "moisture, temperature): rate x (1 + a cos wt + b sin wt), integrated over "
+                   "the calendar days of every interval between measurements, "
+                   "w = 2 pi / 365.25 days.")
+
+    def skip_reason(self, data: FinderData) -> str | None:
+        x = data.season()
+        if x is None:
+            return "needs a measured_on date on every measurement"
+        dates = pd.to_datetime(data.frame["measured_on"])
+        if (dates.max() - dates.min()).days < 180 or np.ptp(x[:, 0]) + np.ptp(x[:, 1]) < 0.2:
+            return "measurement dates span less than half a year"
+        return None
+
+    def param_names(self) -> list[str]:
+        return ["a_cos", "b_sin"]
+
+    def features(self, data: FinderData, theta: Array) -> Array:
+        x = data.season()
+        if x is None:
+            return np.zeros((data.n, 2, 2))
+        return np.repeat(x[:, None, :], 2, axis=1)
+
+    def public(self) -> dict[str, Any]:
+        a, b = (float(v) for v in self.theta_)
+        return {"a_cos": a, "b_sin": b, "amplitude": float(np.hypot(a, b)),
+                "peak_day_of_year": float((np.degrees(np.arctan2(b, a)) % 360.0)
+                                          / 360.0 * 365.25)}
+
+    def intervals(self) -> dict[str, dict[str, float]]:
+        out = super().intervals()
+        a, b = self.theta_
+        amp = float(np.hypot(a, b))
+        if self.cov_ is not None and amp > 0:
+            grad = np.array([a, b]) / amp
+            se = float(np.sqrt(max(grad @ self.cov_[2:4, 2:4] @ grad, 0.0)))
+        else:
+            se = float("nan")
+        out["amplitude"] = _interval(amp, se, self.n_groups_)
+        return out
+
+    def from_params(self, params: Mapping[str, Any]) -> Cause:
+        est = copy.copy(self)
+        est.theta_ = np.array([float(params["a_cos"]), float(params["b_sin"])])
+        return est
+
+    def covariate(self, data: FinderData) -> NDArray[Any]:
+        x = data.season()
+        return x[:, 0] if x is not None else np.zeros(data.n)
+
+    def describe(self) -> str:
+        p = self.public()
+        return (f"wear rate varies by about +/-{100 * p['amplitude']:.0f} % over the year, "
+                f"highest near day {p['peak_day_of_year']:.0f}")
