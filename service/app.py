@@ -18,6 +18,7 @@ from fastapi.openapi.utils import get_openapi
 
 from wearcast.service.db import Database
 from wearcast.service.errors import PROBLEM_MEDIA_TYPE, Problem, install_handlers
+from wearcast.service.middleware import MAX_QUERY_VALUE_CHARS
 from wearcast.service.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -106,6 +107,32 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     return app
 
 
+INT64 = (-(2**63), 2**63 - 1)
+
+
+def _bound_integers(schema: Any) -> None:
+    """Publish the 64-bit range on every integer without bounds (the server refuses others)."""
+    if isinstance(schema, dict):
+        if schema.get("type") == "integer":
+            schema.setdefault("minimum", INT64[0])
+            schema.setdefault("maximum", INT64[1])
+        for value in schema.values():
+            _bound_integers(value)
+    elif isinstance(schema, list):
+        for value in schema:
+            _bound_integers(value)
+
+
+def _bound_strings(schema: Any, max_length: int) -> None:
+    """Publish the longest path or query value the request guard lets through."""
+    if isinstance(schema, dict):
+        if schema.get("type") == "string":
+            schema["maxLength"] = min(schema.get("maxLength", max_length), max_length)
+        for key in ("anyOf", "oneOf", "allOf"):
+            for value in schema.get(key, []):
+                _bound_strings(value, max_length)
+
+
 def problem_openapi(app: FastAPI) -> dict[str, Any]:
     """The OpenAPI document with every error answer of every operation published as
     ``application/problem+json`` (:class:`wearcast.service.errors.Problem`)."""
@@ -121,10 +148,17 @@ def problem_openapi(app: FastAPI) -> dict[str, Any]:
     for name in ("HTTPValidationError", "ValidationError"):
         components.pop(name, None)
     ref = {"$ref": "#/components/schemas/Problem"}
+    settings: Settings = app.state.settings
+    for definition in components.values():
+        _bound_integers(definition)
     for path, operations in schema.get("paths", {}).items():
         for operation in operations.values():
             if not isinstance(operation, dict) or "responses" not in operation:
                 continue
+            for parameter in operation.get("parameters", []):
+                _bound_integers(parameter.get("schema", {}))
+                _bound_strings(parameter.get("schema", {}), settings.max_id_length * 4
+                               if parameter.get("in") == "path" else MAX_QUERY_VALUE_CHARS)
             statuses = dict(COMMON_ERRORS)
             if operation.get("security"):
                 statuses |= SECURED_ERRORS
