@@ -63,7 +63,13 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     from wearcast.service import job_store
     from wearcast.service.auth import KeyCache, bootstrap_admin_key, require_key
     from wearcast.service.jobs import JobRunner
-    from wearcast.service.middleware import AuditTrail, ProblemGuard, RateLimiter, RequestGuard
+    from wearcast.service.middleware import (
+        AuditTrail,
+        ProblemGuard,
+        RateLimiter,
+        RequestGuard,
+        check_request_values,
+    )
     from wearcast.service.routes import health
 
     settings = settings or Settings()
@@ -92,7 +98,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.router.add_event_handler("shutdown", runner.shutdown)
     install_handlers(app)
     app.include_router(health.router, prefix="/v1")
-    secured = [Depends(require_key)]
+    secured = [Depends(require_key), Depends(check_request_values)]
     for module in _router_modules():
         app.include_router(module.router, prefix="/v1", dependencies=secured)
     app.add_middleware(AuditTrail, factory=database.session_factory)
