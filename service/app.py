@@ -62,6 +62,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
 
     from wearcast.service import job_store
     from wearcast.service.auth import KeyCache, bootstrap_admin_key, require_key
+    from wearcast.service.housekeeping import clean_after_restart, stop_import_workers
     from wearcast.service.jobs import JobRunner
     from wearcast.service.middleware import (
         AuditTrail,
@@ -91,11 +92,13 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.state.jobs = runner
     app.state.simulations = runner  # the name the simulation and fit routes use
     if migrate:  # this process starts the service: jobs left running by the last one died
+        clean_after_restart(database.session_factory, settings.data_dir)
         runner.recover(all_running=True)
         if job_store.queued_ids(database.session_factory):
             runner.start()
     app.router.add_event_handler("startup", runner.start)
     app.router.add_event_handler("shutdown", runner.shutdown)
+    app.router.add_event_handler("shutdown", stop_import_workers)
     install_handlers(app)
     app.include_router(health.router, prefix="/v1")
     secured = [Depends(require_key), Depends(check_request_values)]

@@ -135,7 +135,7 @@ def _literal_path_methods(scope: Scope) -> list[str] | None:
     return table.get(scope.get("path", ""))
 
 
-def check_request_values(request: Request) -> None:
+async def check_request_values(request: Request) -> None:
     """422 for path or query values no route could use (NUL bytes, integers beyond 64 bits,
     over-long values); a dependency run after the key check, so a request without a key gets
     401 whatever its values."""
