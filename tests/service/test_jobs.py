@@ -99,12 +99,12 @@ def _start(args: list[str], env: dict[str, str]) -> subprocess.Popen:
 
 def _serve(port: int, env: dict[str, str]) -> tuple[subprocess.Popen, httpx.Client]:
     server = _start(["serve", "--port", str(port)], env)
-    client = httpx.Client(base_url=f"http://127.0.0.1:{port}/v1", timeout=30,
+    client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30,
                           headers={"Authorization": f"Bearer {TEST_KEY}"})
     deadline = time.monotonic() + 60
     while True:
         try:
-            if client.get("/health").status_code == 200:
+            if client.get("/v1/health").status_code == 200:
                 return server, client
         except httpx.TransportError:
             pass
@@ -119,12 +119,12 @@ def test_a_server_killed_during_a_job_resumes_it_after_restart(tmp_path: Path) -
     port = _port()
     server, client = _serve(port, env)
     try:
-        job = client.post("/simulations", json=LONGER).json()["id"]
+        job = client.post("/v1/simulations", json=LONGER).json()["id"]
         _wait(client, job, ("running",))
         server.send_signal(signal.SIGKILL)
         server.wait(timeout=30)
         server, client = _serve(port, env)
-        body = client.get(f"/jobs/{job}").json()
+        body = client.get(f"/v1/jobs/{job}").json()
         assert body["status"] in ("queued", "running") and body["attempts"] >= 1
         body = _wait(client, job, timeout_s=600)
         assert body["status"] == "done", body
