@@ -69,7 +69,7 @@ def start_server(data_dir: Path, port: int, workers: int, log: Path
 
 
 def wait_healthy(base: str, server: subprocess.Popen[bytes], log: Path,
-                 timeout_s: float = 60.0) -> None:
+                 timeout_s: float = 180.0) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if server.poll() is not None:

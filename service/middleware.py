@@ -39,6 +39,7 @@ from wearcast.service.settings import Settings
 log = logging.getLogger(__name__)
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 _DIGITS = re.compile(r"^[+-]?\d+$")
+_LONG_DIGITS = re.compile(rb"\d{19,}")
 INT64_MAX = 2**63 - 1
 MAX_QUERY_VALUE_CHARS = 8192
 
@@ -147,6 +148,40 @@ async def check_request_values(request: Request) -> None:
     item = _query_problem(request.scope.get("query_string", b""), MAX_QUERY_VALUE_CHARS)
     if item:
         raise ApiError(422, item["field"], item["reason"])
+    if request.headers.get("content-type", "").startswith("application/json"):
+        field = _big_integer_field(await request.body())
+        if field is not None:
+            raise ApiError(422, field, "integer out of the 64-bit range")
+
+
+def _big_integer_field(body: bytes) -> str | None:
+    """The field of a JSON body holding an integer beyond 64 bits (None when there is none
+    or the body is not JSON: request validation names that)."""
+    if not body or not _LONG_DIGITS.search(body):  # no run of 19+ digits: nothing to walk
+        return None
+    try:
+        value = json.loads(body)
+    except (ValueError, RecursionError):
+        return None
+
+    def find(node: Any, path: str) -> str | None:
+        if isinstance(node, bool):
+            return None
+        if isinstance(node, int) and not -(2**63) <= node <= INT64_MAX:
+            return path or "body"
+        if isinstance(node, dict):
+            for key, child in node.items():
+                found = find(child, f"{path}.{key}" if path else str(key))
+                if found:
+                    return found
+        if isinstance(node, list):
+            for i, child in enumerate(node):
+                found = find(child, f"{path}[{i}]")
+                if found:
+                    return found
+        return None
+
+    return find(value, "")
 
 
 class RequestGuard:

@@ -104,6 +104,9 @@ def test_size_points_and_integer_limits(backend_url: str, tmp_path: Path,
                              ("GET", "/v1/routes/a%00b", {})):
         r = client.request(method, path, **kw)  # type: ignore[arg-type]
         assert 400 <= r.status_code < 500, (path, r.status_code, r.text)
+    r = client.post("/v1/simulations", json={"vehicle": "metro_b", "classes": [
+        {"radius_m": None, "speed_kmh": 70, "share": 1}], "steps": {"count": huge}})
+    assert r.status_code == 422 and "steps.count" in r.text and "64-bit" in r.text
     assert _total(client) == 0
 
 
