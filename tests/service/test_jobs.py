@@ -32,6 +32,7 @@ TINY = {"vehicle": "metro_b", "law": "archard_kth", "application": "global",
                      "share": 0.4}],
         "steps": {"mode": "adaptive", "count": 2}}
 LONGER = {**TINY, "steps": {"mode": "fixed", "count": 40, "step_km": 2000}}
+MEDIUM = {**TINY, "steps": {"mode": "fixed", "count": 5, "step_km": 2000}}
 TEST_KEY = os.environ["WEARCAST_API_KEY"]
 
 
@@ -119,7 +120,7 @@ def test_a_server_killed_during_a_job_resumes_it_after_restart(tmp_path: Path) -
     port = _port()
     server, client = _serve(port, env)
     try:
-        job = client.post("/v1/simulations", json=LONGER).json()["id"]
+        job = client.post("/v1/simulations", json=MEDIUM).json()["id"]
         _wait(client, job, ("running",))
         server.send_signal(signal.SIGKILL)
         server.wait(timeout=30)
