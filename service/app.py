@@ -166,7 +166,7 @@ def problem_openapi(app: FastAPI) -> dict[str, Any]:
                 continue
             for parameter in operation.get("parameters", []):
                 _bound_integers(parameter.get("schema", {}))
-                _bound_strings(parameter.get("schema", {}), settings.max_id_length * 4
+                _bound_strings(parameter.get("schema", {}), settings.max_id_length
                                if parameter.get("in") == "path" else MAX_QUERY_VALUE_CHARS)
             statuses = dict(COMMON_ERRORS)
             if operation.get("security"):

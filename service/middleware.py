@@ -41,7 +41,7 @@ SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 _DIGITS = re.compile(r"^[+-]?\d+$")
 _LONG_DIGITS = re.compile(rb"\d{19,}")
 INT64_MAX = 2**63 - 1
-MAX_QUERY_VALUE_CHARS = 8192
+MAX_QUERY_VALUE_CHARS = 1000
 
 
 async def send_problem(send: Send, status: int, items: list[dict[str, Any]],
@@ -142,7 +142,7 @@ async def check_request_values(request: Request) -> None:
     401 whatever its values."""
     settings = request.app.state.settings
     for segment in request.url.path.split("/"):
-        problem = _value_problem(segment, settings.max_id_length * 4)
+        problem = _value_problem(segment, settings.max_id_length)
         if problem:
             raise ApiError(422, "path", f"a path segment {problem}")
     item = _query_problem(request.scope.get("query_string", b""), MAX_QUERY_VALUE_CHARS)

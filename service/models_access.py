@@ -86,3 +86,5 @@ def _aware_datetimes(target: Any, _context: Any = None) -> None:
 event.listen(Base, "load", _aware_datetimes, propagate=True)
 event.listen(Base, "refresh", lambda target, context, _attrs: _aware_datetimes(target),
              propagate=True)
+event.listen(Base, "refresh_flush",
+             lambda target, context, _attrs: _aware_datetimes(target), propagate=True)
