@@ -7,17 +7,31 @@ TYPES  := .typecheck/wearcast
 HOST   ?= 127.0.0.1
 PORT   ?= 8000
 
-.PHONY: run test test-all lint typecheck bench demo clean
+.PHONY: run test test-all lint typecheck bench demo clean lock worker
 
-$(STAMP): pyproject.toml
+# dependencies pinned by requirements.lock (pip constraints), the package itself editable
+$(STAMP): pyproject.toml requirements.lock
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "wearcast needs Python 3.11+"'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -c requirements.lock -e '.[dev]'
 	@touch $(STAMP)
+
+# re-pin requirements.lock from a fresh resolution of pyproject.toml
+lock:
+	rm -rf .venv-lock && $(PYTHON) -m venv .venv-lock
+	.venv-lock/bin/python -m pip install --quiet --upgrade pip
+	.venv-lock/bin/python -m pip install --quiet -e '.[dev]'
+	(sed -n '1,3p' requirements.lock; .venv-lock/bin/python -m pip freeze --exclude-editable \
+	  | grep -v '^wearcast') > requirements.lock.new && mv requirements.lock.new requirements.lock
+	rm -rf .venv-lock
 
 run: $(STAMP)
 	$(BIN)/wearcast serve --host $(HOST) --port $(PORT) --load-example
+
+# job worker processes (with WEARCAST_JOB_QUEUE=dramatiq on the API and a Redis broker)
+worker: $(STAMP)
+	$(BIN)/wearcast worker
 
 test: lint
 	$(BIN)/python -m pytest

@@ -18,6 +18,7 @@ from fastapi.openapi.utils import get_openapi
 
 from wearcast.service.db import Database
 from wearcast.service.errors import PROBLEM_MEDIA_TYPE, Problem, install_handlers
+from wearcast.service.middleware import MAX_QUERY_VALUE_CHARS
 from wearcast.service.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -64,8 +65,15 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
 
     from wearcast.service import job_store
     from wearcast.service.auth import KeyCache, bootstrap_admin_key, require_key
+    from wearcast.service.housekeeping import clean_after_restart, stop_import_workers
     from wearcast.service.jobs import JobRunner
-    from wearcast.service.middleware import AuditTrail, ProblemGuard, RateLimiter, RequestGuard
+    from wearcast.service.middleware import (
+        AuditTrail,
+        ProblemGuard,
+        RateLimiter,
+        RequestGuard,
+        check_request_values,
+    )
     from wearcast.service.routes import health
 
     settings = settings or Settings()
@@ -87,14 +95,16 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.state.jobs = runner
     app.state.simulations = runner  # the name the simulation and fit routes use
     if migrate:  # this process starts the service: jobs left running by the last one died
+        clean_after_restart(database.session_factory, settings.data_dir)
         runner.recover(all_running=True)
         if job_store.queued_ids(database.session_factory):
             runner.start()
     app.router.add_event_handler("startup", runner.start)
     app.router.add_event_handler("shutdown", runner.shutdown)
+    app.router.add_event_handler("shutdown", stop_import_workers)
     install_handlers(app)
     app.include_router(health.router, prefix="/v1")
-    secured = [Depends(require_key)]
+    secured = [Depends(require_key), Depends(check_request_values)]
     for module in _router_modules():
         app.include_router(module.router, prefix="/v1", dependencies=secured)
     app.add_middleware(AuditTrail, factory=database.session_factory)
@@ -108,6 +118,32 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.add_middleware(ProblemGuard)
     app.openapi = lambda: problem_openapi(app)  # type: ignore[method-assign]
     return app
+
+
+INT64 = (-(2**63), 2**63 - 1)
+
+
+def _bound_integers(schema: Any) -> None:
+    """Publish the 64-bit range on every integer without bounds (the server refuses others)."""
+    if isinstance(schema, dict):
+        if schema.get("type") == "integer":
+            schema.setdefault("minimum", INT64[0])
+            schema.setdefault("maximum", INT64[1])
+        for value in schema.values():
+            _bound_integers(value)
+    elif isinstance(schema, list):
+        for value in schema:
+            _bound_integers(value)
+
+
+def _bound_strings(schema: Any, max_length: int) -> None:
+    """Publish the longest path or query value the request guard lets through."""
+    if isinstance(schema, dict):
+        if schema.get("type") == "string":
+            schema["maxLength"] = min(schema.get("maxLength", max_length), max_length)
+        for key in ("anyOf", "oneOf", "allOf"):
+            for value in schema.get(key, []):
+                _bound_strings(value, max_length)
 
 
 def problem_openapi(app: FastAPI) -> dict[str, Any]:
@@ -125,10 +161,17 @@ def problem_openapi(app: FastAPI) -> dict[str, Any]:
     for name in ("HTTPValidationError", "ValidationError"):
         components.pop(name, None)
     ref = {"$ref": "#/components/schemas/Problem"}
+    settings: Settings = app.state.settings
+    for definition in components.values():
+        _bound_integers(definition)
     for path, operations in schema.get("paths", {}).items():
         for operation in operations.values():
             if not isinstance(operation, dict) or "responses" not in operation:
                 continue
+            for parameter in operation.get("parameters", []):
+                _bound_integers(parameter.get("schema", {}))
+                _bound_strings(parameter.get("schema", {}), settings.max_id_length
+                               if parameter.get("in") == "path" else MAX_QUERY_VALUE_CHARS)
             statuses = dict(COMMON_ERRORS)
             if operation.get("security"):
                 statuses |= SECURED_ERRORS

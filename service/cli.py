@@ -131,6 +131,21 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
                     timeout_graceful_shutdown=10)
 
 
+@app.command()
+def worker(processes: Annotated[int, typer.Option(min=1, help="worker processes")] = 1,
+           threads: Annotated[int, typer.Option(min=1, help="threads per process")] = 1,
+           ) -> None:
+    """Run jobs from the queue (``WEARCAST_JOB_QUEUE=dramatiq`` on the API): Dramatiq worker
+    processes on ``WEARCAST_BROKER_URL`` and the API's database."""
+    import os
+    import sys
+
+    database = _database()  # migrated before any job runs
+    database.dispose()
+    os.execvp(sys.executable, [sys.executable, "-m", "dramatiq", "wearcast.service.job_queue",
+                               "--processes", str(processes), "--threads", str(threads)])
+
+
 def serve_app() -> Any:
     """The app of one ``serve --workers N`` worker process (database already migrated)."""
     from wearcast.service.app import create_app
@@ -140,8 +155,12 @@ def serve_app() -> Any:
 
 @app.command()
 def migrate() -> None:
-    """Bring the database schema to the newest migration."""
+    """Bring the database schema to the newest migration (and make sure an admin API key
+    exists: ``WEARCAST_API_KEY``, or one created and printed on the first run)."""
+    from wearcast.service.auth import bootstrap_admin_key
+
     database = _database()
+    bootstrap_admin_key(database.session_factory, database.settings)
     console.print(f"migrated {database.settings.resolved_database_url}")
     database.dispose()
 

@@ -110,7 +110,10 @@ def run_diagnosis(session: Session, model_id: int, body: DiagnoseIn) -> Diagnosi
     cal_ids = set(session.scalars(select(link.measurement_id).where(link.model_id == model_id)))
     filter_ = dict(body.filter)
     filter_.setdefault("kind", "profile")
-    ids = sorted(set(measurement_store.matching_ids(session, filter_, "filter")) | cal_ids)
+    matched = set(measurement_store.matching_ids(session, filter_, "filter"))
+    if body.filter and not matched:  # not silently the calibration set alone
+        raise Unprocessable("filter", "no profile measurements match the filter")
+    ids = sorted(matched | cal_ids)
     frame, curves = measurement_store.calibration_frame(session, ids)
     if frame.empty:
         raise Unprocessable("filter", "no profile measurements match the filter")

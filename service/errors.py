@@ -170,6 +170,23 @@ def _http_exception_items(exc: StarletteHTTPException, request: Request) -> list
     return [{"loc": [], "field": "request", "reason": str(detail)}]
 
 
+def allowed_methods(app: Any, path: str) -> list[str]:
+    """The methods the published contract (OpenAPI) documents for ``path``."""
+    import re
+
+    table = getattr(app.state, "allowed_methods", None)
+    if table is None:
+        table = []
+        for template, operations in app.openapi().get("paths", {}).items():
+            pattern = "^" + re.sub(r"\\\{[^}]+\\\}", "[^/]+", re.escape(template)) + "$"
+            table.append((re.compile(pattern), sorted(m.upper() for m in operations)))
+        app.state.allowed_methods = table
+    for pattern, methods in table:
+        if pattern.match(path):
+            return methods
+    return []
+
+
 def install_handlers(app: FastAPI) -> None:
     """Register the handlers on ``app`` (problem details for every error)."""
 
@@ -183,8 +200,11 @@ def install_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(StarletteHTTPException)
     async def _http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        headers = dict(getattr(exc, "headers", None) or {})
+        if exc.status_code == 405:
+            headers["Allow"] = ", ".join(allowed_methods(request.app, request.url.path))
         return problem_response(exc.status_code, _http_exception_items(exc, request),
-                                headers=getattr(exc, "headers", None))
+                                headers=headers or None)
 
     @app.exception_handler(DataError)
     async def _data_error(_request: Request, exc: DataError) -> JSONResponse:

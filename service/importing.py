@@ -33,6 +33,8 @@ import math
 import multiprocessing
 import os
 import threading
+import zipfile
+import zlib
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -48,7 +50,8 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
-from wearcast.service.errors import ApiError, NotFound, Unprocessable
+from wearcast.service.errors import ApiError, Conflict, NotFound, Unprocessable
+from wearcast.service.readers.bundle import ZipLimits
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ParameterRecord, ProfileRecord
 from wearcast.service.reference_store import (
@@ -117,13 +120,16 @@ def _finite_or_none(value: Any) -> float | None:
 class _Registry:
     """Per-import caches of wheels, vehicles and route names, checked for consistency."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: Session, defer_writes: bool = False) -> None:
         self.session = session
         self.wheels: dict[str, tuple[str, str, int, str]] = {}
         self.vehicles: set[str] = set()
         self.routes: dict[str, str] = {}
         self.references: dict[str, ReferenceSpec] = {}
         self.own_wheels: set[str] = set()
+        #: with ``defer_writes`` new wheels are kept here and inserted by ``write_new``
+        self.defer_writes = defer_writes
+        self.new_wheels: dict[str, dict[str, Any]] = {}
         for route_id, name in session.execute(select(db.Route.id, db.Route.name)):
             self.routes[str(route_id)] = name
             self.routes[name] = name
@@ -177,6 +183,9 @@ class _Registry:
                         f"{have!r}, this measurement says {got!r}",
                         line=meta.source_line, field=name)
         if not new_wheels:
+            return
+        if self.defer_writes:
+            self.new_wheels.update(new_wheels)
             return
         vehicles = {w["vehicle_id"] for w in new_wheels.values()} - self.vehicles
         if vehicles:
@@ -487,6 +496,25 @@ class _Counts:
         return tuple((self.warnings + self.infos)[:MAX_WARNINGS])
 
 
+def collect_warnings(counts: _Counts, registry: _Registry, records: list[Record],
+                     rows: list[dict[str, Any]]) -> None:
+    """Count the rows' warnings into ``counts`` (the answer lists warnings before infos, each
+    in file order, up to ``MAX_WARNINGS``) and note the wheels whose baseline is their own
+    first measurement."""
+    for record, row in zip(records, rows, strict=True):
+        if is_own_baseline(record.meta.reference_profile):
+            registry.own_wheels.add(record.meta.wheel_id)
+        for warning in row.get("warnings") or ():
+            counts.warnings_total += 1
+            kept = counts.warnings if warning["level"] == "warning" else counts.infos
+            if len(kept) < MAX_WARNINGS:
+                line = (record.manifest_line if isinstance(record, ProfileRecord)
+                        and record.manifest_line is not None else record.meta.source_line)
+                kept.append({"file": record.meta.source_file or None, "line": line,
+                             "wheel_id": record.meta.wheel_id,
+                             "mileage_km": record.meta.mileage_km, **warning})
+
+
 def store_records(session: Session, records: Iterable[Record], batch_id: int | None, *,
                   chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None,
                   ) -> tuple[_Counts, list[int]]:
@@ -507,19 +535,7 @@ def store_records(session: Session, records: Iterable[Record], batch_id: int | N
         profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
         done = dict(zip(map(id, profiles), processed(), strict=True))
         rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
-        for record, row in zip(fresh, rows, strict=True):
-            if is_own_baseline(record.meta.reference_profile):
-                registry.own_wheels.add(record.meta.wheel_id)
-            for warning in row.get("warnings") or ():
-                counts.warnings_total += 1
-                # the answer lists warnings before infos, each in file order, up to the cap
-                kept = counts.warnings if warning["level"] == "warning" else counts.infos
-                if len(kept) < MAX_WARNINGS:
-                    line = (record.manifest_line if isinstance(record, ProfileRecord)
-                            and record.manifest_line is not None else record.meta.source_line)
-                    kept.append({"file": record.meta.source_file or None, "line": line,
-                                 "wheel_id": record.meta.wheel_id,
-                                 "mileage_km": record.meta.mileage_km, **warning})
+        collect_warnings(counts, registry, fresh, rows)
         counts.points += sum(r["n_points"] for r in rows)
         if batch_id is None:
             for row in rows:
@@ -604,17 +620,41 @@ def iter_records(stream: BinaryIO, file_name: str, manifest: bytes | None,
     yield from iter_upload(stream, file_name, manifest=manifest)
 
 
+#: Errors of a damaged or unsupported upload raised while it is read (a zip member with a bad
+#: CRC, a truncated deflate stream, an encrypted member, bytes that are not UTF-8 text).
+DAMAGED_UPLOAD = (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError,
+                  UnicodeDecodeError, zipfile.LargeZipFile)
+
+
+def _limits(settings: Any) -> ZipLimits:
+    return ZipLimits(max_members=settings.max_zip_members,
+                     max_member_bytes=settings.max_decompressed_bytes,
+                     max_total_bytes=settings.max_decompressed_bytes,
+                     max_line_bytes=settings.max_line_bytes, max_columns=settings.max_columns)
+
+
 def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: str, *,
                   manifest: bytes | None = None, manifest_name: str | None = None,
                   idempotency_key: str | None = None, chunk_size: int = DEFAULT_CHUNK,
-                  progress: Progress | None = None) -> ImportResult:
-    """Import one upload atomically; see the module docstring for the rules."""
+                  progress: Progress | None = None, settings: Any = None) -> ImportResult:
+    """Import one upload atomically; see the module docstring for the rules.
+
+    The records are read, checked and processed before the batch's transaction starts
+    (:mod:`wearcast.service.import_staging`), so the write lock is held only for the
+    inserts. ``settings`` (default: the serving app's, else the environment's) gives the
+    limits: zip members and decompressed size, CSV line length and columns, points per
+    profile (422 naming the limit).
+    """
+    from wearcast.service import idempotency
+    from wearcast.service.import_staging import stage_records, write_stage
+
+    if settings is None:
+        from wearcast.service.auth import current_settings
+        from wearcast.service.settings import Settings
+
+        settings = current_settings.get() or Settings()
     if idempotency_key is not None and not 1 <= len(idempotency_key) <= 200:
         raise Unprocessable("Idempotency-Key", "must be 1 to 200 characters")
-    if idempotency_key is not None:
-        found = _existing_batch(session, key=idempotency_key)
-        if found is not None:
-            return _duplicate(session, found)
     file_sha, size = rawfiles.sha256_of_stream(stream)
     if size == 0:
         raise Unprocessable("file", f"{file_name} is empty")
@@ -622,15 +662,56 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
     if manifest is not None:
         digest.update(b"\0manifest\0" + hashlib.sha256(manifest).hexdigest().encode())
     checksum = digest.hexdigest()
+    if idempotency_key is not None:
+        found = _existing_batch(session, key=idempotency_key)
+        if found is not None:
+            if found.checksum_sha256 != checksum:
+                raise Unprocessable("Idempotency-Key", "this key was used for a different "
+                                    "request (another file or manifest); use a new key")
+            return _duplicate(session, found)
+        done_batch = idempotency.claim(session, idempotency_key, checksum)
+        if done_batch is not None:
+            batch_row = session.get(db.ImportBatch, done_batch)
+            if batch_row is not None:
+                return _duplicate(session, batch_row)
+    try:
+        result = _import_claimed(session, raw_dir, stream, file_name, file_sha, checksum,
+                                 manifest, manifest_name, idempotency_key, chunk_size,
+                                 progress, settings, stage_records, write_stage)
+    except BaseException:
+        if idempotency_key is not None:
+            idempotency.release(session, idempotency_key)
+        raise
+    if idempotency_key is not None:
+        idempotency.complete(session, idempotency_key, result.batch_id)
+    return result
+
+
+def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name: str,
+                    file_sha: str, checksum: str, manifest: bytes | None,
+                    manifest_name: str | None, idempotency_key: str | None, chunk_size: int,
+                    progress: Progress | None, settings: Any, stage_records: Any,
+                    write_stage: Any) -> ImportResult:
     found = _existing_batch(session, checksum=checksum)
     if found is not None:
         return _duplicate(session, found)
     stored_files: list[rawfiles.StoredFile] = []
+    stage = None
     try:
         stored_files.append(rawfiles.store(raw_dir, stream, file_sha))
         if manifest is not None:
             stored_files.append(rawfiles.store(raw_dir, io.BytesIO(manifest),
                                                hashlib.sha256(manifest).hexdigest()))
+        from wearcast.service.readers.bundle import iter_upload
+
+        records = iter_upload(stream, file_name, manifest=manifest, limits=_limits(settings))
+        stage = stage_records(session, records, chunk_size=chunk_size,
+                              tmp_dir=raw_dir.parent / "tmp",
+                              max_points=settings.max_points_per_profile,
+                              max_id_length=settings.max_id_length, progress=progress)
+        session.rollback()  # end the reads; the write transaction starts below
+        if stage.counts.records == 0:
+            raise Unprocessable("file", f"{file_name} holds no measurements")
         batch = db.ImportBatch(checksum_sha256=checksum, idempotency_key=idempotency_key,
                                file_name=file_name, n_records=0, n_created=0, n_duplicates=0,
                                n_points=0)
@@ -643,26 +724,30 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
                                    sha256=stored.sha256, size_bytes=stored.size_bytes,
                                    storage_path=stored.relative_path))
         session.flush()
-        records = iter_records(stream, file_name, manifest, manifest_name)
-        counts, _ = store_records(session, records, batch.id, chunk_size=chunk_size,
-                                  progress=progress)
-        if counts.records == 0:
-            raise Unprocessable("file", f"{file_name} holds no measurements")
+        counts = write_stage(session, stage, batch.id)
         batch.n_records, batch.n_created = counts.records, counts.created
         batch.n_duplicates, batch.n_points = counts.duplicates, counts.points
         session.commit()
     except ImportFileError as exc:
         _abort(session, raw_dir, stored_files)
         raise import_file_error(exc) from exc
+    except DAMAGED_UPLOAD as exc:
+        _abort(session, raw_dir, stored_files)
+        raise Unprocessable("file", f"{file_name} is damaged or not readable: "
+                            f"{type(exc).__name__}: {str(exc)[:200]}") from exc
     except IntegrityError as exc:
         _abort(session, raw_dir, stored_files)
         found = _existing_batch(session, checksum=checksum, key=idempotency_key)
         if found is not None:  # a concurrent import of the same content won the race
             return _duplicate(session, found)
-        raise Unprocessable("file", f"{file_name} conflicts with stored data: {exc.orig}") from exc
+        raise Conflict("file", f"{file_name} conflicts with data stored meanwhile; "
+                       "try again") from exc
     except BaseException:
         _abort(session, raw_dir, stored_files)
         raise
+    finally:
+        if stage is not None:
+            stage.close()
     return ImportResult(batch_id=batch.id, duplicate=False, file_name=file_name,
                         records=counts.records, created=counts.created,
                         duplicates=counts.duplicates, points=counts.points,

@@ -72,20 +72,34 @@ def run(job_id: int) -> None:
 
 
 _BROKER_URL = os.environ.get("WEARCAST_BROKER_URL", "redis://127.0.0.1:6379/0")
-run_job_actor = dramatiq.actor(actor_name="wearcast_run_job", queue_name=QUEUE_NAME,
-                               max_retries=0, time_limit=BROKER_TIME_LIMIT_MS,
-                               broker=_broker(_BROKER_URL))(run)
+
+
+@cache
+def _actor(url: str) -> Any:
+    """The job actor on the broker at ``url`` (workers declare it on WEARCAST_BROKER_URL)."""
+    broker = _broker(url) if url == _BROKER_URL else RedisBroker(url=url)
+    return dramatiq.actor(actor_name="wearcast_run_job", queue_name=QUEUE_NAME, max_retries=0,
+                          time_limit=BROKER_TIME_LIMIT_MS, broker=broker)(run)
+
+
+run_job_actor = _actor(_BROKER_URL)
 
 
 def enqueue(broker_url: str, job_id: int) -> bool:
     """Send a job's id to the workers; False (logged) when the broker cannot be reached: the
     job stays queued in the database and is sent again by the next recovery."""
-    if broker_url != _BROKER_URL:
-        raise RuntimeError("WEARCAST_BROKER_URL differs between the settings and the "
-                           "environment the job_queue module read; set it in the environment")
     try:
-        run_job_actor.send(int(job_id))
+        _actor(broker_url).send(int(job_id))
     except Exception as exc:
         log.warning("broker unreachable, job %s stays queued: %s", job_id, exc)
         return False
     return True
+
+
+def broker_reachable(url: str, timeout_s: float = 1.0) -> bool:
+    import redis
+
+    try:
+        return bool(redis.Redis.from_url(url, socket_connect_timeout=timeout_s).ping())
+    except Exception:
+        return False

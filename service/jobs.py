@@ -132,11 +132,16 @@ class JobRunner:
         return None
 
     def _work(self) -> None:
+        failures = 0
         while not self._stop.is_set():
             try:
                 job_id = self._next()
-            except Exception:  # the database is away for a moment: try again later
-                log.exception("job worker could not read the queue")
+                failures = 0
+            except Exception as exc:  # the database is away for a moment: try again later
+                failures += 1
+                if failures == 1 or failures % 30 == 0:
+                    log.warning("job worker could not read the queue (%d times): %s",
+                                failures, exc)
                 job_id = None
             if job_id is None:
                 with self._wake:
@@ -160,8 +165,8 @@ class JobRunner:
                 for job_id in running:
                     job_store.set_job(self.factory, job_id, heartbeat_at=job_store.now_utc())
                 self.recover(dispatch_all=False)
-            except Exception:
-                log.exception("job sweep failed")
+            except Exception as exc:
+                log.warning("job sweep failed: %s", exc)
 
 
 def runner_of(app: Any) -> JobRunner:

@@ -7,8 +7,9 @@
 * :class:`RequestGuard`: refuses, before any route runs, bodies beyond the size limits (413
   naming the limit, checked on ``Content-Length`` and again while the body streams),
   cross-site writes (403: an ``Origin`` that is not allowed, or ``Sec-Fetch-Site:
-  cross-site``), and path or query values no route could use (422: NUL bytes, integers
-  beyond 64 bits, over-long values).
+  cross-site``) and undocumented methods on literal paths (405 with ``Allow``).
+* :func:`check_request_values` (a dependency after the key check): path or query values no
+  route could use (422: NUL bytes, integers beyond 64 bits, over-long values).
 * :class:`AuditTrail`: one :class:`~wearcast.service.models_access.AuditRecord` per accepted
   write, naming the key, the entity and its id.
 * :class:`RateLimiter`: a token bucket per key (429 with ``Retry-After``), called by
@@ -29,6 +30,7 @@ from urllib.parse import parse_qsl
 
 from fastapi.exceptions import HTTPException
 from starlette.concurrency import run_in_threadpool
+from starlette.requests import Request
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from wearcast.service.errors import ApiError, LimitExceeded, problem_body
@@ -37,8 +39,9 @@ from wearcast.service.settings import Settings
 log = logging.getLogger(__name__)
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 _DIGITS = re.compile(r"^[+-]?\d+$")
+_LONG_DIGITS = re.compile(rb"\d{19,}")
 INT64_MAX = 2**63 - 1
-MAX_QUERY_VALUE_CHARS = 8192
+MAX_QUERY_VALUE_CHARS = 1000
 
 
 async def send_problem(send: Send, status: int, items: list[dict[str, Any]],
@@ -119,8 +122,70 @@ def _value_problem(value: str, max_chars: int) -> str | None:
     return None
 
 
+def _literal_path_methods(scope: Scope) -> list[str] | None:
+    """The documented methods when the path is one of the contract's literal paths."""
+    app = scope.get("app")
+    if app is None or not hasattr(app, "openapi"):
+        return None
+    table = getattr(app.state, "literal_paths", None)
+    if table is None:
+        table = {path: sorted(m.upper() for m in operations)
+                 for path, operations in app.openapi().get("paths", {}).items()
+                 if "{" not in path}
+        app.state.literal_paths = table
+    return table.get(scope.get("path", ""))
+
+
+async def check_request_values(request: Request) -> None:
+    """422 for path or query values no route could use (NUL bytes, integers beyond 64 bits,
+    over-long values); a dependency run after the key check, so a request without a key gets
+    401 whatever its values."""
+    settings = request.app.state.settings
+    for segment in request.url.path.split("/"):
+        problem = _value_problem(segment, settings.max_id_length)
+        if problem:
+            raise ApiError(422, "path", f"a path segment {problem}")
+    item = _query_problem(request.scope.get("query_string", b""), MAX_QUERY_VALUE_CHARS)
+    if item:
+        raise ApiError(422, item["field"], item["reason"])
+    if request.headers.get("content-type", "").startswith("application/json"):
+        field = _big_integer_field(await request.body())
+        if field is not None:
+            raise ApiError(422, field, "integer out of the 64-bit range")
+
+
+def _big_integer_field(body: bytes) -> str | None:
+    """The field of a JSON body holding an integer beyond 64 bits (None when there is none
+    or the body is not JSON: request validation names that)."""
+    if not body or not _LONG_DIGITS.search(body):  # no run of 19+ digits: nothing to walk
+        return None
+    try:
+        value = json.loads(body)
+    except (ValueError, RecursionError):
+        return None
+
+    def find(node: Any, path: str) -> str | None:
+        if isinstance(node, bool):
+            return None
+        if isinstance(node, int) and not -(2**63) <= node <= INT64_MAX:
+            return path or "body"
+        if isinstance(node, dict):
+            for key, child in node.items():
+                found = find(child, f"{path}.{key}" if path else str(key))
+                if found:
+                    return found
+        if isinstance(node, list):
+            for i, child in enumerate(node):
+                found = find(child, f"{path}[{i}]")
+                if found:
+                    return found
+        return None
+
+    return find(value, "")
+
+
 class RequestGuard:
-    """Size limits, cross-site writes and unusable path/query values, before routing."""
+    """Size limits, cross-site writes and methods of literal paths, before routing."""
 
     def __init__(self, app: ASGIApp, settings: Settings) -> None:
         self.app = app
@@ -152,18 +217,14 @@ class RequestGuard:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        # the path: NUL bytes, integers beyond 64 bits, over-long segments
-        for segment in scope.get("path", "").split("/"):
-            problem = _value_problem(segment, self.settings.max_id_length * 4)
-            if problem:
-                await send_problem(send, 422, [{"loc": ["path"], "field": "path",
-                                                "reason": f"a path segment {problem}"}])
-                return
-        query_problem = _query_problem(scope.get("query_string", b""), MAX_QUERY_VALUE_CHARS)
-        if query_problem:
-            await send_problem(send, 422, [query_problem])
-            return
         method = scope.get("method", "GET")
+        allowed = _literal_path_methods(scope)
+        if allowed is not None and method not in allowed:
+            # a literal path (``/v1/measurements/import``) is not an id of a templated one
+            await send_problem(send, 405, [{"loc": ["method"], "field": "method",
+                                            "reason": f"{method} is not allowed here"}],
+                               {"allow": ", ".join(allowed)})
+            return
         if method not in SAFE_METHODS:
             reason = self._cross_site(scope)
             if reason:

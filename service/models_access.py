@@ -11,8 +11,10 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from sqlalchemy import DateTime, Integer, String, func
+from sqlalchemy import DateTime, Integer, String, event, func
+from sqlalchemy import inspect as sa_inspect
 from sqlalchemy.orm import Mapped, mapped_column
+from sqlalchemy.orm.attributes import set_committed_value
 
 from wearcast.service.models_db import Base
 
@@ -69,3 +71,20 @@ class IdempotencyKey(Base):
     batch_id: Mapped[int | None] = mapped_column(Integer)
     created_at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True),
                                                     server_default=func.now())
+
+
+def _aware_datetimes(target: Any, _context: Any = None) -> None:
+    """SQLite gives back ``DateTime(timezone=True)`` columns without their zone; they are
+    stored in UTC, so every loaded row gets UTC attached (answers carry an offset, as their
+    OpenAPI ``date-time`` format requires)."""
+    for attr in sa_inspect(type(target)).column_attrs:
+        value = target.__dict__.get(attr.key)
+        if isinstance(value, dt.datetime) and value.tzinfo is None:
+            set_committed_value(target, attr.key, value.replace(tzinfo=dt.UTC))
+
+
+event.listen(Base, "load", _aware_datetimes, propagate=True)
+event.listen(Base, "refresh", lambda target, context, _attrs: _aware_datetimes(target),
+             propagate=True)
+event.listen(Base, "refresh_flush",
+             lambda target, context, _attrs: _aware_datetimes(target), propagate=True)

@@ -7,7 +7,7 @@ accept only their documented values, so every bad input is a 422 naming its fiel
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -19,6 +19,12 @@ Measure = Literal["tau_max", "t_gamma"]
 RunningMode = Literal["lead", "mixed"]
 FilterValue = str | int | float | bool | None
 Filter = dict[str, FilterValue | list[FilterValue]]
+
+
+#: Largest mileage [km] accepted anywhere (a wheel runs a few million km in its life).
+MAX_MILEAGE_KM = 1e8
+#: Most points of one measured profile (instruments give a few hundred to a few thousand).
+MAX_PROFILE_POINTS = 20_000
 
 
 class Strict(BaseModel):
@@ -189,17 +195,17 @@ class MeasurementIn(Strict):
     bogie_type: BogieType
     axle: Axle
     side: Side
-    mileage_km: float = Field(ge=0)
+    mileage_km: float = Field(ge=0, le=MAX_MILEAGE_KM)
     measured_on: dt.date | None = None
-    route_id: int | str | None = None
+    route_id: int | Annotated[str, Field(max_length=200)] | None = None
     running_mode: RunningMode | None = None
-    instrument_id: str | None = None
-    load_t: float | None = Field(default=None, ge=0)
-    reference_profile: str = "S1002"
-    covariates: dict[str, FilterValue] = Field(default_factory=dict)
+    instrument_id: str | None = Field(default=None, max_length=200)
+    load_t: float | None = Field(default=None, ge=0, le=1000)
+    reference_profile: str = Field(default="S1002", max_length=100)
+    covariates: dict[str, FilterValue] = Field(default_factory=dict, max_length=100)
     diameter_mm: float | None = Field(default=None, gt=0, le=2000)
-    y_mm: list[float] | None = None
-    z_mm: list[float] | None = None
+    y_mm: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
+    z_mm: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
     sd_mm: float | None = None
     sh_mm: float | None = None
     qr_mm: float | None = None
@@ -377,6 +383,8 @@ class PredictIn(RouteRef):
         for i, value in enumerate(values):
             if value < 0:
                 raise ValueError(f"mileage_km[{i}] = {value} is negative")
+            if value > MAX_MILEAGE_KM:
+                raise ValueError(f"mileage_km[{i}] = {value:g} is beyond {MAX_MILEAGE_KM:g} km")
         return values
 
 

@@ -57,6 +57,9 @@ class ZipLimits:
     max_ratio: float = 300.0
     #: members smaller than this are exempt from the ratio test
     ratio_exempt_bytes: int = 1024**2
+    #: CSV files: the longest line [bytes] and the most header columns (checked streaming)
+    max_line_bytes: int = 1024**2
+    max_columns: int = 512
 
 
 DEFAULT_LIMITS = ZipLimits()
@@ -93,10 +96,14 @@ def _read_all(data_or_stream: bytes | BinaryIO) -> bytes:
     return data_or_stream.read()
 
 
-def _csv_records(stream: IO[bytes], name: str) -> Iterator[Record]:
+def _csv_records(stream: IO[bytes], name: str,
+                 limits: ZipLimits = DEFAULT_LIMITS) -> Iterator[Record]:
     """Sniff the header, then stream the right CSV reader over the whole file."""
+    from wearcast.service.upload_limits import guarded
+
     if not stream.seekable():
         stream = io.BytesIO(stream.read())
+    stream = guarded(stream, name, limits.max_line_bytes, limits.max_columns)
     start = stream.tell()
     columns = read_header(stream, name)
     try:
@@ -287,11 +294,11 @@ def _zip_records(data_or_stream: bytes | BinaryIO, name: str, manifest: Manifest
             if ext == ".csv":
                 if keep_raw:
                     csv_raw = RawMember.of(display, archive.read(info))
-                    for record in _csv_records(io.BytesIO(csv_raw.data), display):
+                    for record in _csv_records(io.BytesIO(csv_raw.data), display, limits):
                         yield record, csv_raw
                 else:
                     with archive.open(info) as member:
-                        for record in _csv_records(member, display):
+                        for record in _csv_records(member, display, limits):
                             yield record, None
             else:
                 data = archive.read(info)
@@ -321,10 +328,10 @@ def _iter(data_or_stream: bytes | BinaryIO, file_name: str, manifest: ManifestAr
     elif ext == ".csv":
         if keep_raw:
             csv_raw = RawMember.of(file_name, _read_all(data_or_stream))
-            for record in _csv_records(io.BytesIO(csv_raw.data), file_name):
+            for record in _csv_records(io.BytesIO(csv_raw.data), file_name, limits):
                 yield record, csv_raw
         else:
-            for record in _csv_records(_as_stream(data_or_stream), file_name):
+            for record in _csv_records(_as_stream(data_or_stream), file_name, limits):
                 yield record, None
     else:
         data = _read_all(data_or_stream)

@@ -90,6 +90,11 @@ def revoke_api_key(key_id: EntityId, session: SessionDep, request: Request) -> A
     row = session.get(ApiKey, key_id)
     if row is None:
         raise NotFound("key_id", f"no API key with id {key_id}")
+    configured = request.app.state.settings.api_key
+    if configured is not None and row.key_sha256 == auth.key_hash(
+            configured.get_secret_value()):
+        raise Conflict("key_id", "this is the key set by WEARCAST_API_KEY; change the "
+                       "service's environment to replace it")
     if "admin" in row.scopes.split(",") and row.revoked_at is None:
         admins = session.scalar(select(func.count()).select_from(ApiKey).where(
             ApiKey.revoked_at.is_(None), ApiKey.scopes.contains("admin")))

@@ -142,7 +142,8 @@ def profile_picture(model_id: int, session: SessionDep, route_id: str,
     return Response(content=image, media_type=pictures.MEDIA_TYPES[format])
 
 
-@router.post("/models/{model_id}/diagnose", response_model=DiagnosisOut)
+@router.post("/models/{model_id}/diagnose", response_model=DiagnosisOut,
+             responses={200: {"content": {"text/html": {}}}})
 def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep,
              format: Literal["json", "html"] = "json") -> Response:
     """What the calibrated model gets wrong, the cause, the extension and its gain.

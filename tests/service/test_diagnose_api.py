@@ -160,8 +160,8 @@ def test_diagnose_refuses_bad_input(tmp_path):
     assert "traction" in r.json()["errors"][0]["reason"]
     r = client.post(f"/v1/models/{model_id}/diagnose",
                     json={"filter": {"vehicle_id": "nobody"}, "causes": ["traction"]})
-    # only the calibration measurements remain (one unit): still two wheels -> it runs
-    assert r.status_code == 200, r.text
+    # a filter matching nothing is said so, not answered over the calibration set alone
+    assert r.status_code == 422 and "no profile measurements match" in r.text
     r = client.post("/v1/models/999/diagnose", json={})
     assert r.status_code == 404 and r.json()["errors"][0]["field"] == "model_id"
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"bogus": 1})

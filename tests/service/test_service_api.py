@@ -216,12 +216,16 @@ def test_reimport_of_the_same_content_or_key_creates_nothing(client: TestClient,
                         files={"file": ("fleet.csv", fleet_csv, "text/csv")}).json()
     same_content = client.post("/v1/measurements/import",
                                files={"file": ("renamed.csv", fleet_csv, "text/csv")}).json()
-    other = fleet_csv.replace(b"\n", b"\r\n")  # different bytes, same key
     same_key = client.post("/v1/measurements/import", headers={"Idempotency-Key": "abc"},
-                           files={"file": ("other.csv", other, "text/csv")}).json()
+                           files={"file": ("fleet.csv", fleet_csv, "text/csv")}).json()
     for again in (same_content, same_key):
         assert again["duplicate"] is True and again["batch_id"] == first["batch_id"]
         assert again["created"] == 0
+    # the key reused with different bytes: refused (IETF idempotency-key draft), not dropped
+    other = fleet_csv.replace(b"\n", b"\r\n")
+    reused = client.post("/v1/measurements/import", headers={"Idempotency-Key": "abc"},
+                         files={"file": ("other.csv", other, "text/csv")})
+    assert reused.status_code == 422 and "Idempotency-Key" in reused.text
     assert _count(client, db.Measurement) == 32
     assert _count(client, db.ImportBatch) == 1
     # different bytes without the key: a new batch whose measurements are all duplicates

@@ -29,10 +29,25 @@ def test_the_default_service_keeps_sqlite_in_a_named_volume() -> None:
 
 def test_the_postgres_profile_runs_the_service_on_postgresql() -> None:
     services = _compose()["services"]
-    assert services["postgres"]["profiles"] == ["postgres"]
+    assert "postgres" in services["postgres"]["profiles"]
+    # no password is built in, and nothing is published beyond the loopback interface
+    assert "${POSTGRES_PASSWORD:?" in services["postgres"]["environment"]["POSTGRES_PASSWORD"]
+    assert all(port.startswith("127.0.0.1:") for service in services.values()
+               for port in service.get("ports", []))
     api = services["wearcast-pg"]
     assert api["profiles"] == ["postgres"]
     assert api["environment"]["WEARCAST_DATABASE_URL"].startswith("postgresql+psycopg://")
     assert "@postgres:5432/" in api["environment"]["WEARCAST_DATABASE_URL"]
     assert api["depends_on"]["postgres"]["condition"] == "service_healthy"
     assert api["build"]["dockerfile"] == "service/Dockerfile"  # the YAML anchor resolved
+
+
+def test_the_scale_profile_runs_workers_on_a_broker() -> None:
+    services = _compose()["services"]
+    api, worker = services["wearcast-scale"], services["worker"]
+    assert api["profiles"] == worker["profiles"] == ["scale"]
+    assert api["environment"]["WEARCAST_JOB_QUEUE"] == "dramatiq"
+    assert worker["environment"] == api["environment"]  # same database and broker
+    assert worker["command"][:2] == ["wearcast", "worker"]
+    assert worker["deploy"]["replicas"] == "${WEARCAST_WORKERS:-2}"
+    assert {"redis", "postgres"} <= set(worker["depends_on"])

@@ -1,0 +1,66 @@
+"""What a start cleans up after a previous process that was killed or crashed: temporary
+upload files, raw files no committed batch refers to, idempotency claims left in flight, and
+(at shutdown) the import worker processes.
+
+Run only by the one process that starts the service (``create_app(migrate=True)``, i.e.
+``wearcast serve``), when no import of this service can be running.
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+from pathlib import Path
+
+from sqlalchemy import select
+
+from wearcast.service import models_db as db
+from wearcast.service.db import SessionFactory
+
+log = logging.getLogger(__name__)
+
+
+def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, int]:
+    """Remove leftovers of interrupted imports; returns what was removed, by kind."""
+    from wearcast.service.idempotency import release_stale
+
+    removed = {"temporary": 0, "orphan_raw": 0, "idempotency_claims": 0}
+    raw_dir = data_dir / "raw"
+    tmp_dir = data_dir / "tmp"
+    if tmp_dir.is_dir():
+        for path in tmp_dir.iterdir():
+            if path.is_dir():
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
+            removed["temporary"] += 1
+    if raw_dir.is_dir():
+        with factory() as session:
+            referenced = set(session.scalars(select(db.RawFile.storage_path)))
+        for path in raw_dir.glob("*/*"):
+            relative = f"{path.parent.name}/{path.name}"
+            if path.name.startswith(".upload-"):
+                path.unlink(missing_ok=True)
+                removed["temporary"] += 1
+            elif path.is_file() and relative not in referenced:
+                path.unlink(missing_ok=True)  # written by an import that never committed
+                removed["orphan_raw"] += 1
+    with factory() as session:
+        removed["idempotency_claims"] = release_stale(session)
+    if any(removed.values()):
+        log.info("cleaned up after the last run: %s", removed)
+    return removed
+
+
+def stop_import_workers() -> None:
+    """Terminate the import pool's worker processes (at shutdown, e.g. on SIGTERM)."""
+    from wearcast.service import importing
+
+    pool = importing._POOL
+    if pool is None:
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    importing._discard_pool()
+    for process in processes:
+        if process.is_alive():
+            process.terminate()

@@ -1,0 +1,205 @@
+"""Imports staged outside the write lock: parse, check and process every record first, then
+insert the batch in one short transaction.
+
+Reading and processing an upload (profile cleaning, alignment, wear curves) is the slow part
+of an import; while it ran inside the batch's transaction, SQLite's single write lock was held
+for all of it and every other write waited. Here the rows are built first, with reads only,
+and spooled to an anonymous temporary file (unlinked at once: nothing is left behind by a
+kill), so memory stays flat however large the upload; then the batch, its raw-file rows, new
+vehicles and wheels (upserts: concurrent imports sharing them both succeed) and the
+measurements (a row another import stored meanwhile is skipped as a duplicate) are inserted
+in one transaction — the batch stays atomic and the lock is held only for the inserts.
+"""
+
+from __future__ import annotations
+
+import pickle
+import tempfile
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from itertools import islice
+from pathlib import Path
+from typing import IO, Any
+
+from sqlalchemy import func, insert, select, tuple_
+from sqlalchemy.orm import Session
+
+from wearcast.service import models_db as db
+from wearcast.service.importing import (
+    OWN_BASELINE,
+    Progress,
+    Record,
+    _Counts,
+    _Registry,
+    _submit,
+    apply_reference,
+    collect_warnings,
+    measurement_row,
+)
+from wearcast.service.readers.errors import ImportFileError
+from wearcast.service.readers.records import ProfileRecord
+
+
+def insert_ignoring_duplicates(session: Session, table: Any, index_elements: list[str]) -> Any:
+    """``INSERT ... ON CONFLICT DO NOTHING`` on SQLite and PostgreSQL (plain INSERT else)."""
+    from sqlalchemy.dialects import postgresql, sqlite
+
+    dialect = session.get_bind().dialect.name
+    if dialect == "postgresql":
+        return postgresql.insert(table).on_conflict_do_nothing(index_elements=index_elements)
+    if dialect == "sqlite":
+        return sqlite.insert(table).on_conflict_do_nothing(index_elements=index_elements)
+    return insert(table)
+
+
+def write_new_wheels(session: Session, registry: _Registry) -> None:
+    """Insert the vehicles and wheels a staged import found new (upserts: another import may
+    have stored them meanwhile), then check that every one is stored where the upload says."""
+    new = registry.new_wheels
+    if not new:
+        return
+    vehicles = sorted({w["vehicle_id"] for w in new.values()})
+    session.execute(insert_ignoring_duplicates(session, db.Vehicle, ["vehicle_id"]),
+                    [{"vehicle_id": v} for v in vehicles])
+    session.execute(insert_ignoring_duplicates(session, db.Wheel, ["wheel_id"]),
+                    list(new.values()))
+    stored = {row[0]: tuple(row[1:]) for row in session.execute(
+        select(db.Wheel.wheel_id, db.Wheel.vehicle_id, db.Wheel.bogie_type, db.Wheel.axle,
+               db.Wheel.side).where(db.Wheel.wheel_id.in_(list(new))))}
+    for wheel_id, wanted in new.items():
+        position = (wanted["vehicle_id"], wanted["bogie_type"], wanted["axle"], wanted["side"])
+        if stored.get(wheel_id) != position:
+            raise ImportFileError("upload", f"wheel {wheel_id!r} was stored meanwhile with "
+                                  f"another position {stored.get(wheel_id)!r}", field="wheel_id")
+
+
+@dataclass
+class Stage:
+    """Rows of an upload ready to insert, spooled to an anonymous temporary file."""
+
+    counts: _Counts
+    registry: _Registry
+    spool: IO[bytes]
+    chunks: int = 0
+    keys: set[tuple[str, float]] = field(default_factory=set)
+
+    def rows(self) -> Iterator[list[dict[str, Any]]]:
+        self.spool.seek(0)
+        for _ in range(self.chunks):
+            yield pickle.load(self.spool)
+
+    def close(self) -> None:
+        self.spool.close()
+
+
+def stage_records(session: Session, records: Iterable[Record], *, chunk_size: int,
+                  tmp_dir: Path | None = None, max_points: int | None = None,
+                  max_id_length: int = 200, progress: Progress | None = None) -> Stage:
+    """Read, check and process every record (reads only); the rows go to a spool file."""
+    registry = _Registry(session, defer_writes=True)
+    if tmp_dir is not None:
+        tmp_dir.mkdir(parents=True, exist_ok=True)
+    stage = Stage(_Counts(), registry, tempfile.TemporaryFile(dir=tmp_dir))
+    iterator = iter(records)
+
+    def spool(fresh: list[Record], handle: Any) -> None:
+        profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
+        done = dict(zip(map(id, profiles), handle(), strict=True))
+        rows = [measurement_row(r, None, registry, done.get(id(r))) for r in fresh]
+        collect_warnings(stage.counts, registry, fresh, rows)
+        stage.counts.points += sum(r["n_points"] for r in rows)
+        pickle.dump(rows, stage.spool, protocol=pickle.HIGHEST_PROTOCOL)
+        stage.chunks += 1
+
+    # a chunk's profiles are processed (in worker processes when large) while the next
+    # chunk is parsed and checked; its rows are spooled after that
+    pending: tuple[list[Record], Any, int] | None = None
+    try:
+        while chunk := list(islice(iterator, chunk_size)):
+            stage.counts.records += len(chunk)
+            if max_points is not None:
+                _check_points(chunk, max_points)
+            _check_texts(chunk, max_id_length)
+            keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
+            stored = {tuple(row) for row in session.execute(
+                select(db.Measurement.wheel_id, db.Measurement.mileage_km).where(
+                    tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
+            ).all()}
+            fresh = []
+            for record, key in zip(chunk, keys, strict=True):
+                if key in stored or key in stage.keys:
+                    stage.counts.duplicates += 1
+                    continue
+                stage.keys.add(key)
+                fresh.append(record)
+            if fresh:
+                registry.ensure_wheels(fresh)
+            handle = _submit([r for r in fresh if isinstance(r, ProfileRecord)], registry)
+            if pending is not None:
+                if pending[0]:
+                    spool(pending[0], pending[1])
+                if progress is not None:
+                    progress(pending[2])
+            pending = (fresh, handle, len(chunk))
+        if pending is not None:
+            if pending[0]:
+                spool(pending[0], pending[1])
+            if progress is not None:
+                progress(pending[2])
+    except BaseException:
+        stage.close()
+        raise
+    return stage
+
+
+#: Text fields of a measurement that are stored in bounded columns.
+TEXT_FIELDS = ("wheel_id", "vehicle_id", "route_id", "instrument_id", "reference_profile")
+
+
+def _check_texts(chunk: list[Record], max_id_length: int) -> None:
+    """Ids longer than their columns or text holding NUL bytes (which PostgreSQL cannot store)
+    are refused on every database alike, naming the field."""
+    for record in chunk:
+        meta = record.meta
+        for name in TEXT_FIELDS:
+            value = getattr(meta, name)
+            if isinstance(value, str) and (len(value) > max_id_length or "\x00" in value):
+                reason = ("holds a NUL byte" if "\x00" in value else
+                          f"is {len(value):,} characters long (limit max_id_length = "
+                          f"{max_id_length})")
+                raise ImportFileError(meta.source_file, f"{name} {reason}",
+                                      line=meta.source_line, field=name)
+        for key, value in meta.covariates.items():
+            if "\x00" in key or (isinstance(value, str) and "\x00" in value):
+                raise ImportFileError(meta.source_file, f"covariate {key[:50]!r} holds a NUL "
+                                      "byte", line=meta.source_line, field=key[:100])
+
+
+def _check_points(chunk: list[Record], max_points: int) -> None:
+    for record in chunk:
+        if isinstance(record, ProfileRecord) and len(record.y_mm) > max_points:
+            meta = record.meta
+            raise ImportFileError(meta.source_file, f"profile of wheel {meta.wheel_id!r} at "
+                                  f"{meta.mileage_km:g} km has {len(record.y_mm):,} points "
+                                  f"(limit max_points_per_profile = {max_points:,})",
+                                  line=meta.source_line, field="y_mm")
+
+
+def write_stage(session: Session, stage: Stage, batch_id: int) -> _Counts:
+    """Insert the staged rows under ``batch_id`` in the session's transaction; rows stored
+    meanwhile by another import count as duplicates. Returns the final counts."""
+    write_new_wheels(session, stage.registry)
+    statement = insert_ignoring_duplicates(session, db.Measurement, ["wheel_id", "mileage_km"])
+    for rows in stage.rows():
+        for row in rows:
+            row["batch_id"] = batch_id
+        session.execute(statement, rows)
+    created = int(session.scalar(select(func.count()).select_from(db.Measurement)
+                                 .where(db.Measurement.batch_id == batch_id)) or 0)
+    for wheel_id in sorted(stage.registry.own_wheels):  # baseline = own first measurement
+        session.flush()
+        apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
+    counts = stage.counts
+    counts.duplicates += len(stage.keys) - created
+    counts.created = created
+    return counts
