@@ -151,6 +151,10 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
         areas = {"flange": max(0.0, float(row["flange_area_mm2"])),
                  "tread": max(0.0, float(row["tread_area_mm2"]))}
         gone = state.mileage_km - float(row["mileage_km"])
+        # the model's Sd/Sh/qR followed from the measured ones, as reprofiling from a
+        # measured wheel does (statistics.reprofiling, "Starting from what was measured")
+        measured = {k: float(row[k]) for k in ("sd_mm", "sh_mm", "qr_mm")
+                    if k in row and row[k] is not None and math.isfinite(float(row[k]))}
         position = {"bogie_type": state.bogie_type, "axle": state.axle, "side": state.side}
         out = {}
         try:
@@ -162,7 +166,7 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
                 wanted = {**_RELAXED, key: limits.limit_of(name)}
                 r = stat_reprofiling.reprofiling_mileage(
                     model, route.route, inputs.table, limits=wanted, start_areas=areas,
-                    weighted_measures=measures, **position)
+                    weighted_measures=measures, start_parameters=measured or None, **position)
                 q = [max(v - gone, 0.0) if math.isfinite(v) else math.inf
                      for v in (r.mileage_p10_km, r.mileage_p50_km, r.mileage_p90_km)]
                 out[name] = Remaining(q[0], q[1], q[2], "model",
