@@ -22,7 +22,7 @@ from pathlib import Path
 import pandas as pd
 
 from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
-from wearcast.statistics.physics_diagnosis import diagnose_physics
+from wearcast.statistics.physics_diagnosis import CATALOGUE, diagnose_physics
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT.parent / "shared" / "reference" / "published"
@@ -34,7 +34,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--step", type=float, default=0.8, help="D_step [mm]")
     parser.add_argument("--km", type=float, default=8000.0, help="simulated mileage [km]")
+    parser.add_argument("--causes", default=",".join(c.name for c in CATALOGUE),
+                        help="comma-separated causes of the catalogue (default: all)")
     args = parser.parse_args()
+    wanted = args.causes.split(",")
+    unknown = set(wanted) - {c.name for c in CATALOGUE}
+    if unknown:
+        parser.error(f"unknown causes: {', '.join(sorted(unknown))}")
+    catalogue = tuple(c for c in CATALOGUE if c.name in wanted)
     measured_csv = REFERENCE / "aosta_measured_FH_FT_QR.csv"
     track_csv = REFERENCE / "aosta_statistical_track_nclass7.csv"
     if not measured_csv.exists():
@@ -56,7 +63,7 @@ def main() -> None:
         return sim
 
     t0 = time.perf_counter()
-    d = diagnose_physics(simulate, measured)
+    d = diagnose_physics(simulate, measured, catalogue=catalogue)
     print(f"physics diagnosis of the Aosta data: {time.perf_counter() - t0:.1f} s")
     print(json.dumps(d.to_dict(), indent=1, default=str))
 

@@ -203,13 +203,13 @@ def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: N
     return best
 
 
-def _holm(p: Sequence[float]) -> NDArray:
-    p = np.asarray(p, dtype=float)
+def _holm(pvalues: Sequence[float]) -> NDArray:
+    p = np.asarray(pvalues, dtype=float)
     order = np.argsort(p)
     adj = np.empty_like(p)
     running = 0.0
     for rank, i in enumerate(order):
-        running = max(running, (len(p) - rank) * p[i])
+        running = max(running, (len(p) - rank) * float(p[i]))
         adj[i] = min(1.0, running)
     return adj
 
@@ -270,7 +270,8 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     rng = np.random.default_rng(seed)
     unit = vehicles if group_by == "vehicle" else np.arange(km.size).astype(str)
     units = np.unique(unit)
-    pvals, findings = [], []
+    pvals: list[float] = []
+    findings: list[tuple[PhysicsCause, PhysicsGain, dict[str, Any], float]] = []
     for cause, after in rows:
         d_units = np.array([np.sum(before[unit == u] - after[unit == u]) for u in units])
         b_units = np.array([np.sum(before[unit == u]) for u in units])
@@ -287,10 +288,10 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
         lo, hi = np.percentile(boot, [2.5, 97.5])
         theta, scale, sse = _fit(_blends(cause, runs[cause.name]), km, y, cols)
-        findings.append([cause, PhysicsGain(float(before.mean()), float(after.mean()),
+        findings.append((cause, PhysicsGain(float(before.mean()), float(after.mean()),
                                             float(rel), float(lo), float(hi)),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
-                          "null_value": cause.null}, p])
+                          "null_value": cause.null}, p))
     adj = _holm(pvals) if pvals else np.array([])
     out = []
     for (cause, gain, ext, p), p_holm in zip(findings, adj, strict=True):
