@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.step_convergence import DEFAULT_TOLERANCE, StepConvergence, converge_steps
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
 from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear
 from wearcast.physics.wear_laws import WearLaw
@@ -122,6 +123,7 @@ class VehicleWearSimulation:
     depth_per_step_mm: float
     options: VehicleWearOptions
     law: str
+    convergence: StepConvergence | None = None
 
     def mean(self, quantity: str) -> NDArray:
         """Vehicle average of ``sd_mm`` | ``sh_mm`` | ``qr_mm`` per step (as measured) [mm]."""
@@ -140,7 +142,9 @@ class VehicleWearSimulation:
                 "ft_mm": self.mean("sd_mm").tolist(), "fh_mm": self.mean("sh_mm").tolist(),
                 "qr_mm": self.mean("qr_mm").tolist(), "contact_updates": self.contact_updates,
                 "contact_fallbacks": self.contact_fallbacks, "elapsed_s": self.elapsed_s,
-                "depth_per_step_mm": self.depth_per_step_mm, "law": self.law}
+                "depth_per_step_mm": self.depth_per_step_mm, "law": self.law,
+                "step_convergence": None if self.convergence is None
+                else self.convergence.to_dict()}
 
 
 def vehicle_bogies(vehicle: str | Sequence[tuple[BogieVehicle, int]],
@@ -284,6 +288,35 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         profiles_mm=profiles.reshape(n_b * 4, -1), contact_updates=updates,
         contact_fallbacks=fallbacks, elapsed_s=time.perf_counter() - start,
         depth_per_step_mm=depth_per_step_mm, options=opts, law=wl.name)
+
+
+def simulate_vehicle_wear_converged(vehicle: str | Sequence[tuple[BogieVehicle, int]],
+                                    route_classes: Any, *, first_step_mm: float = 0.8,
+                                    max_halvings: int = 2,
+                                    tolerance: float = DEFAULT_TOLERANCE,
+                                    **kwargs: Any) -> VehicleWearSimulation:
+    """:func:`simulate_vehicle_wear` with D_step = ``first_step_mm`` halved until the vehicle
+    mean FT and qR at the end change by less than ``tolerance`` of their loss
+    (:mod:`wearcast.physics.step_convergence`); the finest run, with its ``convergence``."""
+    if "depth_per_step_mm" in kwargs:
+        raise ValueError("give first_step_mm, not depth_per_step_mm")
+
+    def run(step: float) -> VehicleWearSimulation:
+        return simulate_vehicle_wear(vehicle, route_classes, depth_per_step_mm=step, **kwargs)
+
+    def ends(sim: VehicleWearSimulation) -> dict[str, float]:
+        return {"FT": float(sim.mean("sd_mm")[-1]), "qR": float(sim.mean("qr_mm")[-1])}
+
+    sim = run(first_step_mm)
+    initial = {"FT": float(sim.mean("sd_mm")[0]), "qR": float(sim.mean("qr_mm")[0])}
+    runs = iter([sim])
+
+    def cached(step: float) -> VehicleWearSimulation:
+        return next(runs, None) or run(step)
+
+    result, conv = converge_steps(cached, ends, initial, first_step_mm,
+                                  tolerance=tolerance, max_halvings=max_halvings)
+    return replace(result, convergence=conv)
 
 
 def _parameters(y: NDArray, profiles: NDArray) -> NDArray:

@@ -117,3 +117,16 @@ def test_step_convergence_halves_until_the_loss_settles():
                              max_halvings=1, min_loss=1e-3)
     assert not once.converged and "NOT converged" in once.summary()
     assert relative_change(0.5, 0.51, 1.0, 0.05) == pytest.approx(0.02)
+
+
+@pytest.mark.slow
+def test_converged_run_reports_its_step_check():
+    from wearcast.physics.vehicle_wear_simulation import simulate_vehicle_wear_converged
+
+    sim = simulate_vehicle_wear_converged("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                          first_step_mm=2.0, max_halvings=1)
+    conv = sim.convergence
+    assert conv is not None and conv.steps == (2.0, 1.0)
+    assert sim.depth_per_step_mm == 1.0
+    assert set(conv.changes[0]) == {"FT", "qR"}
+    assert sim.to_dict()["step_convergence"]["steps"] == [2.0, 1.0]
