@@ -39,6 +39,8 @@ DEFAULT_ALPHA = 0.05
 DEFAULT_MIN_RELATIVE_GAIN = 0.05
 #: Measured column -> simulation quantity.
 SERIES = {"FT_mm": "sd_mm", "QR_mm": "qr_mm"}
+#: How far beyond its end a series is extrapolated (linearly from its last step) [-].
+EXTRAPOLATION = 1.25
 #: Bounds of the fitted wear-coefficient scale c [-].
 SCALE_BOUNDS = (0.05, 20.0)
 
@@ -73,6 +75,21 @@ CATALOGUE: tuple[PhysicsCause, ...] = (
     PhysicsCause("wear_law", "the wear law and its coefficient map", "law",
                  ("usfd", "archard_kth"), "usfd"),
 )
+
+
+def catalogue_for(friction: float) -> tuple[PhysicsCause, ...]:
+    """:data:`CATALOGUE` with the friction level around a vehicle's own coefficient mu (its
+    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28)."""
+    out = []
+    for c in CATALOGUE:
+        if c.parameter == "friction":
+            c = PhysicsCause(c.name, c.summary, c.parameter,
+                             (round(0.7 * friction, 4), friction, round(1.4 * friction, 4)),
+                             friction)
+        out.append(c)
+    return tuple(out)
+
+
 #: Causes of issue 12 this module cannot build yet, with the reason (reported in ``skipped``).
 NOT_BUILT = {
     "traction_on_motor_axles": "the loop's operating points carry no traction torque yet",
@@ -146,9 +163,15 @@ class _Series:
         self.values = {col: np.asarray(sim.mean(q), dtype=float) for col, q in SERIES.items()}
 
     def at(self, col: str, km: NDArray) -> NDArray:
-        if np.any(km > self.km[-1] + 1e-6):
-            raise _OutOfRange(float(km.max()), float(self.km[-1]))
-        return np.interp(km, self.km, self.values[col])
+        """Values at mileages; beyond the simulated end, linear from the last step up to
+        ``EXTRAPOLATION`` x the simulated mileage (a held-out vehicle may need a little more
+        than the training fit), further raises."""
+        end = self.km[-1]
+        if np.any(km > EXTRAPOLATION * end):
+            raise _OutOfRange(float(km.max()), float(end))
+        v = self.values[col]
+        slope = (v[-1] - v[-2]) / (self.km[-1] - self.km[-2]) if self.km.size > 1 else 0.0
+        return np.where(km <= end, np.interp(km, self.km, v), v[-1] + slope * (km - end))
 
 
 class _OutOfRange(ValueError):
