@@ -82,6 +82,8 @@ def main() -> None:
               f"{time.perf_counter() - t0:.1f} s, {sim.contact_updates} bogie contact updates, "
               f"{sim.contact_fallbacks} class fallbacks; FT {sim.mean('sd_mm')[-1]:.3f}, "
               f"qR {sim.mean('qr_mm')[-1]:.3f}, FH {sim.mean('sh_mm')[-1]:.3f} mm", flush=True)
+        overall = compare_with_measured(sim, measured).overall
+        print(overall.to_string(index=False, float_format=lambda v: f"{v:.2f}"), flush=True)
         return sim
 
     sim, conv = converge_steps(

@@ -162,12 +162,12 @@ class _Series:
         self.km = np.asarray(sim.mileage_km, dtype=float)
         self.values = {col: np.asarray(sim.mean(q), dtype=float) for col, q in SERIES.items()}
 
-    def at(self, col: str, km: NDArray) -> NDArray:
-        """Values at mileages; beyond the simulated end, linear from the last step up to
-        ``EXTRAPOLATION`` x the simulated mileage (a held-out vehicle may need a little more
-        than the training fit), further raises."""
+    def at(self, col: str, km: NDArray, strict: bool = True) -> NDArray:
+        """Values at mileages; beyond the simulated end, linear from the last step, up to
+        ``EXTRAPOLATION`` x the simulated mileage when ``strict`` (fits), without limit
+        otherwise (a held-out vehicle's prediction with the training fit's scale)."""
         end = self.km[-1]
-        if np.any(km > EXTRAPOLATION * end):
+        if strict and np.any(km > EXTRAPOLATION * end):
             raise _OutOfRange(float(km.max()), float(end))
         v = self.values[col]
         slope = (v[-1] - v[-2]) / (self.km[-1] - self.km[-2]) if self.km.size > 1 else 0.0
@@ -180,13 +180,13 @@ class _OutOfRange(ValueError):
 
 
 def _predict(series: list[_Series], weights: NDArray, scale: float, km: NDArray,
-             cols: Sequence[str]) -> NDArray:
+             cols: Sequence[str], strict: bool = True) -> NDArray:
     """(n_points, n_cols) prediction of a blend of series at scale c."""
     out = np.zeros((km.size, len(cols)))
     for s, w in zip(series, weights, strict=True):
         if w == 0:
             continue
-        out += w * np.stack([s.at(c, scale * km) for c in cols], axis=1)
+        out += w * np.stack([s.at(c, scale * km, strict) for c in cols], axis=1)
     return out
 
 
@@ -272,7 +272,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
             test = vehicles == g
             theta, scale, _ = _fit(cands, km[~test], y[~test], cols)
             chosen = next(c for c in cands if c[0] == theta)
-            pred = _predict(chosen[1], chosen[2], scale, km[test], cols)
+            pred = _predict(chosen[1], chosen[2], scale, km[test], cols, strict=False)
             err[test] = np.sum((pred - y[test]) ** 2, axis=1)
         return err
 
