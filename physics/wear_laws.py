@@ -311,7 +311,8 @@ def element_depth_rate_mm_per_m(law: WearLaw, shear_traction_mpa: ArrayLike, sli
     v = np.asarray(rolling_speed_m_s, dtype=float)
     index = pt * s                                               # N/mm^2 = J/(m mm^2)
     if law.name == "usfd":
-        return usfd_coefficient(index, law.usfd_jump) / STEEL_DENSITY_UG_PER_MM3
+        jump: UsfdJump = "as_printed" if law.usfd_jump == "as_printed" else "continuous"
+        return usfd_coefficient(index, jump) / STEEL_DENSITY_UG_PER_MM3
     if law.name == "krause_poll":
         c = np.where(index * v > KRAUSE_POLL_TRANSITION_W_PER_MM2,
                      KRAUSE_POLL_C_SEVERE_M3_PER_J, KRAUSE_POLL_C_MILD_M3_PER_J)
