@@ -174,6 +174,51 @@ def local_archard_depth(result: FastsimResult, rolling_speed_m_s: ArrayLike,
     return out * (cos_d / h)[:, None, None]
 
 
+def local_rate_depth(result: FastsimResult, element_rate_mm_per_m: ArrayLike,
+                     centre_y_mm: ArrayLike, rolling_radius_mm: ArrayLike,
+                     contact_angle_rad: ArrayLike, y_grid_mm: ArrayLike) -> NDArray[np.float64]:
+    """Local application of any law on the FASTSIM grid (seed 003 §4.2, seed 002 eqs. 4-5).
+
+    element_rate_mm_per_m : (P, n_y, n_x) normal depth per metre travelled while the element is
+        in contact [mm/m] (``wear_laws.element_depth_rate_mm_per_m``); 0 outside the patch
+    Other arguments as :func:`local_archard_depth`.
+
+    Returns the normal depth per metre rolled on the grid [mm/m], shape (P, n). One passage
+    through the element removes rate dx / 1000 [mm]; a point of the wheel passes
+    1000 / (2 pi R_cp) times per metre rolled, so each longitudinal strip wears
+    sum_x rate dx / (2 pi R_cp) per metre; the strips are box-deposited as in
+    :func:`local_archard_depth` (volume conserving).
+    """
+    shape = np.shape(result.fx_n)
+    if len(shape) != 1:
+        raise ValueError("local_rate_depth expects a 1-D batch of patches")
+    rate = np.where(result.in_contact, np.asarray(element_rate_mm_per_m, dtype=float), 0.0)
+    r = np.broadcast_to(np.asarray(rolling_radius_mm, dtype=float), shape)
+    dx = np.asarray(result.dx_mm, dtype=float)
+    dx = np.broadcast_to(dx, shape)[:, None, None]
+    strips = np.sum(rate * dx, axis=-1) / (2.0 * np.pi * r)[:, None]      # (P, ny) mm/m
+    return _deposit_strips(result, strips[:, None, :], centre_y_mm, contact_angle_rad,
+                           y_grid_mm)[:, 0, :]
+
+
+def _deposit_strips(result: FastsimResult, strips: NDArray[np.float64], centre_y_mm: ArrayLike,
+                    contact_angle_rad: ArrayLike, y_grid_mm: ArrayLike) -> NDArray[np.float64]:
+    """Box deposition of per-strip normal depths (P, k, n_y) [mm/m] onto the profile grid:
+    the strip at y_prof = y_c + y_el cos(delta) covers w = dy_el cos(delta); returns (P, k, n)."""
+    y = np.asarray(y_grid_mm, dtype=float)
+    h = _grid_step(y)
+    shape = np.shape(result.fx_n)
+    yc, d = (np.broadcast_to(np.asarray(a, dtype=float), shape)
+             for a in (centre_y_mm, contact_angle_rad))
+    dy_el = np.broadcast_to(np.asarray(result.dy_mm, dtype=float), shape)
+    cos_d = np.cos(d)
+    y_strip = yc[:, None] + np.asarray(result.y_mm, dtype=float) * cos_d[:, None]
+    area = strips * dy_el[:, None, None]
+    width = np.broadcast_to(np.maximum(dy_el * cos_d, 1e-9 * h)[:, None], y_strip.shape)
+    out = _box_deposit(y, h, y_strip, width, area)
+    return out * (cos_d / h)[:, None, None]
+
+
 def normal_to_lateral_vertical(normal_depth_mm: ArrayLike, slope: ArrayLike
                                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Lateral and vertical components of a normal wear depth (seed 004 eq. 9; seed 002 eqs.

@@ -29,6 +29,22 @@ Four laws, each a pure function of contact quantities, vectorised over any batch
 
 All laws return the worn volume per metre rolled [mm^3/m]; the caller multiplies by the
 distance. Velocities in m/s, forces N, pressures MPa (N/mm^2), lengths mm.
+
+Wheel and rail (:func:`wheel_rail_split`): each law's volume is attributed to the bodies by the
+law's own definition. KTH/Jendel's map values are the wear of ONE body (the wheel; seed 004
+§2.1: "given for the wheel only"), and seed 004 Table 1 (our default) doubles them for the
+wheel-rail system, so a volume computed with ``coefficient_scope="wheel_and_rail"`` is shared
+half and half, with ``"per_body"`` each body loses the full volume. The USFD law is "the same
+both for the wheel and for the rail" (seed 003 §4.2): each body loses the full volume.
+Krause-Poll's C is taken per body (ASSUMED: seed 004 quotes UniFi's values without a scope);
+the tau_max law is fitted to wheel wear, so the wheel loses the full volume and the rail the
+same (ASSUMED).
+
+Local application (:func:`element_depth_rate_mm_per_m`): every law is also written per element
+of the FASTSIM grid, as a depth rate per metre travelled while the element is in contact
+[mm/m], from the element's frictional power index I = |p_t| |s| [N/mm^2] (seed 003 eq. 1:
+I_w = p s / V with the element's shear traction p_t and slip s = v_slide / V), its pressure and
+shear traction.
 """
 
 from __future__ import annotations
@@ -41,6 +57,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.wear_measures import (
     HB_TO_MPA,
+    KRAUSE_POLL_C_MILD_M3_PER_J,
+    KRAUSE_POLL_C_SEVERE_M3_PER_J,
+    KRAUSE_POLL_TRANSITION_W_PER_MM2,
     KTH_COEFFICIENTS,
     KTH_PRESSURE_FRACTION_OF_HARDNESS,
     KTH_VELOCITY_LIMITS_M_S,
@@ -65,6 +84,9 @@ USFD_CATASTROPHIC = (61.9, -4778.7)
 #: tread patch, published nowhere. Replace it by a fitted value (``statistics.coefficient_fit``).
 TAU_COEFFICIENT_PLACEHOLDER_MM_PER_M_MPA = 1e-6
 
+#: Scopes of a coefficient: the wear of one body, or of the wheel and rail together.
+COEFFICIENT_SCOPES = ("per_body", "wheel_and_rail")
+
 UsfdJump = Literal["continuous", "as_printed"]
 LawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
 LAW_NAMES: tuple[str, ...] = ("archard_kth", "krause_poll", "usfd", "tau_max")
@@ -79,6 +101,9 @@ class ArchardKTH:
     pressure_fraction : seizure when p > pressure_fraction * H [-] (0.8, seed 000)
     hardness_mpa : H [MPa] (300 HB by default, seed 002)
     contamination_factor : divides ``coefficients`` (1 = use them as given)
+    coefficient_scope : ``wheel_and_rail`` (the coefficients give the volume of wheel and rail
+        together, as seed 004 Table 1, the default: each body loses half) or ``per_body``
+        (KTH's own map values, the wear of one body: each loses the full volume)
     """
 
     coefficients: tuple[float, float, float, float] = KTH_COEFFICIENTS
@@ -86,8 +111,12 @@ class ArchardKTH:
     pressure_fraction: float = KTH_PRESSURE_FRACTION_OF_HARDNESS
     hardness_mpa: float = STEEL_HARDNESS_HB * HB_TO_MPA
     contamination_factor: float = 1.0
+    coefficient_scope: str = "wheel_and_rail"
 
     def __post_init__(self) -> None:
+        if self.coefficient_scope not in COEFFICIENT_SCOPES:
+            raise ValueError(f"coefficient_scope must be one of {', '.join(COEFFICIENT_SCOPES)}"
+                             f", got {self.coefficient_scope!r}")
         if len(self.coefficients) != 4 or any(c < 0 for c in self.coefficients):
             raise ValueError("coefficients must be four non-negative numbers (zones 1-4)")
         v1, v2 = self.velocity_limits_m_s
@@ -103,9 +132,11 @@ class ArchardKTH:
                        contamination_factor: float = CONTAMINATION_FACTOR_SEED_002,
                        wheel_and_rail_factor: float = WHEEL_AND_RAIL_FACTOR) -> ArchardKTH:
         """Coefficients from the KTH map's nominal zone means (seed 000), doubled for the
-        wheel-rail system (seed 004 §2.1) and divided by the contamination factor (seed 002)."""
+        wheel-rail system (seed 004 §2.1) and divided by the contamination factor (seed 002).
+        A factor other than 1 makes the scope ``wheel_and_rail``; 1 keeps KTH's ``per_body``."""
+        scope = "per_body" if wheel_and_rail_factor == 1.0 else "wheel_and_rail"
         return cls(coefficients=tuple(m * wheel_and_rail_factor for m in means),  # type: ignore
-                   contamination_factor=contamination_factor)
+                   contamination_factor=contamination_factor, coefficient_scope=scope)
 
     @property
     def effective_coefficients(self) -> NDArray[np.float64]:
@@ -241,3 +272,54 @@ class WearLaw:
     def is_zone_linear(self) -> bool:
         """Worn volume is linear in per-zone coefficients (Archard/KTH)."""
         return self.name == "archard_kth"
+
+
+def wheel_rail_split(law: WearLaw) -> tuple[float, float]:
+    """Fractions of the law's worn volume removed from the wheel and from the rail [-].
+
+    Archard/KTH: (0.5, 0.5) for ``coefficient_scope="wheel_and_rail"`` (seed 004 §2.1: its
+    coefficients are twice KTH's, which are for the wheel only), (1, 1) for ``per_body``.
+    USFD: (1, 1) (seed 003 §4.2: K_w is "the same both for the wheel and for the rail").
+    Krause-Poll and tau_max: (1, 1) (ASSUMED, module docstring).
+    """
+    if law.name == "archard_kth" and law.archard.coefficient_scope == "wheel_and_rail":
+        return 0.5, 0.5
+    return 1.0, 1.0
+
+
+def element_depth_rate_mm_per_m(law: WearLaw, shear_traction_mpa: ArrayLike, slip: ArrayLike,
+                                pressure_mpa: ArrayLike, rolling_speed_m_s: ArrayLike
+                                ) -> NDArray[np.float64]:
+    """Local form of every law: normal depth per metre travelled while a surface element is in
+    contact [mm/m] (multiply by the element length dx / 1000 for the depth of one passage).
+
+    shear_traction_mpa : |p_t| [MPa]; slip : |v_slide| / V [-] (0 in adhesion);
+    pressure_mpa : p [MPa]; rolling_speed_m_s : V [m/s] (broadcast).
+
+    * USFD (seed 003 eq. 1 per element): K_w(I) / rho, I = |p_t| s [N/mm^2].
+    * Krause-Poll (seed 004 eq. 1 per element): C I 1e9 with the frictional work per metre and
+      mm^2, I [J/(m mm^2)]; C severe where the power density I V > 4 W/mm^2.
+    * tau_max: c_tau (|p_t| - tau_0)_+ on elements that slip.
+    * Archard/KTH: k p 1000 s / H with the element's zone (``local_archard_depth`` keeps the
+      zone basis for the calibration).
+
+    Volume: integrating these rates over a uniform patch reproduces the global laws (tested).
+    """
+    pt = np.abs(np.asarray(shear_traction_mpa, dtype=float))
+    s = np.abs(np.asarray(slip, dtype=float))
+    p = np.asarray(pressure_mpa, dtype=float)
+    v = np.asarray(rolling_speed_m_s, dtype=float)
+    index = pt * s                                               # N/mm^2 = J/(m mm^2)
+    if law.name == "usfd":
+        jump: UsfdJump = "as_printed" if law.usfd_jump == "as_printed" else "continuous"
+        return usfd_coefficient(index, jump) / STEEL_DENSITY_UG_PER_MM3
+    if law.name == "krause_poll":
+        c = np.where(index * v > KRAUSE_POLL_TRANSITION_W_PER_MM2,
+                     KRAUSE_POLL_C_SEVERE_M3_PER_J, KRAUSE_POLL_C_MILD_M3_PER_J)
+        return c * index * 1e9
+    if law.name == "tau_max":
+        return np.where(s > 0, law.tau_coefficient_mm_per_m_mpa
+                        * np.maximum(pt - law.tau_threshold_mpa, 0.0), 0.0)
+    zone = kth_zone(s * v, p, law.archard)
+    k = law.archard.effective_coefficients[zone - 1]
+    return k * p * 1000.0 * s / law.archard.hardness_mpa

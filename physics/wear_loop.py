@@ -14,8 +14,10 @@ One step (seeds 000, 002, 003, 004):
    :class:`~wearcast.physics.curving.CurvingConvergenceError` is raised.
 2. Wear of the tracked wheel (``axle``, ``side``) per class: the law's worn volume per metre
    rolled (:mod:`wearcast.physics.wear_laws`) spread with the semi-elliptic distribution
-   (global) or Archard on the FASTSIM grid (local; Archard/KTH only)
-   (:mod:`wearcast.physics.wear_distribution`).
+   (global) or per element of the FASTSIM grid (local; every law)
+   (:mod:`wearcast.physics.wear_distribution`); the wheel's share of the law's volume by the
+   law's definition (``wear_laws.wheel_rail_split``: half for seed 004's wheel-and-rail KTH
+   coefficients, all of it for USFD).
 3. Route average: depth per km = sum_k p_k depth_k (seed 003 §4.3, shares normalised to 1).
 4. Smoothing of the depth (moving average or smoothing spline).
 5. Step length: adaptive (the maximum depth of the step equals D_step, seed 003 eq. 2) or a
@@ -60,15 +62,18 @@ from wearcast.physics.wear_distribution import (
     Smoothing,
     apply_normal_wear,
     local_archard_depth,
+    local_rate_depth,
     semi_elliptic_depth,
     worn_volume_mm3,
 )
 from wearcast.physics.wear_laws import (
     WearLaw,
     archard_basis,
+    element_depth_rate_mm_per_m,
     krause_poll_rate,
     tau_max_rate,
     usfd_rate,
+    wheel_rail_split,
 )
 from wearcast.physics.wear_measures import rigid_sliding_velocity_m_s
 from wearcast.physics.wear_tables import CurveClass
@@ -232,23 +237,39 @@ def _curvature(point: tuple) -> float:
 
 
 def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int,
-                  warm: dict | None = None) -> list[CurvingResult | None]:
+                  warm: dict | None = None, warm_first: bool = False
+                  ) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
     from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
     ``CurvingResult.state`` on the previous profile) if it has one, else it is None (the caller
-    falls back to a neighbour or the previous contact)."""
+    falls back to a neighbour or the previous contact). ``warm_first``: start every point that
+    has a last equilibrium from it (Newton at full load, no continuation) and retry the failures
+    by continuation from centred wheelsets (faster when the profile changed little)."""
     cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]
+    first = None
+    if warm_first and warm:
+        first = [warm.get(p) for p in points]
     out = solve_curving_cases_or_none(vehicle, cases, labels, table,
-                                      fastsim_grid=fastsim_grid)
-    retry = [i for i, r in enumerate(out) if r is None and points[i] in (warm or {})]
-    if warm and retry:
+                                      fastsim_grid=fastsim_grid, initial_states=first)
+    if first is not None:
+        retry = [i for i, r in enumerate(out) if r is None and first[i] is not None]
+        init: list = [None] * len(retry)
+    else:
+        retry = [i for i, r in enumerate(out) if r is None and points[i] in (warm or {})]
+        init = [(warm or {})[points[i]] for i in retry]
+    if retry:
         again = solve_curving_cases_or_none(
             vehicle, [cases[i] for i in retry], [labels[i] for i in retry], table,
-            fastsim_grid=fastsim_grid, initial_states=[warm[points[i]] for i in retry])
+            fastsim_grid=fastsim_grid, initial_states=init)
         for i, res in zip(retry, again, strict=True):
             out[i] = res
     return out
+
+
+#: The four wheels of a bogie, (axle, side); axle 1 leads.
+BOGIE_WHEELS: tuple[tuple[int, str], ...] = ((1, "left"), (1, "right"), (2, "left"),
+                                             (2, "right"))
 
 
 def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: NDArray,
@@ -268,6 +289,30 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
     """
     if axle not in (1, 2) or side not in ("left", "right"):
         raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
+    out, fallbacks = class_contacts_all_wheels(
+        vehicle, classes, y_mm, z_mm, wheels=((axle, side),),
+        unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+        tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+        previous=None if previous is None else {(axle, side): previous},
+        patch_width=patch_width)
+    return out[(axle, side)], fallbacks
+
+
+def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[LoopClass],
+                              y_mm: NDArray, z_mm: NDArray, *,
+                              wheels: Sequence[tuple[int, str]] = BOGIE_WHEELS,
+                              unbalanced_acceleration_m_s2: float = 0.58,
+                              tangent_speed_kmh: float = 100.0, fastsim_grid: int = 20,
+                              previous: Mapping[tuple[int, str], ClassContacts] | None = None,
+                              patch_width: str = "hertz", warm_first: bool = False
+                              ) -> tuple[dict[tuple[int, str], ClassContacts], int]:
+    """:func:`class_contacts` of several wheels of the bogie from ONE curving solve per
+    operating point (all four wheels by default). ``previous``: per wheel the contacts of the
+    previous update (fallback and warm start); ``warm_first``: see :func:`_solve_points`.
+    Returns ({(axle, side): contacts}, class fallbacks summed over the wheels)."""
+    for axle, side in wheels:
+        if axle not in (1, 2) or side not in ("left", "right"):
+            raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
     if patch_width not in PATCH_WIDTHS:
         raise ValueError(f"patch_width must be one of {', '.join(PATCH_WIDTHS)}, "
                          f"got {patch_width!r}")
@@ -278,11 +323,33 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
     points = [_operating_point(c, unbalanced_acceleration_m_s2, tangent_speed_kmh)
               for c in classes]
     unique = sorted(set(points), key=lambda p: (p[0] is None, p[0] or 0.0, p[1], p[2]))
-    warm = None if previous is None else previous.states
-    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm),
-                      strict=True))
+    prev = dict(previous or {})
+    warm: dict | None = None
+    for pc in prev.values():
+        warm = {**(warm or {}), **pc.states}
+    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm,
+                                            warm_first), strict=True))
     states = dict(warm or {})
     states.update({p: r.state for p, r in solved.items() if r is not None})
+    good = [p for p, r in solved.items() if r is not None]
+    if not good and not prev:
+        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
+                                      np.inf, float("nan"))
+    out = {}
+    fallbacks = 0
+    for wheel in wheels:
+        out[wheel], fb = _wheel_contacts(vehicle, classes, points, solved, good, y, z, wheel,
+                                         prev.get(wheel), patch_width, states)
+        fallbacks += fb
+    return out, fallbacks
+
+
+def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], points: list,
+                    solved: dict, good: list, y: NDArray, z: NDArray, wheel: tuple[int, str],
+                    previous: ClassContacts | None, patch_width: str, states: dict
+                    ) -> tuple[ClassContacts, int]:
+    """Contacts of one wheel per class from the solved operating points (fallbacks counted)."""
+    axle, side = wheel
     ai = axle - 1
     n = len(classes)
     slots = [np.shape(r.normal_force_n)[-1] for r in solved.values() if r is not None]
@@ -293,7 +360,6 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[LoopClass], y_mm: ND
     rail = {f: np.zeros((n, 2, n_slot)) for f in _RAIL_FIELDS}
     speed = np.zeros(n)
     fallbacks = 0
-    good = [p for p, r in solved.items() if r is not None]
     if not good and previous is None:
         raise CurvingConvergenceError("quasi-static curving did not converge for any class",
                                       np.inf, float("nan"))
@@ -368,8 +434,15 @@ def law_coefficients(law: WearLaw) -> NDArray[np.float64]:
 def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
                       application: str = "global", fastsim_grid: int = 20,
                       friction: float = 0.35) -> NDArray[np.float64]:
-    """Normal depth per metre rolled per class and basis function: (n_class, n_basis, n)
-    [mm/m]. ``application``: ``global`` (semi-elliptic) or ``local`` (FASTSIM grid, Archard)."""
+    """Normal depth of the WHEEL per metre rolled per class and basis function:
+    (n_class, n_basis, n) [mm/m].
+
+    ``application``: ``global`` (semi-elliptic, seed 004 eqs. 3-5) or ``local`` (FASTSIM grid:
+    Archard/KTH per zone, seed 002 eqs. 4-5; USFD, Krause-Poll and tau_max per element,
+    seed 003 §4.2, ``wear_laws.element_depth_rate_mm_per_m``). The wheel's share of the law's
+    volume (``wear_laws.wheel_rail_split``) is applied here.
+    """
+    wheel_share, _ = wheel_rail_split(law)
     c = contacts
     n_class = c.normal_n.shape[0]
     safe_b = np.where(c.loaded, c.b_mm, 1.0)
@@ -378,23 +451,29 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
         safe_r = np.where(c.loaded, c.rolling_radius_mm, 1.0)
         shape = semi_elliptic_depth(y_grid_mm, c.wheel_y_mm, safe_b, 1.0,
                                     safe_r, c.angle_rad)  # (n_class, n_slot, n)
-        return np.einsum("csb,csn->cbn", vol, shape)
+        return wheel_share * np.einsum("csb,csn->cbn", vol, shape)
     if application != "local":
         raise ValueError(f"application must be 'global' or 'local', got {application!r}")
-    if law.name != "archard_kth":
-        raise ValueError("the local application is defined for Archard/KTH only (seed 002)")
-    out = np.zeros((n_class, 4, np.size(y_grid_mm)))
+    n_basis = 4 if law.name == "archard_kth" else 1
+    out = np.zeros((n_class, n_basis, np.size(y_grid_mm)))
     idx = np.nonzero(c.loaded)
     if idx[0].size == 0:
         return out
     sel = tuple(np.asarray(getattr(c, f))[idx] for f in ("xi", "eta", "phi_per_mm", "a_mm",
                                                            "b_mm", "normal_n"))
     fs = fastsim(*sel, friction, SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
-    basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
-                                c.rolling_radius_mm[idx], c.angle_rad[idx], y_grid_mm,
-                                law.archard)
+    if law.name == "archard_kth":
+        basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
+                                    c.rolling_radius_mm[idx], c.angle_rad[idx], y_grid_mm,
+                                    law.archard)
+    else:
+        v = c.speed_m_s[idx[0]][:, None, None]
+        rate = element_depth_rate_mm_per_m(law, fs.shear_traction_mpa,
+                                           np.hypot(fs.sx, fs.sy), fs.pn_mpa, v)
+        basis = local_rate_depth(fs, rate, c.wheel_y_mm[idx], c.rolling_radius_mm[idx],
+                                 c.angle_rad[idx], y_grid_mm)[:, None, :]
     np.add.at(out, idx[0], basis)
-    return out
+    return wheel_share * out
 
 
 def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArray,
@@ -402,11 +481,14 @@ def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArra
                            ) -> NDArray[np.float64]:
     """Rail normal depth per vehicle passage, class-averaged with p_k (seed 003 eq. 4) [mm].
 
-    Both axles of the bogie on the tracked wheel's rail; the per-wheel volume rate is taken
+    The rail's share of the law's volume is ``wear_laws.wheel_rail_split``. Both axles of the
+    bogie on the tracked wheel's rail; the per-wheel volume rate is taken
     from the tracked wheel's law basis scaled by the axle's normal force share (a first-order
     approximation: the trailing axle's creepages are not recomputed for the rail).
     """
-    vol = contact_volume_basis(contacts, law) @ law_coefficients(law)   # (n_class, slot) mm^3/m
+    _, rail_share = wheel_rail_split(law)
+    vol = rail_share * contact_volume_basis(contacts, law) @ law_coefficients(
+        law)                                                            # (n_class, slot) mm^3/m
     r = contacts.rail_axles
     lead_n = np.where(contacts.normal_n > 0, contacts.normal_n, 1.0)
     scale = r["normal_force_n"] / lead_n[:, None, :]                # (n_class, axle, slot)

@@ -175,8 +175,6 @@ def submit(session: Session, runner: Any, body: SimulationIn) -> SimulationOut:
 
 
 def unprocessable_law(body: SimulationIn) -> None:
-    """Combinations the wear loop refuses, refused before queuing (seed 002 defines the
-    local application for Archard/KTH only)."""
-    if body.application == "local" and body.law != "archard_kth":
-        raise Unprocessable("application", "the local application (seed 002) is defined for "
-                            f"the archard_kth law only, not {body.law!r}")
+    """Combinations the wear loop refuses, refused before queuing (none since every law has
+    a local application on the FASTSIM grid)."""
+    return None

@@ -82,8 +82,8 @@ def test_fixed_steps_of_seed_000():
     assert sim.mileage_km == pytest.approx([0.0, 5000.0, 10000.0])
     # The step-depth limit cuts a fixed step into sub-steps (at most max_substeps).
     sharp = simulate_wear("metro_b", CLASSES[:1], steps=WearSteps(
-        mode="fixed", n_steps=1, step_km=2.0, max_depth_per_step_mm=0.1))
-    assert sharp.mileage_km == pytest.approx([0.0, 2.0])
+        mode="fixed", n_steps=1, step_km=4.0, max_depth_per_step_mm=0.1))
+    assert sharp.mileage_km == pytest.approx([0.0, 4.0])
     assert sharp.contact_updates >= 3
     assert sharp.step_max_depth_mm[0] > 0.25
 
@@ -123,8 +123,27 @@ def test_local_application_runs_and_smoothing_options():
     sim = simulate_wear("metro_b", CLASSES[:1], application="local",
                         steps=WearSteps(n_steps=1), smoothing=Smoothing("spline", lam=2.0))
     assert sim.step_max_depth_mm[0] == pytest.approx(0.2, rel=0.03)
-    with pytest.raises(ValueError, match="local application"):
-        simulate_wear("metro_b", CLASSES[:1], law="krause_poll", application="local")
+    # Every law has a local application (seed 003 §4.2 for USFD): one step of D_step.
+    for law in ("usfd", "krause_poll"):
+        local = simulate_wear("metro_b", CLASSES[:1], law=law, application="local",
+                              steps=WearSteps(n_steps=1))
+        assert local.step_max_depth_mm[0] == pytest.approx(0.2, rel=0.03)
+        assert local.application == "local"
+    with pytest.raises(ValueError, match="application"):
+        simulate_wear("metro_b", CLASSES[:1], application="regional")
+
+
+def test_archard_wheel_wear_is_half_the_wheel_and_rail_volume():
+    # Seed 004 Table 1 coefficients are for wheel AND rail (seed 004 §2.1): the wheel loses half
+    # the volume; KTH's own per-body scope gives the wheel all of it.
+    from wearcast.physics.wear_laws import ArchardKTH
+    steps = WearSteps(mode="fixed", n_steps=1, step_km=50.0, max_substeps=1)
+    system = simulate_wear("metro_b", CLASSES[:1], steps=steps)
+    body = simulate_wear("metro_b", CLASSES[:1], steps=steps, law=WearLaw(
+        "archard_kth", ArchardKTH(coefficient_scope="per_body")))
+    assert system.worn_volume_mm3[-1] == pytest.approx(0.5 * body.worn_volume_mm3[-1], rel=0.02)
+    assert system.rail_depth_per_vehicle_mm.max() == pytest.approx(
+        0.5 * body.rail_depth_per_vehicle_mm.max(), rel=1e-9)
 
 
 def test_rail_evolves_with_tonnage():

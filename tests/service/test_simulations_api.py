@@ -106,7 +106,7 @@ def test_kik_piotrowski_patch_width_is_passed_to_the_loop(tmp_path: Path) -> Non
 @pytest.mark.parametrize(("change", "status", "field"), [
     ({"vehicle": "tgv"}, 422, "vehicle"),
     ({"law": "magic"}, 422, "law"),
-    ({"application": "local", "law": "krause_poll"}, 422, "application"),
+    ({"application": "regional"}, 422, "application"),
     ({"patch_width": "ellipse"}, 422, "patch_width"),
     ({"steps": {"count": 0}}, 422, "steps.count"),
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),

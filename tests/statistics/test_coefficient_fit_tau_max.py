@@ -76,12 +76,13 @@ def test_exact_method_with_noise(twin):
 
 
 def test_pso_solves_the_same_one_column_problem(twin):
-    # The metaheuristics minimise the same inner objective; PSO's swarm in log10(c) lands within
-    # 1e-4 of the exact fixed point here (measured ~1e-6).
+    # The metaheuristics minimise the same inner objective; PSO's swarm in log10(c), with seed
+    # 000's printed settings (swarm 40, 30 iterations, c1 = c2 = 2, inertia 1.2 -> 0.5), lands
+    # within 1e-3 of the exact fixed point here (measured 4.7e-4 with seed=1).
     exact = calibrate(_problem(twin.wear_fit_mm, twin.y_mm), "exact", rtol=1e-8, max_runs=10)
     pso = calibrate(_problem(twin.wear_fit_mm, twin.y_mm), "PSO", rtol=1e-8, max_runs=10,
                     seed=1)
-    assert pso.coefficients[0] == pytest.approx(exact.coefficients[0], rel=1e-4)
+    assert pso.coefficients[0] == pytest.approx(exact.coefficients[0], rel=1e-3)
 
 
 def test_doubling_the_wear_doubles_c_tau_without_feedback(twin):

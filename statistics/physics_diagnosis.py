@@ -1,0 +1,331 @@
+"""Diagnosis of the PHYSICS wear model: what the whole-vehicle loop gets wrong, and why.
+
+The model: :func:`wearcast.physics.vehicle_wear_simulation.simulate_vehicle_wear` with one
+fitted wear-coefficient scale c. Scaling every wear rate by c is a change of the mileage
+variable of the loop's autonomous evolution (profile -> contact -> rate): the series of a
+scale-c run at mileage m equals the scale-1 run at c m, exactly up to the step discretisation.
+So c is fitted without new runs: predicted(m; c) = series_1(c m).
+
+Each physical cause (:data:`CATALOGUE`) is an extension of the loop with ONE physical
+parameter theta (the wear scale c is refitted with it), run at a few values of theta; the
+prediction between them is linear in theta (categorical causes: each level). Scoring, as the
+hybrid finder's (``statistics.discrepancy``): folds grouped by vehicle (leave one vehicle out
+when there are fewer than 5 vehicles), the null (c only) and each extension fitted on the
+training vehicles, squared errors of FT and qR [mm^2] on the held-out vehicle; the per-group
+difference null - extension is tested one-sided (t-test over vehicles, over points when
+there are fewer than 5 vehicles; Holm across the catalogue); the relative gain 1 - after /
+before with a 95 % percentile bootstrap over the same groups. Verdict: among causes with
+Holm p < alpha, relative gain >= ``min_relative_gain`` and a bootstrap interval above 0, the
+one with the largest gain; else ``none``. Same response contract as the hybrid diagnosis:
+``verdict``, ``findings`` (cause, summary, evidence, extension, gain with interval,
+significant, material), ``skipped``.
+
+Pure: the caller supplies ``simulate(params) -> simulation`` (any object with ``mileage_km``
+and ``mean(quantity)``), so tests and the service choose vehicle, route and law.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+from scipy import optimize, stats
+
+DEFAULT_ALPHA = 0.05
+DEFAULT_MIN_RELATIVE_GAIN = 0.05
+#: Measured column -> simulation quantity.
+SERIES = {"FT_mm": "sd_mm", "QR_mm": "qr_mm"}
+#: How far beyond its end a series is extrapolated (linearly from its last step) [-].
+EXTRAPOLATION = 1.25
+#: Bounds of the fitted wear-coefficient scale c [-].
+SCALE_BOUNDS = (0.05, 20.0)
+
+
+@dataclass(frozen=True)
+class PhysicsCause:
+    """One cause: ``parameter`` of the loop varied over ``values`` (``null`` = the model as
+    is; categorical when the values are strings)."""
+
+    name: str
+    summary: str
+    parameter: str
+    values: tuple[Any, ...]
+    null: Any
+
+    @property
+    def categorical(self) -> bool:
+        return any(isinstance(v, str) for v in self.values)
+
+
+#: The catalogue (issue 12): each cause one physical parameter of the loop besides the scale.
+CATALOGUE: tuple[PhysicsCause, ...] = (
+    PhysicsCause("flange_lubrication", "flange wear differs from the law's (lubrication or "
+                 "flange friction): factor on the wear of flange patches",
+                 "flange_wear_factor", (0.25, 0.5, 1.0), 1.0),
+    PhysicsCause("friction_level", "the friction coefficient differs from the model's "
+                 "(dry/wet, season)", "friction", (0.2, 0.28, 0.4), 0.28),
+    PhysicsCause("running_direction_share", "the vehicle does not run half its mileage in "
+                 "each direction", "forward_share", (0.5, 0.75, 1.0), 0.5),
+    PhysicsCause("patch_model", "the contact patch model (Hertz vs non-Hertzian width)",
+                 "patch_width", ("hertz", "kik_piotrowski"), "hertz"),
+    PhysicsCause("wear_law", "the wear law and its coefficient map", "law",
+                 ("usfd", "archard_kth"), "usfd"),
+)
+
+
+def catalogue_for(friction: float) -> tuple[PhysicsCause, ...]:
+    """:data:`CATALOGUE` with the friction level around a vehicle's own coefficient mu (its
+    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28)."""
+    out = []
+    for c in CATALOGUE:
+        if c.parameter == "friction":
+            c = PhysicsCause(c.name, c.summary, c.parameter,
+                             (round(0.7 * friction, 4), friction, round(1.4 * friction, 4)),
+                             friction)
+        out.append(c)
+    return tuple(out)
+
+
+#: Causes of issue 12 this module cannot build yet, with the reason (reported in ``skipped``).
+NOT_BUILT = {
+    "traction_on_motor_axles": "the loop's operating points carry no traction torque yet",
+    "rail_state": "the curving model takes only named rail profiles (no worn or measured "
+                  "rail in the contact)",
+    "curve_classes": "needs the route's segments; a class table cannot be re-binned",
+}
+
+
+@dataclass(frozen=True)
+class PhysicsGain:
+    """Held-out error before (null: scale only) and after (the cause's extension) [mm^2 per
+    point, FT and qR], relative gain and its 95 % bootstrap interval."""
+
+    before_error: float
+    after_error: float
+    relative: float
+    ci95_low: float
+    ci95_high: float
+    metric: str = "ft_qr_squared_error_mm2"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: float(v) if isinstance(v, (float, np.floating)) else v
+                for k, v in self.__dict__.items()}
+
+
+@dataclass(frozen=True)
+class PhysicsFinding:
+    cause: str
+    summary: str
+    evidence: dict[str, Any]
+    extension: dict[str, Any]
+    gain: PhysicsGain
+    significant: bool
+    material: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"cause": self.cause, "summary": self.summary, "evidence": self.evidence,
+                "extension": self.extension, "gain": self.gain.to_dict(),
+                "significant": self.significant, "material": self.material}
+
+
+@dataclass(frozen=True)
+class PhysicsDiagnosis:
+    """verdict (cause or ``none``), findings ranked by gain, skipped causes with reasons, the
+    null model's fitted scale on all data and its error per vehicle."""
+
+    verdict: str
+    findings: tuple[PhysicsFinding, ...]
+    skipped: dict[str, str]
+    n_measurements: int
+    n_groups: int
+    group_by: str
+    null_fit: dict[str, Any] = field(default_factory=dict)
+
+    def finding(self, cause: str) -> PhysicsFinding | None:
+        return next((f for f in self.findings if f.cause == cause), None)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"verdict": self.verdict, "findings": [f.to_dict() for f in self.findings],
+                "skipped": dict(self.skipped), "n_measurements": self.n_measurements,
+                "n_groups": self.n_groups, "group_by": self.group_by,
+                "null_fit": self.null_fit}
+
+
+class _Series:
+    """The loop's vehicle-mean series of one parameter set, as functions of mileage."""
+
+    def __init__(self, sim: Any):
+        self.km = np.asarray(sim.mileage_km, dtype=float)
+        self.values = {col: np.asarray(sim.mean(q), dtype=float) for col, q in SERIES.items()}
+
+    def at(self, col: str, km: NDArray, strict: bool = True) -> NDArray:
+        """Values at mileages; beyond the simulated end, linear from the last step, up to
+        ``EXTRAPOLATION`` x the simulated mileage when ``strict`` (fits), without limit
+        otherwise (a held-out vehicle's prediction with the training fit's scale)."""
+        end = self.km[-1]
+        if strict and np.any(km > EXTRAPOLATION * end):
+            raise _OutOfRange(float(km.max()), float(end))
+        v = self.values[col]
+        slope = (v[-1] - v[-2]) / (self.km[-1] - self.km[-2]) if self.km.size > 1 else 0.0
+        return np.where(km <= end, np.interp(km, self.km, v), v[-1] + slope * (km - end))
+
+
+class _OutOfRange(ValueError):
+    def __init__(self, wanted: float, have: float):
+        super().__init__(f"needs the series to {wanted:.0f} km, simulated {have:.0f} km")
+
+
+def _predict(series: list[_Series], weights: NDArray, scale: float, km: NDArray,
+             cols: Sequence[str], strict: bool = True) -> NDArray:
+    """(n_points, n_cols) prediction of a blend of series at scale c."""
+    out = np.zeros((km.size, len(cols)))
+    for s, w in zip(series, weights, strict=True):
+        if w == 0:
+            continue
+        out += w * np.stack([s.at(c, scale * km, strict) for c in cols], axis=1)
+    return out
+
+
+def _blends(cause: PhysicsCause | None, runs: Mapping[Any, _Series]
+            ) -> list[tuple[Any, list[_Series], NDArray]]:
+    """Candidate (theta, series, weights): each level, and for numeric causes a fine grid of
+    linear blends between adjacent values."""
+    if cause is None:
+        return [(None, [runs[None]], np.ones(1))]
+    vals = list(cause.values)
+    if cause.categorical:
+        return [(v, [runs[v]], np.ones(1)) for v in vals]
+    vals = sorted(vals)
+    out = []
+    for lo, hi in zip(vals[:-1], vals[1:], strict=True):
+        for t in np.linspace(0.0, 1.0, 6)[:-1]:
+            out.append((lo + t * (hi - lo), [runs[lo], runs[hi]], np.array([1 - t, t])))
+    out.append((vals[-1], [runs[vals[-1]]], np.ones(1)))
+    return out
+
+
+def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: NDArray,
+         cols: Sequence[str]) -> tuple[Any, float, float]:
+    """Best (theta, scale, sse) on the training points (scale by bounded 1-D search)."""
+    best = (None, 1.0, np.inf)
+    for theta, series, w in candidates:
+        def sse(log_c: float, series=series, w=w) -> float:
+            try:
+                pred = _predict(series, w, float(np.exp(log_c)), km, cols)
+            except _OutOfRange:
+                return 1e12
+            return float(np.sum((pred - y) ** 2))
+        res = optimize.minimize_scalar(sse, bounds=np.log(SCALE_BOUNDS), method="bounded",
+                                       options={"xatol": 1e-3})
+        if res.fun < best[2]:
+            best = (theta, float(np.exp(res.x)), float(res.fun))
+    return best
+
+
+def _holm(pvalues: Sequence[float]) -> NDArray:
+    p = np.asarray(pvalues, dtype=float)
+    order = np.argsort(p)
+    adj = np.empty_like(p)
+    running = 0.0
+    for rank, i in enumerate(order):
+        running = max(running, (len(p) - rank) * float(p[i]))
+        adj[i] = min(1.0, running)
+    return adj
+
+
+def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.DataFrame, *,
+                     catalogue: Sequence[PhysicsCause] = CATALOGUE,
+                     alpha: float = DEFAULT_ALPHA,
+                     min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
+                     n_bootstrap: int = 2000, seed: int = 0) -> PhysicsDiagnosis:
+    """Diagnose the physics model against measured vehicle-averaged series.
+
+    simulate : {parameter: value} -> simulation (``mileage_km``, ``mean("sd_mm"|"qr_mm")``);
+        called once per parameter set with only the cause's parameter set (empty = null); it
+        must simulate far enough for the fitted scales (SCALE_BOUNDS x the largest mileage
+        is not required: a scale that needs more is simply not reachable)
+    measured : columns ``vehicle``, ``distance_km`` and ``FT_mm`` and/or ``QR_mm``
+    """
+    cols = [c for c in SERIES if c in measured]
+    if not cols or "vehicle" not in measured or "distance_km" not in measured:
+        raise ValueError("measured needs vehicle, distance_km and FT_mm and/or QR_mm")
+    data = measured.dropna(subset=cols).reset_index(drop=True)
+    km = data["distance_km"].to_numpy(float)
+    y = data[cols].to_numpy(float)
+    vehicles = data["vehicle"].astype(str).to_numpy()
+    groups = np.unique(vehicles)
+    if groups.size < 2:
+        raise ValueError("the physics diagnosis needs measurements of at least 2 vehicles")
+    group_by = "vehicle" if groups.size >= 5 else "point"
+    skipped = dict(NOT_BUILT)
+    runs: dict[Any, dict[Any, _Series]] = {}
+    null_runs = {None: _Series(simulate({}))}
+
+    def held_out(cause: PhysicsCause | None, cause_runs: Mapping[Any, _Series]) -> NDArray:
+        cands = _blends(cause, cause_runs)
+        err = np.zeros(km.size)
+        for g in groups:
+            test = vehicles == g
+            theta, scale, _ = _fit(cands, km[~test], y[~test], cols)
+            chosen = next(c for c in cands if c[0] == theta)
+            pred = _predict(chosen[1], chosen[2], scale, km[test], cols, strict=False)
+            err[test] = np.sum((pred - y[test]) ** 2, axis=1)
+        return err
+
+    before = held_out(None, null_runs)
+    theta0, scale0, sse0 = _fit(_blends(None, null_runs), km, y, cols)
+    null_fit = {"wear_scale": scale0, "rms_mm": float(np.sqrt(sse0 / y.size))}
+    rows = []
+    for cause in catalogue:
+        try:
+            cause_runs = {v: (null_runs[None] if v == cause.null else
+                              _Series(simulate({cause.parameter: v}))) for v in cause.values}
+        except Exception as exc:  # a run that fails leaves the cause unscored, saying why
+            skipped[cause.name] = f"the loop failed for this extension: {exc}"
+            continue
+        runs[cause.name] = cause_runs
+        after = held_out(cause, cause_runs)
+        rows.append((cause, after))
+    rng = np.random.default_rng(seed)
+    unit = vehicles if group_by == "vehicle" else np.arange(km.size).astype(str)
+    units = np.unique(unit)
+    pvals: list[float] = []
+    findings: list[tuple[PhysicsCause, PhysicsGain, dict[str, Any], float]] = []
+    for cause, after in rows:
+        d_units = np.array([np.sum(before[unit == u] - after[unit == u]) for u in units])
+        b_units = np.array([np.sum(before[unit == u]) for u in units])
+        a_units = np.array([np.sum(after[unit == u]) for u in units])
+        if np.allclose(d_units, 0):
+            p = 1.0
+        else:
+            p = float(stats.ttest_1samp(d_units, 0.0, alternative="greater").pvalue)
+        pvals.append(p if np.isfinite(p) else 1.0)
+        pick = rng.integers(0, units.size, (n_bootstrap, units.size))
+        bb = b_units[pick].sum(axis=1)
+        boot = np.where(bb > 0, 1.0 - a_units[pick].sum(axis=1) / np.where(bb > 0, bb, 1.0),
+                        0.0)
+        rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
+        lo, hi = np.percentile(boot, [2.5, 97.5])
+        theta, scale, sse = _fit(_blends(cause, runs[cause.name]), km, y, cols)
+        findings.append((cause, PhysicsGain(float(before.mean()), float(after.mean()),
+                                            float(rel), float(lo), float(hi)),
+                         {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
+                          "null_value": cause.null}, p))
+    adj = _holm(pvals) if pvals else np.array([])
+    out = []
+    for (cause, gain, ext, p), p_holm in zip(findings, adj, strict=True):
+        significant = bool(p_holm < alpha and gain.ci95_low > 0)
+        material = bool(gain.relative >= min_relative_gain)
+        out.append(PhysicsFinding(
+            cause.name, cause.summary,
+            {"p_value": p, "p_holm": float(p_holm), "test_groups": group_by,
+             "values_run": [v for v in cause.values]},
+            ext, gain, significant, material))
+    out.sort(key=lambda f: -f.gain.relative)
+    chosen = [f for f in out if f.significant and f.material]
+    return PhysicsDiagnosis(chosen[0].cause if chosen else "none", tuple(out), skipped,
+                            int(km.size), int(groups.size), group_by, null_fit)

@@ -1,0 +1,132 @@
+"""Whole-vehicle wear: every wheel, both running directions, averaged as measured."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wearcast.physics.step_convergence import converge_steps, relative_change
+from wearcast.physics.vehicle_wear_simulation import (
+    VehicleWearOptions,
+    simulate_vehicle_wear,
+    vehicle_bogies,
+)
+from wearcast.physics.wear_loop import LoopClass
+from wearcast.statistics.physics_comparison import compare_with_measured
+
+ROUTE = [LoopClass(250.0, 100.0, None, "left", 0.15), LoopClass(250.0, 100.0, None, "right", 0.15),
+         LoopClass(None, share=0.7)]
+ONE_WAY = [LoopClass(250.0, 100.0, None, "left", 0.3), LoopClass(None, share=0.7)]
+KM = 1500.0
+STEP = 1.0
+
+
+@pytest.fixture(scope="module")
+def symmetric():
+    return simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                 depth_per_step_mm=STEP)
+
+
+def test_minuetto_has_two_motor_and_two_trailer_bogies():
+    bogies = vehicle_bogies("minuetto")
+    assert [(b.bogie_type, n) for b, n in bogies] == [("motor", 2), ("trailer", 2)]
+    assert all(b.friction == 0.4 for b, _ in vehicle_bogies("minuetto", friction=0.4))
+
+
+@pytest.mark.slow
+def test_reversing_vehicle_on_a_symmetric_route_wears_all_wheels_of_a_bogie_alike(symmetric):
+    sim = symmetric
+    assert sim.mileage_km[-1] == pytest.approx(KM)
+    assert len(sim.wheels) == 8 and sim.weights.sum() == pytest.approx(1.0)
+    for bogie in range(2):
+        ft = sim.sd_mm[-1, 4 * bogie:4 * bogie + 4]
+        assert np.ptp(ft) < 1e-9
+    assert sim.mean("sd_mm")[-1] < sim.mean("sd_mm")[0] - 0.01  # the flange wears
+    # The mean is the weighted average of the wheels.
+    assert sim.mean("qr_mm")[-1] == pytest.approx(float(sim.qr_mm[-1] @ sim.weights))
+
+
+@pytest.mark.slow
+def test_one_direction_wears_the_leading_axle_more_and_the_outer_wheel_only():
+    fwd = simulate_vehicle_wear("metro_b", ONE_WAY, law="usfd", mileage_km=KM,
+                                depth_per_step_mm=STEP,
+                                options=VehicleWearOptions(forward_share=1.0))
+    loss = fwd.sd_mm[0] - fwd.sd_mm[-1]
+    lab = {w: i for i, w in enumerate(fwd.wheels)}
+    # Left curves only: the right wheel is the outer one; axle 1 leads.
+    assert loss[lab["motor0-1R"]] > loss[lab["motor0-2R"]]
+    assert loss[lab["motor0-1R"]] > loss[lab["motor0-1L"]] + 0.01
+    back = simulate_vehicle_wear("metro_b", ONE_WAY, law="usfd", mileage_km=KM,
+                                 depth_per_step_mm=STEP,
+                                 options=VehicleWearOptions(forward_share=0.0))
+    # Reversed: the physical axles swap roles (mirror in the axle index).
+    assert back.sd_mm[-1, lab["motor0-2R"]] == pytest.approx(fwd.sd_mm[-1, lab["motor0-1R"]],
+                                                             abs=0.02)
+
+
+@pytest.mark.slow
+def test_wear_scale_and_flange_lubrication_act_in_the_right_direction(symmetric):
+    base_loss = symmetric.mean("sd_mm")[0] - symmetric.mean("sd_mm")[-1]
+    lube = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                 depth_per_step_mm=STEP,
+                                 options=VehicleWearOptions(flange_wear_factor=0.3))
+    assert lube.mean("sd_mm")[0] - lube.mean("sd_mm")[-1] < 0.8 * base_loss
+    with pytest.raises(ValueError, match="forward_share"):
+        VehicleWearOptions(forward_share=1.5)
+
+
+class _FakeSimulation:
+    """A vehicle simulation's comparison interface with a linear FT loss of 1 mm/1000 km."""
+
+    mileage_km = np.array([0.0, 4000.0])
+
+    def mean(self, quantity):
+        return np.array([32.5, 28.5]) if quantity == "sd_mm" else np.array([1.0, 1.0])
+
+    def mean_at(self, quantity, km):
+        return np.interp(km, self.mileage_km, self.mean(quantity))
+
+
+def test_comparison_with_measured_series_per_vehicle():
+    sim = _FakeSimulation()
+    km = np.array([0.0, 1000.0, 2500.0, 0.0, 3000.0])
+    ft = sim.mean_at("sd_mm", km)
+    measured = pd.DataFrame({"vehicle": ["A", "A", "A", "B", "B"], "distance_km": km,
+                             "FT_mm": ft + np.array([0, 0.1, 0.1, 0, -0.2])})
+    comp = compare_with_measured(sim, measured)
+    a = comp.per_vehicle.set_index("vehicle").loc["A"]
+    assert a["bias_mm"] == pytest.approx(-0.2 / 3)
+    assert a["rms_mm"] == pytest.approx(np.sqrt(0.02 / 3))
+    assert a["simulated_loss_per_1000_km"] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="beyond the simulated"):
+        compare_with_measured(sim, measured.assign(distance_km=km * 10))
+
+
+def test_step_convergence_halves_until_the_loss_settles():
+    # A toy integration: the end value of x' = -x over 1 with Euler steps h converges as h -> 0.
+    def run(h):
+        n = int(round(1.0 / h))
+        return (1.0 - h) ** n
+
+    result, conv = converge_steps(run, lambda r: {"x": r}, {"x": 1.0}, 0.5, tolerance=0.02,
+                                  max_halvings=8, min_loss=1e-3)
+    assert conv.converged and conv.steps[0] == 0.5 and len(conv.steps) >= 3
+    assert all(c["x"] >= 0 for c in conv.changes)
+    assert conv.changes[-1]["x"] < 0.02 <= conv.changes[-2]["x"]
+    assert result == pytest.approx(np.exp(-1.0), rel=0.05)
+    _, once = converge_steps(run, lambda r: {"x": r}, {"x": 1.0}, 0.5, tolerance=1e-9,
+                             max_halvings=1, min_loss=1e-3)
+    assert not once.converged and "NOT converged" in once.summary()
+    assert relative_change(0.5, 0.51, 1.0, 0.05) == pytest.approx(0.02)
+
+
+@pytest.mark.slow
+def test_converged_run_reports_its_step_check():
+    from wearcast.physics.vehicle_wear_simulation import simulate_vehicle_wear_converged
+
+    sim = simulate_vehicle_wear_converged("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                          first_step_mm=2.0, max_halvings=1)
+    conv = sim.convergence
+    assert conv is not None and conv.steps == (2.0, 1.0)
+    assert sim.depth_per_step_mm == 1.0
+    assert set(conv.changes[0]) == {"FT", "qR"}
+    assert sim.to_dict()["step_convergence"]["steps"] == [2.0, 1.0]
