@@ -82,7 +82,7 @@ from wearcast.statistics.routes import (  # noqa: E402
 )
 
 IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
-REFERENCE = Path("/work/shared/reference/published")
+REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "published"
 
 LINE_LENGTH_M = 31_000.0  # seed 003 §5.1: l_track ~ 31 km
 TANGENT_SPEED_KMH = 130.0  # seed 003 §5.3 / Table 3

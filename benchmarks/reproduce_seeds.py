@@ -47,7 +47,7 @@ IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
 Y = np.linspace(-70.0, 60.0, 651)
 
 
-FLANGE_TREAD_SPLIT_MM = -30.0  # DESIGN.md regions: flange y < -30 mm, tread y >= -30 mm
+FLANGE_TREAD_SPLIT_MM = -30.0  # docs/conventions.md regions: flange y < -30 mm, tread y >= -30 mm
 NEAR_FLANGE_MM = -20.0  # "near the flange" (seed 002 Fig. 4b): flange and flange root
 
 

@@ -3,7 +3,7 @@
     .venv/bin/python examples/make_example_fleet.py [--out DIR]
 
 Deterministic: the same seed writes byte-identical files. Writes ``profiles.csv`` (long CSV,
-DESIGN.md import format), ``routes.json`` (``POST /v1/routes`` bodies), ``wear_table.csv``
+docs/conventions.md import format), ``routes.json`` (``POST /v1/routes`` bodies), ``wear_table.csv``
 (curve-radius table, synthetic) and ``README.md`` (how it was made, with summary figures).
 """
 
@@ -24,7 +24,8 @@ POINTS_PER_PROFILE = 200
 
 
 def wear_table_csv(table: pd.DataFrame) -> str:
-    """The table as CSV with tangent radii left empty (DESIGN.md format)."""
+    """The table as CSV with tangent radii left empty (docs/conventions.md "Curve-radius table
+    CSV")."""
     return table.to_csv(index=False, float_format="%.6g", lineterminator="\n")
 
 
@@ -57,7 +58,7 @@ demo, the tests and the benchmarks, not as evidence about real wheels. Regenerat
 
 ## Files
 
-- `profiles.csv` — long CSV (DESIGN.md import format), {len(twin.profiles):,} rows,
+- `profiles.csv` — long CSV (docs/conventions.md import format), {len(twin.profiles):,} rows,
   {size_bytes / 1e6:.2f} MB: {truth.wheel_id.nunique()} wheels x {len(config.mileages_km)}
   mileages, {config.points_per_profile} points per profile evenly spaced in arc length from
   the flange back (y = -70 mm) to the field side (y = +60 mm), 3 decimals; measurement noise
@@ -72,7 +73,8 @@ demo, the tests and the benchmarks, not as evidence about real wheels. Regenerat
     seed), left/right halves.
   - `tangent`: 100 % tangent track (the application example of seed 001 Fig. 15), the "new"
     route the demo predicts for.
-- `wear_table.csv` — curve-radius table (DESIGN.md format), motor/trailer, leading/trailing,
+- `wear_table.csv` — curve-radius table (docs/conventions.md "Curve-radius table CSV"),
+motor/trailer, leading/trailing,
   high/low/tangent, radii 150–3000 m, tread/flange, `tau_max` [MPa] and `t_gamma` [N].
   **Synthetic**: a smooth model that follows seed 001 Fig. 10 only qualitatively (flange
   measures zero on tangent and wide curves, rising fast as the radius falls on the leading

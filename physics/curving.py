@@ -66,7 +66,7 @@ GAUGE_MM = 1435.0
 TAPE_CIRCLE_HALF_SPACING_MM = 750.0
 #: Lateral distance used for the cant angle (rail-centre spacing) [mm].
 CANT_BASE_MM = 1500.0
-#: Wheel-frame lateral position separating flange (y < split) from tread [mm] (DESIGN.md).
+#: Wheel-frame lateral position separating flange (y < split) from tread [mm] (docs/conventions.md).
 FLANGE_SPLIT_Y_MM = -30.0
 #: Shear modulus of wheel and rail steel [MPa].
 SHEAR_MODULUS_MPA = 82_000.0
@@ -113,7 +113,8 @@ class ContactTable:
     ``shift_mm`` (n_s,) is the wheelset's lateral displacement towards THIS wheel's field side
     (the left wheel's +y, the right wheel's -y; both wheels alike by mirror symmetry).
     ``gap_mm`` (n_s, n_y) is the vertical distance between wheel and rail surfaces at the wheel
-    points ``wheel_y_mm`` (n_y,) (wheel frame of DESIGN.md), the wheelset at its nominal height
+    points ``wheel_y_mm`` (n_y,) (wheel frame of docs/conventions.md), the wheelset at its nominal
+    height
     and without roll, smoothed with a Gaussian of standard deviation ``smoothing_mm`` (n_y,)
     (the scale of a contact patch, 2 mm by default on tread and flange; S1002 on a rail crown
     is nearly conformal and the raw gap has shallow double minima);
@@ -858,7 +859,7 @@ class CurvingResult:
 
     @property
     def high_rail_side(self) -> str | None:
-        """Side of the wheels on the high rail: right in a left curve (DESIGN.md)."""
+        """Side of the wheels on the high rail: right in a left curve (docs/conventions.md)."""
         if not np.isfinite(self.radius_m):
             return None
         return "right" if self.direction == "left" else "left"

@@ -23,7 +23,8 @@
 * Smoothing of the worn depth: moving average (window in mm) or a smoothing spline
   (scipy's ``make_smoothing_spline``; penalty ``lam``); both are linear in the depth.
 
-Wheel frame of DESIGN.md: y [mm] lateral (negative towards the flange), z [mm] radius increase
+Wheel frame of docs/conventions.md: y [mm] lateral (negative towards the flange), z [mm] radius
+increase
 over the tape circle; depths in mm, positive = material removed.
 """
 

@@ -228,8 +228,9 @@ def _operating_point(c: LoopClass, unbalanced_acceleration_m_s2: float,
         v = (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / 3.6
         return (None, 0.0, round(v, 9))
     v = None if c.speed_kmh is None else c.speed_kmh / 3.6
-    case = curve_case(c.radius_m, c.cant_mm, v, "left", unbalanced_acceleration_m_s2)
-    return (float(c.radius_m), float(c.cant_mm), round(case.speed_m_s, 9))
+    radius_m = float(c.radius_m)  # not tangent here
+    case = curve_case(radius_m, c.cant_mm, v, "left", unbalanced_acceleration_m_s2)
+    return (radius_m, float(c.cant_mm), round(case.speed_m_s, 9))
 
 
 def _curvature(point: tuple) -> float:
@@ -459,9 +460,10 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
     idx = np.nonzero(c.loaded)
     if idx[0].size == 0:
         return out
-    sel = tuple(np.asarray(getattr(c, f))[idx] for f in ("xi", "eta", "phi_per_mm", "a_mm",
-                                                           "b_mm", "normal_n"))
-    fs = fastsim(*sel, friction, SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
+    xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
+        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_n"))
+    fs = fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
+                 n_x=fastsim_grid, n_y=fastsim_grid)
     if law.name == "archard_kth":
         basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
                                     c.rolling_radius_mm[idx], c.angle_rad[idx], y_grid_mm,

@@ -9,12 +9,14 @@ at one speed per radius (unbalanced lateral acceleration 0.58 m/s^2); here they 
 Conventions
 -----------
 * Every curve class is solved as a LEFT curve (track bending to the vehicle's left), so the
-  right wheels run on the high rail and the left wheels on the low rail (DESIGN.md "Sides and
+  right wheels run on the high rail and the left wheels on the low rail (docs/conventions.md "Sides
+  and
   curves"); the model is mirror symmetric (tested), so a right curve gives the same table with
   the sides exchanged. The class ``direction`` is therefore only carried into the raw frame.
 * Axle 1 of the (front) bogie leads: ``leading`` = axle 1, ``trailing`` = axle 2.
 * A wheel's contact patches are attributed to a region by their lateral position on the wheel:
-  wheel-frame y < -30 mm is ``flange``, the rest ``tread`` (DESIGN.md). Per region T-gamma is
+  wheel-frame y < -30 mm is ``flange``, the rest ``tread`` (docs/conventions.md). Per region
+  T-gamma is
   the sum over its patches [N], tau_max the largest [MPa]; a region without contact gets 0.
 * On tangent track both wheels are ``tangent``; the table gives their mean (they are equal
   by symmetry up to the solver tolerance) with ``radius_m`` NaN.
@@ -46,7 +48,7 @@ from wearcast.physics.wear_measures import (
     t_gamma_per_area,
 )
 
-#: Columns of the curve-radius table (DESIGN.md "Curve-radius table CSV").
+#: Columns of the curve-radius table (docs/conventions.md "Curve-radius table CSV").
 TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value"]
 MEASURES = ("tau_max", "t_gamma")
 _KMH = 3.6
@@ -191,7 +193,7 @@ def _add_indices(contacts: pd.DataFrame) -> pd.DataFrame:
 
 
 def _table_from_contacts(contacts: pd.DataFrame) -> pd.DataFrame:
-    """Aggregate the raw contacts into the DESIGN.md table (regions, rails, radii)."""
+    """Aggregate the raw contacts into the table of docs/conventions.md (regions, rails, radii)."""
     df = contacts.copy()
     df["tau_max"] = np.where(df["in_contact"], df["tau_max_mpa"], 0.0)
     df["t_gamma"] = np.where(df["in_contact"], df["t_gamma_n"], 0.0)
@@ -250,7 +252,8 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
 
     Returns
     -------
-    (table, contacts): ``table`` in the DESIGN.md format (columns ``TABLE_COLUMNS``; tau_max in
+    (table, contacts): ``table`` in the format of docs/conventions.md (columns ``TABLE_COLUMNS``;
+    tau_max in
     MPa, t_gamma in N); ``contacts`` one row per bogie type, class, axle, side and contact
     patch with positions, angle, forces, creepages, Hertz patch, tau_max, T-gamma, T-gamma/A,
     KTH/Archard and Krause-Poll indices and regimes (wear_measures; the Archard sliding velocity

@@ -62,7 +62,7 @@ def _default_zones() -> list[Zone]:
 
 
 class MeasuredWearIn(Strict):
-    """A measured vertical wear curve w(y) [mm] on the wheel frame (DESIGN.md)."""
+    """A measured vertical wear curve w(y) [mm] on the wheel frame (docs/conventions.md)."""
 
     y_mm: list[float] = Field(min_length=5, max_length=5000)
     wear_mm: list[float] = Field(min_length=5, max_length=5000)

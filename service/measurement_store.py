@@ -1,6 +1,6 @@
 """Measurements in storage: one posted as JSON, listing with filters, reading back points.
 
-A ``filter`` maps metadata field names to one accepted value or a list of them (DESIGN.md
+A ``filter`` maps metadata field names to one accepted value or a list of them (docs/conventions.md
 "Service"): the standard fields (``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km,
 measured_on, route_id, running_mode, instrument_id, load_t, reference_profile, kind,
 batch_id, id``) are matched in SQL; any other name is a covariate, matched in Python (numbers

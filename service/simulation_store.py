@@ -21,7 +21,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
-from wearcast.service.errors import NotFound, Unprocessable, from_value_error
+from wearcast.service.errors import NotFound, from_value_error
 from wearcast.service.job_store import (
     RESTART_REASON,
     JobControl,

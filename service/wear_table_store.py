@@ -148,7 +148,8 @@ def wear_table_out(session: Session, row: db.WearTable, with_rows: bool = True) 
 # --- computed tables --------------------------------------------------------------------------
 
 def canonical_csv(frame: pd.DataFrame) -> bytes:
-    """The table as CSV bytes in a fixed form (the columns of DESIGN.md, shortest round-trip
+    """The table as CSV bytes in a fixed form (the columns of docs/conventions.md, shortest
+    round-trip
     float repr, ``\\n`` line ends): its SHA-256 is the content key of a computed table."""
     out = frame.loc[:, list(wear_tables.TABLE_COLUMNS)]
     return out.to_csv(index=False, lineterminator="\n").encode()

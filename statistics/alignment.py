@@ -2,7 +2,7 @@
 
 Seed 000 §IV.A corrects the position of a measured profile by minimising the mean distance
 between the measured and the reference curve over a lateral shift X, a vertical shift Y and a
-rotation alpha (eq. 2, solved there by Hooke–Jeeves pattern search). DESIGN.md "The hybrid
+rotation alpha (eq. 2, solved there by Hooke–Jeeves pattern search). docs/conventions.md "The hybrid
 model" step 1 asks for the same three-parameter least-squares fit. Here it is solved by
 Gauss–Newton with iteratively reweighted least squares, because the fit must run in well under
 a millisecond per profile:

@@ -304,7 +304,7 @@ class FlangeLubrication(Cause):
         return f"flanges on lubricated routes wear {m:.2f} x the dry rate"
 
 
-#: The catalogue, in DESIGN.md order.
+#: The catalogue, in docs/conventions.md order.
 CATALOGUE: tuple[Cause, ...] = (
     Traction(), RunningDirection(), CurveAsymmetry(), FlangeLubrication(), WearMeasure(),
     NonlinearProgression(), SeasonalFriction(), VehicleLoad(), ProfileMisalignment(),

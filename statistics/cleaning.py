@@ -3,7 +3,7 @@
 A measured profile arrives as raw points ``(y_mm, z_mm)`` in the instrument's order. Before it
 can be aligned to its reference (``wearcast.statistics.alignment``) and turned into a wear
 curve (seed 001 §3.1) it must be a single-valued, ascending function z(y) in the wheel frame
-of DESIGN.md "Conventions": y [mm] lateral from the tape circle, negative towards the flange;
+of docs/conventions.md: y [mm] lateral from the tape circle, negative towards the flange;
 z [mm] radius increase over the tape circle, positive towards the flange tip.
 
 ``clean_profile`` does, in this order:

@@ -101,7 +101,7 @@ def weighted_wear_measure(
     route : curve classes with their shares c_i
     table : curve-radius table (long DataFrame or compiled)
     bogie_type : bogie type in the table
-    axle : 1 or 2, the wheelset's position in its bogie (DESIGN.md "Sides and curves")
+    axle : 1 or 2, the wheelset's position in its bogie (docs/conventions.md "Sides and curves")
     side : 'left' or 'right' side of the vehicle
     running_mode : 'lead' (axle 1 always leads) or 'mixed' (half leading, half trailing)
     region : 'flange' or 'tread'
@@ -272,7 +272,8 @@ class HybridModel:
             curves = self.states.region(region).curves_mm.reshape(-1, g)
             zero = np.zeros_like(curves)
             pair = (curves, zero) if region == "flange" else (zero, curves)
-            joined = join_regions(self.grid_y_mm, *pair, self.split_y_mm, self.join_window_mm)
+            joined = join_regions(self.grid_y_mm, pair[0], pair[1], self.split_y_mm,
+                                  self.join_window_mm)
             joined.setflags(write=False)
             out.append(joined)
         return out[0], out[1]

@@ -5,7 +5,8 @@ p(s) = p_0 + b s. Seed 003 §5.2 reports that on the Aosta line FT (Sd) and QR (
 almost linearly" while FH (Sh) "remains approximately constant" (Table 2).
 
 Intercept: by default it is FIXED at the new-profile value (S1002: Sd 32.5, Sh 28.0,
-qR 10.8 mm, DESIGN.md), because each series starts at reprofiling, where the profile is the
+qR 10.8 mm, docs/conventions.md), because each series starts at reprofiling, where the profile is
+the
 nominal one (seed 003 Table 2 starts every vehicle at exactly these values), and because with
 the three or four points a vehicle typically has, a free intercept roughly doubles the
 slope's variance. Rows at mileage 0 then carry no information and are left out of the fit
@@ -31,7 +32,7 @@ from scipy.stats import t as student_t
 
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 
-#: S1002 new-profile values [mm] (DESIGN.md "Profile parameters"; EN 13715).
+#: S1002 new-profile values [mm] (docs/conventions.md "Profile parameters and limits"; EN 13715).
 NEW_PROFILE_VALUES = {"sd_mm": 32.5, "sh_mm": 28.0, "qr_mm": 10.8}
 PARAMETERS = ("sd_mm", "sh_mm", "qr_mm")
 LIMIT_NAME = {"sd_mm": "sd", "sh_mm": "sh", "qr_mm": "qr"}

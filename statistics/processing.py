@@ -1,6 +1,7 @@
 """One call per measured profile: clean, align, wear curve, wear areas, flange parameters.
 
-This is DESIGN.md "The hybrid model" steps 1–2 for a single measurement (seed 001 §3.1, seed
+This is docs/conventions.md "The hybrid model" steps 1–2 for a single measurement (seed 001 §3.1,
+seed
 000 §IV.A), the call the import service makes for each profile it stores.
 
 Two ways to bring the profile onto its reference for the wear curve (``alignment``):

@@ -1,6 +1,7 @@
 """Flange parameters Sd, Sh, qR of a wheel profile and their in-service limits.
 
-Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm; DESIGN.md
+Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm;
+docs/conventions.md
 "Conventions"; ``reference/README.md`` "Wheel limits"), in the wheel frame y [mm] from the
 tape circle (back face at y = -70), z [mm] up towards the flange tip:
 
@@ -89,7 +90,7 @@ def parameters_from_wear_curve(
 
     Returns
     -------
-    FlangeParameters of the worn profile (DESIGN.md hybrid model step 6).
+    FlangeParameters of the worn profile (docs/conventions.md hybrid model step 6).
     """
     grid = np.asarray(grid_y_mm, dtype=float)
     z_worn = reference_on_grid(grid, reference_height) - np.asarray(wear_mm, dtype=float)

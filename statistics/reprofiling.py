@@ -1,4 +1,4 @@
-"""Reprofiling mileage from the hybrid model (DESIGN.md "The hybrid model" 7).
+"""Reprofiling mileage from the hybrid model (docs/conventions.md "The hybrid model" 7).
 
 The wheel's region areas grow as A_r(s) = A_r,0 + k_r s (seed 001 eq. 4, k_r = c_s,r P_s,r);
 the wear states turn areas into a worn profile, whose Sd, Sh and qR are compared with the

@@ -4,7 +4,8 @@ A route is described by classes of (curve radius, direction, cant, speed), each 
 of the route length it covers. The hybrid model weights a curve-radius table with these shares
 (seed 001 eq. 2, ``P = sum_i c_i P_i``).
 
-Conventions (DESIGN.md "Sides and curves"): ``direction`` is the side of the vehicle towards
+Conventions (docs/conventions.md "Sides and curves"): ``direction`` is the side of the vehicle
+towards
 which the track bends (``'left'`` or ``'right'``); a tangent class has ``radius_m = None`` and
 ``direction = None``.
 """
@@ -390,7 +391,7 @@ def route_share_by_rail(route: Route, side: str) -> dict[str, float]:
 def rail_for(route_class: RouteClass, side: str) -> str:
     """Rail a wheel on ``side`` runs on in this class: 'tangent', 'high' or 'low'.
 
-    DESIGN.md "Sides and curves": in a left curve the right wheels run on the high (outer)
+    docs/conventions.md "Sides and curves": in a left curve the right wheels run on the high (outer)
     rail and the left wheels on the low rail; mirrored in a right curve.
     """
     if route_class.radius_m is None:

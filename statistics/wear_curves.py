@@ -1,4 +1,4 @@
-"""Wear curves and wear areas (seed 001 §3.1; DESIGN.md "Conventions").
+"""Wear curves and wear areas (seed 001 §3.1; docs/conventions.md).
 
 The wear curve is the vertical distance between the reference (new) profile and the aligned
 worn profile, w(y) = z_ref(y) - z_worn(y) [mm], positive where material is gone. Seed 001

@@ -33,7 +33,7 @@ REGIONS = ("flange", "tread")
 
 
 def region_mask(grid_y_mm: ArrayLike, split_y_mm: float, region: str) -> NDArray[np.bool_]:
-    """Grid points of a region: flange y < split, tread y >= split (DESIGN.md)."""
+    """Grid points of a region: flange y < split, tread y >= split (docs/conventions.md)."""
     y = np.asarray(grid_y_mm, dtype=float)
     if region == "flange":
         return y < split_y_mm

@@ -1,4 +1,4 @@
-"""Curve-radius tables of wear measures (DESIGN.md "The hybrid model" 5).
+"""Curve-radius tables of wear measures (docs/conventions.md "The hybrid model" 5).
 
 A table gives, per bogie type, wheelset position (leading/trailing), rail (high/low/tangent),
 curve radius, wheel region (tread/flange) and wear measure (tau_max/t_gamma), one value of the

@@ -20,7 +20,8 @@ Wheelset pose:
   rail** (so the left flange closes up).  ``roll_rad`` rotation about +x, **positive when the
   left wheel rises**.  ``height_mm`` vertical displacement of the axle from its nominal
   position (tape circles of radius r0 standing on the rail tops at z = 0).
-Wheel frame (per wheel, DESIGN.md): ``y_wheel_mm`` from the tape circle, negative towards the
+Wheel frame (per wheel, docs/conventions.md): ``y_wheel_mm`` from the tape circle, negative towards
+the
   flange, i.e. positive towards the wheel's outer (field) face for both wheels; z = radius
   increase over the nominal radius r0.  The left wheel's tape circle is at y_ws = +d/2, the
   right one at -d/2 in the wheelset frame, d = flange_back_distance + 2 * tape offset (1500).
@@ -78,7 +79,8 @@ class WheelsetTrack:
 
     Parameters
     ----------
-    wheel : wheel profile in the wheel frame (DESIGN.md), used for the left wheel and, mirrored,
+    wheel : wheel profile in the wheel frame (docs/conventions.md), used for the left wheel and,
+    mirrored,
         for the right wheel unless ``wheel_right`` is given
     rail : rail profile in the upright rail frame (gauge side y < 0), used for both rails unless
         ``rail_right`` is given; it is inclined by ``rail_inclination`` here

@@ -2,7 +2,7 @@
 
 The table is Kalker's table E.3 (C11, C22, C23 for Poisson's ratio 0, 0.25, 0.5), as held in
 CONTACT's ``linrol`` (E.A.H. Vollebregt, Apache-2.0), plus C33 from a second public table;
-both transcribed in ``shared/reference/README.md`` ("Kalker's linear-theory coefficients").
+both from [Kalker 1967] (see docs/references.md).
 One deliberate difference from CONTACT's source: for a/b = 0.8, nu = 0.25 CONTACT holds
 C23 = 1.15, which breaks the monotone column; Kalker's printed value 1.25 is used here.
 

@@ -3,7 +3,7 @@
 A profile is a plane curve (y(s), z(s)) with s the arc length [mm].  Parameterising by arc
 length, not by y, keeps steep and even overhanging parts (flange flanks, rail flanks, a
 measured flange with a lip) well posed.  Coordinates are whatever frame the points are given
-in; wheels use the wheel frame of DESIGN.md (y from the tape circle, negative towards the
+in; wheels use the wheel frame of docs/conventions.md (y from the tape circle, negative towards the
 flange; z the radius increase over the tape circle), rails the rail frame of
 ``profiles.rails`` (z up, top at (0, 0), gauge side at y < 0).
 
@@ -173,7 +173,8 @@ class ProfileCurve:
 
 def s1002_curve(step_mm: float = 0.1, y_min_mm: float = S1002_Y_MIN_MM,
                 y_max_mm: float = S1002_Y_MAX_MM) -> ProfileCurve:
-    """S1002 wheel profile (wheel frame of DESIGN.md) as an interpolating arc-length spline.
+    """S1002 wheel profile (wheel frame of docs/conventions.md) as an interpolating arc-length
+    spline.
 
     Parameters
     ----------

@@ -1,6 +1,7 @@
 """Flange parameters Sd, Sh, qR of a wheel profile (EN 15313 / MiniProf).
 
-Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm; DESIGN.md
+Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm;
+docs/conventions.md
 "Conventions"; ``reference/README.md`` "Wheel limits"), in the wheel frame y [mm] from the
 tape circle (back face at y = -70), z [mm] up towards the flange tip:
 

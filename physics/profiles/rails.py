@@ -2,7 +2,8 @@
 
 Rail frame: ``y`` [mm] lateral, ``z`` [mm] up, the top of the (un-inclined) rail at (0, 0).
 The head is symmetric; ``y < 0`` is the half that faces the track centre when the rail is
-laid (the gauge side), matching the wheel frame of DESIGN.md where the flange is at ``y < 0``.
+laid (the gauge side), matching the wheel frame of docs/conventions.md where the flange is at ``y <
+0``.
 
 Geometry (``reference/README.md``, tables "60E1" and "60E2"): a chain of tangent arcs from the
 crown outwards, then the 1:20 flank (dy/dz = 1/20).  The arc centres are recomputed here from

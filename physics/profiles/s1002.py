@@ -1,11 +1,11 @@
 """S1002 wheel profile (EN 13715) from its analytic piecewise definition.
 
-Coordinates follow the wheel frame of DESIGN.md: ``y`` [mm] lateral from the tape circle,
+Coordinates follow the wheel frame of docs/conventions.md: ``y`` [mm] lateral from the tape circle,
 negative towards the flange (flange back at y = -70, flange tip at y = -55); ``z`` [mm] radius
 increase over the tape circle, positive towards the flange tip.
 
 Source: the Netter (DLR) piecewise definition of S1002 as listed in
-``shared/reference/README.md`` (checked there against CONTACT's MBench_S1002_v3.prw).
+EN 13715 (checked in the tests against CONTACT's MBench_S1002_v3.prw).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Streaming reader for the long profile CSV: one row per profile point (DESIGN.md "Long CSV").
+"""Streaming reader for the long profile CSV: one row per profile point (docs/conventions.md "Long
+CSV").
 
 Required columns ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km, y_mm, z_mm``
 (``y_mm``/``z_mm`` [mm] in the wheel frame: y from the tape circle, negative towards the

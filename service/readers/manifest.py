@@ -3,7 +3,8 @@
 Column ``file`` names a MiniProf file of the upload (its base name, or its path inside the
 zip); for a multi-part ``.mpt`` a row may name one part as ``name.mpt#2`` (1-based, as in
 the file's ``[Profile2Points]``). The other columns are the metadata columns of the long CSV
-(DESIGN.md "Long CSV": ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km`` required,
+(docs/conventions.md "Long CSV": ``wheel_id, vehicle_id, bogie_type, axle, side, mileage_km``
+required,
 the optional ones and covariates). ``measured_on`` and ``instrument_id`` may be left empty:
 the import then takes them from the MiniProf header.
 

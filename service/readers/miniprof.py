@@ -14,7 +14,7 @@ Three text layouts (reference/README.md "Measurement file formats"):
 
 Raw points are returned in file order in instrument coordinates: X [mm] from the wheel's
 back face (0) to the field side (~140), Y [mm] up with 0 at the taperline (X = 70).
-``to_wheel_frame`` converts to the wheel frame of DESIGN.md (y = X - 70, z = Y), undoing
+``to_wheel_frame`` converts to the wheel frame of docs/conventions.md (y = X - 70, z = Y), undoing
 the sign and order differences between files and refusing data that is not a wheel.
 """
 
@@ -381,7 +381,7 @@ def parse_miniprof(data: bytes, file_name: str) -> MiniProfFile:
 
 
 def to_wheel_frame(mp: MiniProfFile, part: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Points of a MiniProf wheel file in the wheel frame (DESIGN.md "Conventions").
+    """Points of a MiniProf wheel file in the wheel frame (docs/conventions.md).
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Reader for the parameter-only CSV: one row per measurement with Sd, Sh, qR [mm].
 
-Same metadata columns as the long profile CSV (DESIGN.md "Long CSV"), plus ``sd_mm, sh_mm,
-qr_mm`` (EN 15313 / MiniProf definitions, DESIGN.md "Conventions") instead of points. One
+Same metadata columns as the long profile CSV (docs/conventions.md "Long CSV"), plus ``sd_mm, sh_mm,
+qr_mm`` (EN 15313 / MiniProf definitions, docs/conventions.md) instead of points. One
 row per (``wheel_id``, ``mileage_km``); a repeated measurement is refused. Streams in chunks
 like the long reader; line numbers are 1-based file lines (header = line 1).
 """

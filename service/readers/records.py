@@ -2,7 +2,8 @@
 
 Every reader (long CSV, parameter CSV, MiniProf + manifest, zip bundles) yields
 ``ProfileRecord`` or ``ParameterRecord`` objects, each carrying a validated
-``MeasurementMeta``. The metadata columns and their rules are those of DESIGN.md "Long CSV"
+``MeasurementMeta``. The metadata columns and their rules are those of docs/conventions.md "Long
+CSV"
 and "Conventions": ``side`` in {left, right} seen in the vehicle's reference running
 direction, ``axle`` in {1, 2} counted from the vehicle's reference end, ``running_mode`` in
 {lead, mixed}; any other column is kept as a covariate.
@@ -75,7 +76,7 @@ MeasurementMetaWithoutPoints = MeasurementMeta
 
 @dataclass(frozen=True)
 class ProfileRecord:
-    """A measured wheel profile in the wheel frame of DESIGN.md.
+    """A measured wheel profile in the wheel frame of docs/conventions.md.
 
     ``y_mm`` [mm] lateral from the tape circle, negative towards the flange; ``z_mm`` [mm]
     radius increase over the tape circle (up). Points in measurement order.

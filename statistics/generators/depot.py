@@ -96,7 +96,8 @@ def depot_measure(bogie: str, wheelset: str, rail: str, radius_m: float | None, 
 
 
 def depot_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
-    """The curve-radius table (DESIGN.md CSV columns) sampling ``depot_measure``."""
+    """The curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling
+    ``depot_measure``."""
     rows = []
     for bogie in ("motor", "trailer"):
         for ws in ("leading", "trailing"):

@@ -1,14 +1,16 @@
 """Fleet twin: a generator of realistic wheel-profile measurements that obey the hybrid model.
 
 The twin produces what a fleet's MiniProf campaign would deliver — one measured profile per
-(wheel, mileage) in the long-CSV import format of DESIGN.md — but from a known truth, so that
+(wheel, mileage) in the long-CSV import format of docs/conventions.md — but from a known truth, so
+that
 the statistical core can be tested against it and the discrepancy finder can later be shown
 effects it has to find.
 
 How a profile is made (all lengths in mm, mileage in km):
 
 1. **Wear measure of the wheel's route** (seed 001 eq. 2): P = sum_i c_i P_i over the route's
-   curve classes, P_i read from a curve-radius table (DESIGN.md format) for the wheel's bogie
+   curve classes, P_i read from a curve-radius table (docs/conventions.md "Curve-radius table CSV")
+   for the wheel's bogie
    type, wheelset position (axle 1 leads in ``lead`` mode; ``mixed`` = half leading, half
    trailing), rail (high/low from the wheel's side and the curve's direction, tangent for
    straight track) and region; radii between table rows are interpolated linearly in
@@ -188,7 +190,7 @@ def tangent_route(name: str = "tangent", speed_kmh: float = 100.0) -> TwinRoute:
 
 def synthetic_wear_table(radii_m: Sequence[float] = (150, 200, 250, 300, 400, 500, 700, 1000,
                                                      1500, 2000, 3000)) -> pd.DataFrame:
-    """A smooth, synthetic curve-radius table in the DESIGN.md CSV format.
+    """A smooth, synthetic curve-radius table in the docs/conventions.md CSV format.
 
     Stand-in for the physics core's tables; follows seed 001 Fig. 10 qualitatively:
 
@@ -252,7 +254,7 @@ def _synthetic_values(bogie: str, wheelset: str, rail: str, kappa: Array,
 def _rail_for(side: str, direction: str | None, radius_m: float | None) -> str:
     if radius_m is None or direction is None:
         return "tangent"
-    # In a left curve the right wheels run on the high (outer) rail (DESIGN.md).
+    # In a left curve the right wheels run on the high (outer) rail (docs/conventions.md).
     return "high" if side != direction else "low"
 
 
@@ -297,7 +299,7 @@ def weighted_wear_measure(table: pd.DataFrame | WearTableIndex, route: TwinRoute
 
     Axle 1 leads in ``lead`` mode and axle 2 trails; ``mixed`` averages leading and trailing.
     Rail per class: tangent on straight track, else high when the wheel's side is opposite
-    the curve's direction (DESIGN.md). Units are those of the table's measure.
+    the curve's direction (docs/conventions.md). Units are those of the table's measure.
     """
     index = table if isinstance(table, WearTableIndex) else WearTableIndex(table)
     if running_mode == "lead":
@@ -747,7 +749,8 @@ def generate_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None) 
     ----------
     config : the fleet (units, routes, bogies, axles, sides, mileages, scatter, noise, seed,
         effect hooks)
-    wear_table : curve-radius table (DESIGN.md format); default ``synthetic_wear_table()``
+    wear_table : curve-radius table (docs/conventions.md "Curve-radius table CSV"); default
+    ``synthetic_wear_table()``
 
     Returns
     -------

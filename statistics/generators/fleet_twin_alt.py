@@ -120,7 +120,8 @@ def alt_measure(bogie_type: str, wheelset: str, rail: str, radius_m: float | Non
 
 
 def alt_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
-    """The curve-radius table (DESIGN.md CSV columns) sampling ``alt_measure``, both measures."""
+    """The curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling
+    ``alt_measure``, both measures."""
     rows = []
     for bogie in ("motor", "trailer"):
         for ws in ("leading", "trailing"):

@@ -44,7 +44,7 @@ def test_table_has_the_design_format(manchester_table):
                 "tau_max_mpa", "t_gamma_n", "t_gamma_per_area_n_per_mm2", "archard_regime",
                 "krause_poll_regime"):
         assert col in contacts.columns
-    # the table can be written as the DESIGN.md CSV (empty radius for tangent)
+    # the table can be written as the CSV of docs/conventions.md (empty radius for tangent)
     csv_text = table.to_csv(index=False)
     assert csv_text.splitlines()[0] == ",".join(wt.TABLE_COLUMNS)
 

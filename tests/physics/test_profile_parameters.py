@@ -17,7 +17,8 @@ from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
 
 @pytest.mark.parametrize("step_mm", [0.1, 0.5])
 def test_s1002_new_gives_the_published_parameters(step_mm):
-    # DESIGN.md / reference README: S1002 new has Sd 32.50, Sh 28.00, qR 10.80 mm. The exact
+    # docs/conventions.md / reference README: S1002 new has Sd 32.50, Sh 28.00, qR 10.80 mm. The
+    # exact
     # values of the analytic profile are Sd = 32.500, Sh = 28.000 and qR = 10.794 (flank arc
     # F: z = 26 at y = -48.294); the published 10.80 is rounded, so 0.01 mm holds.
     y, z = s1002_profile(step_mm)
@@ -79,7 +80,7 @@ def test_parameters_ignore_vertical_offset_and_sampling(dz, step):
 
 
 def test_nominal_frame_gives_the_published_s1002_parameters():
-    # DESIGN.md: S1002 new Sd 32.50, Sh 28.00, qR 10.80 mm on the wear loop's 0.2 mm grid;
+    # docs/conventions.md: S1002 new Sd 32.50, Sh 28.00, qR 10.80 mm on the wear loop's 0.2 mm grid;
     # chord crossings there: Sd 32.5018, qR 10.7963 (exact 32.500 / 10.794), within 0.01 mm.
     y = np.linspace(-70.0, 60.0, 651)
     p = nominal_frame_flange_parameters(y, s1002_height_mm(y))

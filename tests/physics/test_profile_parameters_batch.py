@@ -47,7 +47,8 @@ def test_batch_equals_the_one_profile_definition(y):
 
 
 def test_s1002_new_gives_the_published_parameters_in_a_batch():
-    # DESIGN.md / reference README: S1002 new has Sd 32.50, Sh 28.00, qR 10.80 mm (the exact
+    # docs/conventions.md / reference README: S1002 new has Sd 32.50, Sh 28.00, qR 10.80 mm (the
+    # exact
     # analytic qR is 10.794, hence 0.01 mm as in test_profile_parameters)
     y, z = s1002_profile(0.5)
     p = flange_parameters_batch(y, np.vstack([z, z]))

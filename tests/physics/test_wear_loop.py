@@ -45,7 +45,7 @@ def test_progress_and_parameters(adaptive):
     sim, calls = adaptive
     assert [c[0] for c in calls] == [1, 2, 3] and all(c[1] == 3 for c in calls)
     assert [c[2] for c in calls] == pytest.approx(sim.mileage_km[1:].tolist())
-    # New S1002 (DESIGN.md): Sh 28.0, Sd 32.5, qR 10.8 mm.
+    # New S1002 (docs/conventions.md): Sh 28.0, Sd 32.5, qR 10.8 mm.
     assert sim.sh_mm[0] == pytest.approx(28.0, abs=0.01)
     assert sim.sd_mm[0] == pytest.approx(32.5, abs=0.01)
     assert sim.qr_mm[0] == pytest.approx(10.8, abs=0.01)

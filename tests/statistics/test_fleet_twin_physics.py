@@ -1,6 +1,7 @@
 """The fleet twin driven by a curve-radius table computed by the physics core (issue 4).
 
-The twin accepts any table in the DESIGN.md format; here it is the Minuetto-like DMU's table
+The twin accepts any table in the format of docs/conventions.md; here it is the Minuetto-like DMU's
+table
 from quasi-static curving (``wearcast.physics.wear_tables``) for the radii of the Aosta route
 (seed 003 Table 3) and the metro line (seed 000 Table 1). The hybrid calibration must then
 recover the c_s the twin was made with, from processed (noisy, misaligned) profiles.

@@ -202,7 +202,8 @@ def test_tangent_track_gives_no_flange_wear(model, table):
 def test_prediction_profile_and_parameters(model, table):
     pred = predict(model, CAL_ROUTE, table, bogie_type="motor", axle=1, side="right",
                    mileage_km=[0.0, 60_000.0, 120_000.0])
-    # new S1002: Sd 32.5, Sh 28.0, qR 10.8 mm (DESIGN.md); the parameters come from the grid
+    # new S1002: Sd 32.5, Sh 28.0, qR 10.8 mm (docs/conventions.md); the parameters come from the
+    # grid
     assert pred.sd_mm[0] == pytest.approx(32.5, abs=0.05)
     assert pred.sh_mm[0] == pytest.approx(28.0, abs=0.05)
     assert pred.qr_mm[0] == pytest.approx(10.8, abs=0.05)

@@ -59,7 +59,7 @@ def test_route_round_trips_through_json():
 
 
 def test_rail_mapping_left_curve_puts_right_wheels_on_high_rail():
-    # DESIGN.md "Sides and curves": in a left curve the right wheels run on the high rail.
+    # docs/conventions.md "Sides and curves": in a left curve the right wheels run on the high rail.
     left_curve = RouteClass(400.0, "left", 80.0, 60.0, 1.0)
     assert rail_for(left_curve, "right") == "high"
     assert rail_for(left_curve, "left") == "low"
