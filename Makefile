@@ -33,7 +33,7 @@ run: $(STAMP)
 worker: $(STAMP)
 	$(BIN)/wearcast worker
 
-test: lint
+test: lint typecheck
 	$(BIN)/python -m pytest
 
 test-all: $(STAMP)
@@ -49,7 +49,6 @@ $(TYPES)/__init__.py:
 lint: $(STAMP)
 	$(BIN)/ruff check physics statistics service tests benchmarks examples docs
 
-# not yet part of `make test`: 28 cross-module type errors remain (issue 15)
 typecheck: $(STAMP) $(TYPES)/__init__.py
 	MYPYPATH=.typecheck $(BIN)/mypy -p wearcast.physics -p wearcast.statistics -p wearcast.service
 

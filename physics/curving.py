@@ -45,6 +45,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,7 +55,7 @@ from scipy.optimize import root
 from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import fastsim
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
-from wearcast.physics.profiles.rails import rail_profile
+from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
 from wearcast.physics.wear_measures import t_gamma as wear_t_gamma
@@ -290,7 +291,7 @@ def conical_wheel(conicity: float) -> Callable[[NDArray[np.float64]], NDArray[np
     return height_mm
 
 
-def _rail_envelope(rail: str, inclination: float) -> tuple[NDArray, NDArray, float]:
+def _rail_envelope(rail: str | RailShape, inclination: float) -> tuple[NDArray, NDArray, float]:
     """Upper envelope z(y) of the inclined rail (top at 0) and the distance of the rail-frame
     origin from the track centre [mm] that puts the gauge point (14 mm below the top, innermost)
     at GAUGE_MM / 2."""
@@ -310,7 +311,8 @@ def _rail_envelope(rail: str, inclination: float) -> tuple[NDArray, NDArray, flo
 KIK_PIOTROWSKI_EPSILON = 0.55
 
 
-def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLike, rail: str,
+def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLike,
+                            rail: str | RailShape,
                             inclination: float, wheel_y_mm: ArrayLike, rail_y_mm: ArrayLike,
                             normal_n: ArrayLike, a_mm: ArrayLike, b_mm: ArrayLike,
                             search_mm: float = 12.0) -> NDArray[np.float64]:
@@ -387,7 +389,8 @@ def _hertz_unit_table() -> tuple[NDArray, NDArray, NDArray, NDArray]:
 
 
 def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray[np.float64]]
-                        | None = None, rail: str = "60E1", inclination: float = 1.0 / 40.0,
+                        | None = None, rail: str | RailShape = "60E1",
+                        inclination: float = 1.0 / 40.0,
                         wheel_radius_m: float = 0.46, max_shift_mm: float = 15.0,
                         shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
                         wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
@@ -455,7 +458,8 @@ def contact_table_for(wheel_profile: str, rail: str, inclination: float,
 
 def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
     """The (cached) contact table of a vehicle's profile pair."""
-    return contact_table_for(vehicle.wheel_profile, vehicle.rail_profile,
+    rail: Any = vehicle.rail_profile  # a name or a hashable measured-rail shape
+    return contact_table_for(vehicle.wheel_profile, rail,
                              float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))
 
 

@@ -244,7 +244,7 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     mileage = [0.0]
     params = [_parameters(y, profiles)]
     updates = fallbacks = 0
-    s = opts.forward_share
+    fwd = opts.forward_share
     lead_index = {w: i for i, w in enumerate(BOGIE_WHEELS)}
     for _ in range(max_steps):
         if mileage[-1] >= mileage_km - 1e-9:
@@ -260,12 +260,13 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
             previous[bi] = contacts
             updates += 1
             fallbacks += fb
-            lead = _wheel_rates(contacts, wl, y, shares, opts, bogie.friction, sm, fastsim_grid)
+            lead_rates = _wheel_rates(contacts, wl, y, shares, opts, bogie.friction, sm,
+                                      fastsim_grid)
             for axle, side in BOGIE_WHEELS:
                 other = (3 - axle, side)
-                rates[bi, lead_index[(axle, side)]] = (s * lead[(axle, side)]
-                                                       + (1.0 - s) * lead[other])
-        slopes = np.gradient(profiles, y, axis=-1)
+                rates[bi, lead_index[(axle, side)]] = (fwd * lead_rates[(axle, side)]
+                                                       + (1.0 - fwd) * lead_rates[other])
+        slopes = np.asarray(np.gradient(profiles, y, axis=-1))
         peak = float(np.max(rates * np.sqrt(1.0 + slopes * slopes)))
         remaining = mileage_km - mileage[-1]
         ds = remaining if peak <= 0 else min(depth_per_step_mm / peak, remaining)

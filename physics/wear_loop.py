@@ -227,9 +227,10 @@ def _operating_point(c: LoopClass, unbalanced_acceleration_m_s2: float,
     if c.is_tangent:
         v = (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / 3.6
         return (None, 0.0, round(v, 9))
-    v = None if c.speed_kmh is None else c.speed_kmh / 3.6
-    radius_m = float(c.radius_m)  # not tangent here
-    case = curve_case(radius_m, c.cant_mm, v, "left", unbalanced_acceleration_m_s2)
+    speed_m_s = None if c.speed_kmh is None else c.speed_kmh / 3.6
+    assert c.radius_m is not None  # not tangent here
+    radius_m = float(c.radius_m)
+    case = curve_case(radius_m, c.cant_mm, speed_m_s, "left", unbalanced_acceleration_m_s2)
     return (radius_m, float(c.cant_mm), round(case.speed_m_s, 9))
 
 
@@ -420,7 +421,8 @@ def contact_volume_basis(contacts: ClassContacts, law: WearLaw) -> NDArray[np.fl
     elif law.name == "krause_poll":
         basis = krause_poll_rate(c.t_gamma_n, v, area)[..., None]
     elif law.name == "usfd":
-        basis = usfd_rate(c.t_gamma_n, area, law.usfd_jump)[..., None]
+        jump: Any = law.usfd_jump  # 'continuous' or 'as_printed', checked by WearLaw
+        basis = usfd_rate(c.t_gamma_n, area, jump)[..., None]
     else:
         basis = tau_max_rate(c.tau_max_mpa, area, law.tau_coefficient_mm_per_m_mpa,
                              law.tau_threshold_mpa)[..., None]
@@ -593,8 +595,9 @@ def _contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, sid
                  unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
                  fastsim_grid: int, y_mm: NDArray, patch_width: str = "hertz") -> Any:
     """Everything a contact update depends on besides the profile heights (hashable)."""
-    key = (vehicle, tuple(classes), axle, side, float(unbalanced_acceleration_m_s2),
-           float(tangent_speed_kmh), int(fastsim_grid), y_mm.tobytes(), patch_width)
+    key: tuple[Any, ...] = (vehicle, tuple(classes), axle, side,
+                            float(unbalanced_acceleration_m_s2), float(tangent_speed_kmh),
+                            int(fastsim_grid), y_mm.tobytes(), patch_width)
     try:
         hash(key)
     except TypeError:  # a vehicle with unhashable fields: fall back to its full repr

@@ -23,6 +23,7 @@ import secrets
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -73,14 +74,14 @@ def key_hash(key: str) -> str:
     return hashlib.sha256(key.encode("utf-8", "surrogatepass")).hexdigest()
 
 
-def normalise_scopes(scopes: list[str] | tuple[str, ...] | set[str]) -> str:
+def normalise_scopes(scopes: Sequence[str] | set[str]) -> str:
     unknown = set(scopes) - set(SCOPES)
     if unknown or not scopes:
         raise ApiError(422, "scopes", f"must be a non-empty list of {', '.join(SCOPES)}")
     return ",".join(s for s in SCOPES if s in scopes)
 
 
-def create_key(session: Session, name: str, scopes: list[str] | tuple[str, ...],
+def create_key(session: Session, name: str, scopes: Sequence[str],
                created_by: int | None = None, key: str | None = None) -> tuple[ApiKey, str]:
     """Store a new key (or the given secret) and return the row and the secret (shown once)."""
     secret = key or new_key()

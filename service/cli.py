@@ -13,7 +13,7 @@ import json
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any, Literal, TypeVar
 
 import typer
 from rich.console import Console
@@ -640,7 +640,7 @@ def predict(model_id: Annotated[int, typer.Argument(help="model id")],
                           _band(p.tread_area_mm2), _num(p.sd_mm), _num(p.sh_mm), _num(p.qr_mm))
         console.print(table)
         if picture is not None:
-            fmt = "png" if picture.suffix.lower() == ".png" else "svg"
+            fmt: Literal["png", "svg"] = "png" if picture.suffix.lower() == ".png" else "svg"
             picture.write_bytes(pictures.wear_area_picture(
                 session, model_id, route_id=_route_ref(route_id), bogie_type=bogie_type,
                 axle=axle, side=side, max_mileage_km=max(max(mileage_km), 1.0), fmt=fmt))

@@ -225,6 +225,8 @@ def _measured_wear(session: Session, body: CoefficientFitIn) -> tuple[list, list
                             "loop starts from S1002")
     datum = (m.placement or {}).get("alignment") == "datum"  # keep a MiniProf wheel's datum
     try:
+        if m.y_mm is None or m.z_mm is None:
+            raise ValueError("measurement_id: the measurement holds no profile points")
         processed = process_profile(m.y_mm, m.z_mm, alignment="datum" if datum else "free")
     except ValueError as exc:
         raise Unprocessable("measurement_id", f"measurement {m.id}: {exc}") from exc

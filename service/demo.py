@@ -325,8 +325,8 @@ def _diagnose(session: Session, out: Path, model_id: int,
         echo(f"  residual structure by {u['by']}: {100 * u['share_of_residual']:.1f} % of "
              f"the residual (p = {u['p_value']:.3f})")
     echo(format_findings(findings))
-    for code, reason in d.skipped.items():
-        echo(f"  skipped {code}: {reason}")
+    for code, skip_reason in d.skipped.items():
+        echo(f"  skipped {code}: {skip_reason}")
     report = out / report_name
     report.write_text(discrepancy.report_html(d, discrepancy.diagnosis_figures(d)),
                       encoding="utf-8")

@@ -187,9 +187,10 @@ def to_out(m: db.Measurement, w: db.Wheel, include_points: bool = False) -> Meas
             if hasattr(m, c) and c not in {"y_mm", "z_mm"}}
     data.update(vehicle_id=w.vehicle_id, bogie_type=w.bogie_type, axle=w.axle, side=w.side,
                 covariates=m.covariates or {})
-    if include_points and m.y_mm is not None:
-        data["y_mm"] = [round(v, 4) for v in from_f32(m.y_mm).tolist()]
-        data["z_mm"] = [round(v, 4) for v in from_f32(m.z_mm).tolist()]
+    y_points, z_points = from_f32(m.y_mm), from_f32(m.z_mm)
+    if include_points and y_points is not None and z_points is not None:
+        data["y_mm"] = [round(v, 4) for v in y_points.tolist()]
+        data["z_mm"] = [round(v, 4) for v in z_points.tolist()]
     return MeasurementOut.model_validate(data)
 
 
@@ -209,7 +210,8 @@ def create(session: Session, body: MeasurementIn) -> MeasurementOut:
         measured_on=body.measured_on,
         route_id=None if body.route_id is None else str(body.route_id),
         running_mode=body.running_mode, instrument_id=body.instrument_id, load_t=body.load_t,
-        reference_profile=body.reference_profile, covariates=dict(body.covariates),
+        reference_profile=body.reference_profile,
+        covariates={k: v for k, v in body.covariates.items() if v is not None},
         source_file="api", source_line=None, diameter_mm=body.diameter_mm)
     record: ProfileRecord | ParameterRecord
     if body.y_mm is not None and body.z_mm is not None:
@@ -249,7 +251,7 @@ def calibration_frame(session: Session, ids: list[int]) -> tuple[pd.DataFrame, n
                    M.wear_mm).join(W, W.wheel_id == M.wheel_id).where(M.id.in_(chunk))
             .order_by(M.id)).all()
         for row in rows:
-            curves.append(from_f32(row[-1]))
+            curves.append(from_f32(row[-1] if isinstance(row[-1], bytes) else None))
         frames.append(pd.DataFrame([r[:-1] for r in rows], columns=[
             "measurement_id", "wheel_id", "vehicle_id", "bogie_type", "axle", "side",
             "mileage_km", "measured_on", "route_id", "running_mode", "instrument_id", "load_t",

@@ -103,7 +103,7 @@ def own_baseline_spec(session: Session, wheel_id: str) -> tuple[ReferenceSpec, i
         select(db.Measurement.id, db.Measurement.y_mm, db.Measurement.z_mm)
         .where(db.Measurement.wheel_id == wheel_id, db.Measurement.kind == "profile")
         .order_by(db.Measurement.mileage_km, db.Measurement.id).limit(1)).first()
-    if row is None:
+    if row is None or row[1] is None or row[2] is None:
         return None
     return _measurement_spec(row[0], row[1], row[2]), row[0]
 

@@ -115,7 +115,7 @@ class SeasonalFriction(Cause):
         amp = float(np.hypot(a, b))
         if self.cov_ is not None and amp > 0:
             grad = np.array([a, b]) / amp
-            se = float(np.sqrt(max(grad @ self.cov_[2:4, 2:4] @ grad, 0.0)))
+            se = float(np.sqrt(max(float(grad @ self.cov_[2:4, 2:4] @ grad), 0.0)))
         else:
             se = float("nan")
         out["amplitude"] = _interval(amp, se, self.n_groups_)

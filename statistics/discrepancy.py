@@ -529,7 +529,7 @@ def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDAr
                                                   factors[f])[0]) for f in names])
     null = np.vstack([fs.structure_share(draws, sw * data.phi, factors[f]) for f in names])
     p_raw, p_adj = fs.min_p(observed, null)
-    out = []
+    out: list[dict[str, Any]] = []
     for i, name in enumerate(names):
         excess = float(observed[i] - np.median(null[i]))
         if p_adj[i] <= alpha and excess >= min_share:   # resampling p: reject at <= alpha

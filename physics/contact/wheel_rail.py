@@ -24,6 +24,7 @@ forces on the rail, F_s towards the wheel's field side.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -188,7 +189,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
 
 def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
     """The locus restricted to one pose (shape (1, M))."""
-    def pick(a: _FloatArray) -> _FloatArray:
+    def pick(a: np.ndarray) -> Any:
         return a[row:row + 1]
 
     return WheelLocus(

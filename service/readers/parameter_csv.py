@@ -9,7 +9,7 @@ like the long reader; line numbers are 1-based file lines (header = line 1).
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import BinaryIO
+from typing import IO
 
 import numpy as np
 
@@ -45,7 +45,7 @@ def _parameter_column(chunk, name: str, lines: np.ndarray, file_name: str) -> np
     return values
 
 
-def iter_parameter_records(stream: BinaryIO, file_name: str, *, chunk_rows: int = 200_000
+def iter_parameter_records(stream: IO[bytes], file_name: str, *, chunk_rows: int = 200_000
                            ) -> Iterator[ParameterRecord]:
     """Yield one ParameterRecord per row of a parameter-only CSV.
 

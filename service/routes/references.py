@@ -57,7 +57,7 @@ def list_reference_profiles(session: SessionDep) -> list[dict[str, Any]]:
 def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str, Any]:
     if body.measurement_id is not None:
         m = session.get(db.Measurement, body.measurement_id)
-        if m is None or m.kind != "profile":
+        if m is None or m.kind != "profile" or m.y_mm is None or m.z_mm is None:
             raise NotFound("measurement_id", f"no profile measurement with id "
                            f"{body.measurement_id}")
         y = np.frombuffer(m.y_mm, "<f4").astype(float).tolist()

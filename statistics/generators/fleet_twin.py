@@ -373,7 +373,7 @@ def _flange_area_table(centre_mm: float, split_y_mm: float) -> Array:
         y = _FINE_Y_MM[mask]
         curves = _flange_curve_from_amplitude(y[None, :], _FLANGE_AMPLITUDES_MM[:, None],
                                               centre_mm, split_y_mm)
-        _FLANGE_AREA_CACHE[key] = np.trapezoid(curves, y, axis=1)
+        _FLANGE_AREA_CACHE[key] = np.asarray(np.trapezoid(curves, y, axis=1), dtype=float)
     return _FLANGE_AREA_CACHE[key]
 
 

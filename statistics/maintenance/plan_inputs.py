@@ -38,9 +38,9 @@ def fleet_rates(state: FleetState) -> dict[str, float]:
     """Fleet median wear rates [mm/km] of the wheels with a history (0 without any)."""
     out = {}
     for name in (*FLANGE_LIMITS, "diameter"):
-        values = [w.remaining[name].rate_mm_per_1000km for w in state.wheels
+        values = [float(rate) for w in state.wheels
                   if w.remaining[name].source == "history"
-                  and w.remaining[name].rate_mm_per_1000km is not None]
+                  and (rate := w.remaining[name].rate_mm_per_1000km) is not None]
         out[name] = max(float(np.median(values)), 0.0) / 1000.0 if values else 0.0
     return out
 
