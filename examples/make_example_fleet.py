@@ -74,7 +74,8 @@ demo, the tests and the benchmarks, not as evidence about real wheels. Regenerat
   - `tangent`: 100 % tangent track (the application example of seed 001 Fig. 15), the "new"
     route the demo predicts for.
 - `wear_table.csv` — curve-radius table (docs/conventions.md "Curve-radius table CSV"),
-  motor/trailer, leading/trailing, high/low/tangent, radii 150–3000 m, tread/flange, `tau_max` [MPa] and `t_gamma` [N].
+  motor/trailer, leading/trailing, high/low/tangent, radii 150–3000 m, tread/flange,
+  `tau_max` [MPa] and `t_gamma` [N].
   **Synthetic**: a smooth model that follows seed 001 Fig. 10 only qualitatively (flange
   measures zero on tangent and wide curves, rising fast as the radius falls on the leading
   wheelset's high-rail wheel; tread measures nonzero on tangent; motor bogies higher T_gamma
