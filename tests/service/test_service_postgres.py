@@ -7,8 +7,6 @@ there, drops it afterwards, and skips when the server is unreachable.
 
 from __future__ import annotations
 
-import os
-import uuid
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,8 +14,6 @@ from pathlib import Path
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import create_engine, text
-from sqlalchemy.engine import make_url
 
 from wearcast.service.models_db import Base
 from wearcast.service.settings import Settings
@@ -29,29 +25,12 @@ with warnings.catch_warnings():
 
 pytestmark = pytest.mark.postgres
 
-DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
-
-
 @pytest.fixture(scope="module")
 def postgres_url() -> Iterator[str]:
-    url = make_url(os.environ.get("WEARCAST_TEST_POSTGRES_URL", DEFAULT_URL))
-    admin = create_engine(url, isolation_level="AUTOCOMMIT",
-                          connect_args={"connect_timeout": 3})
-    try:
-        with admin.connect() as connection:
-            connection.execute(text("SELECT 1"))
-    except Exception as exc:  # no server, no driver, no permission
-        admin.dispose()
-        pytest.skip(f"PostgreSQL not reachable at {url.render_as_string()}: {exc}")
-    name = f"wearcast_test_{uuid.uuid4().hex[:12]}"
-    with admin.connect() as connection:
-        connection.execute(text(f'CREATE DATABASE "{name}"'))
-    try:
-        yield url.set(database=name).render_as_string(hide_password=False)
-    finally:
-        with admin.connect() as connection:
-            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        admin.dispose()
+    """A throw-away database on the local PostgreSQL (the service tests' one helper)."""
+    from tests.service.conftest import fresh_postgres_database
+
+    yield from fresh_postgres_database()
 
 
 def test_the_walk_on_postgresql(postgres_url: str, tmp_path: Path) -> None:
