@@ -32,7 +32,7 @@ SECURED_ERRORS = {401: "No valid API key", 403: "The key lacks the scope (or a c
 
 
 def _router_modules() -> list[Any]:
-    from wearcast.service.routes import (
+    from wearcast.service.routers import (
         admin,
         coefficient_fits,
         jobs,
@@ -74,7 +74,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
         RequestGuard,
         check_request_values,
     )
-    from wearcast.service.routes import health
+    from wearcast.service.routers import health
 
     settings = settings or Settings()
     database = Database(settings)
