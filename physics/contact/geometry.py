@@ -567,6 +567,22 @@ def wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left",
     return y_wheel, gap - gap0[:, None]
 
 
+def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
+                    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+    """:func:`wheel_gap` without yaw, with the solved roll: (y_wheel_mm (M,), gap_mm (N, M),
+    roll_rad (N,)) [mm, mm, rad]. The gap is 0 at each wheel's primary contact (rigid pose);
+    the curving model's contact table is built from it (``curving.build_contact_table``)."""
+    if side not in ("left", "right"):
+        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    shift, yaw = _pose_arrays(shifts_mm, 0.0)
+    sides = _prepare(wt)
+    roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm)
+    chosen = sides[0] if side == "left" else sides[1]
+    gap, _ = _gaps(chosen, shift, roll, yaw, wt.nominal_radius_mm)
+    y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
+    return y_wheel, gap - gap0[:, None], roll
+
+
 def contact_points(wt: WheelsetTrack, lateral_shift_mm: float, yaw_rad: float = 0.0,
                    two_point_gap_mm: float = 0.05) -> WheelsetContact:
     """Contact geometry at one lateral shift [mm] (positive towards the left rail) and yaw
