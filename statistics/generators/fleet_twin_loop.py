@@ -29,7 +29,7 @@ Pure: numpy/pandas in and out, deterministic for a given seed.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, MutableMapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -103,7 +103,9 @@ def _curve(sims: list[WearSimulation], loop_km: float) -> Array:
 
 
 def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
-                        max_rate_factor: float = 1.5) -> LoopFleetTwin:
+                        max_rate_factor: float = 1.5,
+                        cache: MutableMapping[Any, WearSimulation] | None = None
+                        ) -> LoopFleetTwin:
     """Generate the fleet of ``config`` with the wear loop as truth (module docstring).
 
     Parameters
@@ -112,6 +114,10 @@ def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
     truth : vehicles, law, steps and mileage scale of the loop
     max_rate_factor : the loop runs to the largest mileage times this (rate factors above it
         are clipped; with rate_scatter 0.1 a factor above 1.5 has probability 5e-5)
+    cache : optional dict shared by several calls (e.g. the seeds of a benchmark) that keeps
+        each loop run keyed by everything it depends on (the truth, the step length, the
+        route's curve classes, bogie type, axle, side); a loop run is deterministic, so the
+        fleets are identical with and without it
 
     Returns
     -------
@@ -129,9 +135,16 @@ def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
         if key not in sims:
             if bogie not in truth.vehicles:
                 raise ValueError(f"truth.vehicles: no vehicle preset for bogie type {bogie!r}")
-            sims[key] = simulate_wear(vehicle_preset(truth.vehicles[bogie], bogie),
-                                      _loop_classes(route), law=truth.law, steps=steps,
-                                      axle=axle, side=side, **dict(truth.loop))
+            shared = (repr(truth), steps.step_km, truth.n_steps, route.classes, bogie, axle,
+                      side)
+            if cache is not None and shared in cache:
+                sims[key] = cache[shared]
+            else:
+                sims[key] = simulate_wear(vehicle_preset(truth.vehicles[bogie], bogie),
+                                          _loop_classes(route), law=truth.law, steps=steps,
+                                          axle=axle, side=side, **dict(truth.loop))
+                if cache is not None:
+                    cache[shared] = sims[key]
         return sims[key]
 
     y_nominal = arc_length_samples(config.points_per_profile)
