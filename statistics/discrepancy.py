@@ -12,8 +12,9 @@ scores it out of sample and names a cause only when it is specific:
    bootstrap over the groups;
 3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
    per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
-   (effects across vehicles and wheels, residuals permuted within each wheel with random
-   signs) carry the baseline's nuisance variation and no effect; every cause is fitted and
+   (wild cluster bootstrap: every effect and residual kept at its rows with a random sign,
+   so heteroscedastic noise keeps its place) carry the baseline's nuisance variation and no
+   effect; every cause is fitted and
    scored on them exactly as on the data. A cause's p-value is the share of resampled
    gains at least as large as its observed gain, adjusted across the catalogue by the
    Westfall-Young max-T method (gains standardised by their own null distribution) on the
@@ -487,7 +488,9 @@ def diagnose(
     preds["calibrated"] = data.base.tolist()
     preds["measured"] = data.measured.tolist()
     test = (f"held-out gain vs {n_null} datasets resampled from the baseline's nuisance model "
-            "(vehicle and wheel log-scale effects, residuals permuted within wheels), "
+            "(vehicle and wheel log-scale effects and residuals, "
+            + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
+               else "residuals permuted within wheels") + "), "
             "Westfall-Young max-T across the catalogue; margin over the runner-up by a "
             f"sign-flip test over {np.unique(groups).size} {group_by} groups")
     return Diagnosis(verdict=verdict, findings=tuple(findings), skipped=skipped,

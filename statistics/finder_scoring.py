@@ -2,10 +2,12 @@
 
 * ``held_out``: held-out working residuals of an extension, folds grouped by vehicle.
 * ``NuisanceModel``: the fitted baseline's per-vehicle and per-wheel log-scale effects and
-  the remaining per-measurement residuals; ``draws`` resamples them (vehicle effects across
-  vehicles, wheel effects across wheels, each wheel's residuals permuted within the wheel
-  with random signs): datasets with the baseline's nuisance variation and no effect
-  (a parametric/residual bootstrap, no assumed noise distribution).
+  the remaining per-measurement residuals; ``draws`` resamples them into datasets with the
+  baseline's nuisance variation and no effect (no assumed noise distribution): by default a
+  wild cluster bootstrap (every vehicle effect, wheel effect and residual kept at its rows
+  with an independent random sign, so noise that depends on the mileage, the wheel position
+  or the instrument keeps its place), or effects resampled across vehicles and wheels with
+  each wheel's residuals permuted within the wheel (``scheme="permute"``).
 * ``bootstrap_gains``: the held-out relative gain of every candidate on those datasets,
   computed exactly as on the data but with each extension linearised at its nominal value
   (closed-form refits by precomputed pseudo-inverses, so hundreds of datasets cost little).
@@ -32,6 +34,9 @@ from numpy.typing import NDArray
 from wearcast.statistics import causes as cz
 
 Array = NDArray[np.float64]
+
+# resampling scheme of the nuisance-only datasets (``NuisanceModel.draws``)
+RESAMPLING = "wild"
 
 
 def codes_of(values: NDArray[Any]) -> NDArray[np.int64]:
@@ -108,13 +113,27 @@ class NuisanceModel:
               "measurement": np.std(eps, axis=0).tolist()}
         return cls(v, w, ve, we, eps, wt, sd)
 
-    def draws(self, n_draws: int, rng: np.random.Generator, used_dof: int = 0) -> Array:
+    def draws(self, n_draws: int, rng: np.random.Generator, used_dof: int = 0,
+              scheme: str | None = None) -> Array:
         """(n * m, B) resampled residual datasets without any effect (module docstring).
 
         ``used_dof``: parameters of an effect fitted before the residuals were taken; the
         vehicle and wheel effects are widened by sqrt(G / (G - used_dof)) for the variance
         that fit absorbed.
+
+        ``scheme`` (default :data:`RESAMPLING`):
+
+        * ``wild``: every vehicle effect, wheel effect and measurement residual stays where
+          it was and gets an independent random sign (a wild cluster bootstrap with
+          Rademacher weights at the three levels). Each measurement keeps its own spread, so
+          noise that is larger for small areas (early mileage, trailing flanges) or on one
+          instrument stays where it is, and so does a larger scatter of one wheel position;
+        * ``permute``: effects resampled across vehicles / wheels, each wheel's residuals
+          permuted within the wheel with random signs (exchangeable noise within a wheel).
         """
+        scheme = scheme or RESAMPLING
+        if scheme not in ("wild", "permute"):
+            raise ValueError(f"scheme must be 'wild' or 'permute', got {scheme!r}")
         n, m = self.residual.shape
         vf = pd.Series(np.arange(n)).groupby(self.vehicle).first().to_numpy()
         wf = pd.Series(np.arange(n)).groupby(self.wheel).first().to_numpy()
@@ -122,16 +141,27 @@ class NuisanceModel:
         if used_dof:
             v_eff = v_eff * np.sqrt(v_eff.shape[0] / max(v_eff.shape[0] - used_dof, 1))
             w_eff = w_eff * np.sqrt(w_eff.shape[0] / max(w_eff.shape[0] - used_dof, 1))
-        by_wheel = np.argsort(self.wheel, kind="stable")
-        # all draws at once: effects resampled across vehicles / wheels, each wheel's
-        # residuals permuted within the wheel (argsort of wheel code + uniform key) with
-        # random signs
-        vs = v_eff[rng.integers(0, v_eff.shape[0], (n_draws, v_eff.shape[0]))][:, self.vehicle]
-        ws = w_eff[rng.integers(0, w_eff.shape[0], (n_draws, w_eff.shape[0]))][:, self.wheel]
-        order = np.argsort(self.wheel[None, :] + rng.random((n_draws, n)), axis=1)
-        eps = np.empty((n_draws, n, m))
-        eps[:, by_wheel] = self.residual[order]
-        eps *= rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
+        if scheme == "wild":
+            # codes from codes_of are the positions of the first occurrences' order, so
+            # v_eff[self.vehicle] puts every vehicle's own effect back on its rows
+            sv = rng.choice((-1.0, 1.0), size=(n_draws, v_eff.shape[0], 1))
+            sw = rng.choice((-1.0, 1.0), size=(n_draws, w_eff.shape[0], 1))
+            vs = (sv * v_eff[None, :, :])[:, self.vehicle]
+            ws = (sw * w_eff[None, :, :])[:, self.wheel]
+            eps = self.residual[None, :, :] * rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
+        else:
+            by_wheel = np.argsort(self.wheel, kind="stable")
+            # all draws at once: effects resampled across vehicles / wheels, each wheel's
+            # residuals permuted within the wheel (argsort of wheel code + uniform key) with
+            # random signs
+            vs = v_eff[rng.integers(0, v_eff.shape[0], (n_draws, v_eff.shape[0]))][
+                :, self.vehicle]
+            ws = w_eff[rng.integers(0, w_eff.shape[0], (n_draws, w_eff.shape[0]))][
+                :, self.wheel]
+            order = np.argsort(self.wheel[None, :] + rng.random((n_draws, n)), axis=1)
+            eps = np.empty((n_draws, n, m))
+            eps[:, by_wheel] = self.residual[order]
+            eps *= rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
         out = self.weight[None, :, :] * (vs + ws) + eps
         return np.ascontiguousarray(np.moveaxis(out, 0, -1)).reshape(n * m, n_draws)
 

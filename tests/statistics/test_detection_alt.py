@@ -75,7 +75,11 @@ def test_alt_hidden_effect_is_named(cause):
     assert finding.gain.after_error < finding.gain.before_error
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
+# seeds 104 and 108 are benchmarks/detection_rates.py's effect-free alt datasets on which the
+# finder said ``ambiguous`` (seasonal at adjusted p = 0.040, traction at 0.030) while its
+# nuisance-only datasets permuted each wheel's residuals: the area noise of fleet_twin_alt is
+# larger in log terms for the small early areas, and the wild resampling keeps it there
+@pytest.mark.parametrize("seed", [0, 1, 2, 104, 108])
 def test_alt_effect_free_data_gives_none(seed):
     diagnosis = cached("none", seed)[2]
     assert diagnosis.verdict == "none", [(f.cause, round(f.gain.relative, 3),

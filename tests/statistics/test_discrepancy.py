@@ -52,6 +52,53 @@ def test_nuisance_draws_keep_the_vehicle_and_wheel_variation():
     assert 0.1 < veh_means.std(axis=1).mean() < 0.3
 
 
+def test_resampled_null_keeps_its_size_under_noise_that_shrinks_with_mileage():
+    # null: vehicle and wheel effects and measurement noise ten times larger at the first of
+    # six measurements than at the last (log-area noise of small early areas, as in
+    # fleet_twin_alt and depot), and a candidate that tilts each wheel's series (the
+    # nonlinear-progression feature, log mileage centred per wheel). Permuting a wheel's
+    # residuals would move the large early noise to late rows and shrink the null spread of
+    # the tilt; the wild resampling keeps every residual at its row, so the max-T test
+    # rejects in about 5 % of 200 data sets (binomial 2-sigma bound ~ 8 %)
+    rng = np.random.default_rng(2)
+    n_veh, per_veh, per_wheel = 9, 8, 6
+    vehicle = np.repeat(np.arange(n_veh), per_veh * per_wheel)
+    wheel = np.repeat(np.arange(n_veh * per_veh), per_wheel)
+    t = np.tile(np.arange(1, per_wheel + 1), n_veh * per_veh).astype(float)
+    x = np.log(t) - np.log(t).reshape(-1, per_wheel).mean(axis=1).repeat(per_wheel)
+    n = vehicle.size
+    folds = vehicle % 5
+    null_design = np.ones((n, 1))
+    alt_design = np.column_stack([np.ones(n), x])
+    rejections = 0
+    for _ in range(200):
+        r = (np.repeat(rng.normal(0, 0.1, n_veh), per_veh * per_wheel)
+             + np.repeat(rng.normal(0, 0.1, n_veh * per_veh), per_wheel)
+             + 0.3 / t * rng.standard_normal(n))[:, None]
+        obs = fs.bootstrap_gains(null_design, [alt_design], r, folds)[0]
+        nm = fs.NuisanceModel.fit(r - r.mean(), np.ones_like(r), vehicle, wheel)
+        null = fs.bootstrap_gains(null_design, [alt_design], nm.draws(99, rng), folds)
+        _, adj = fs.min_p(obs, null)
+        rejections += adj[0] <= 0.05
+    assert rejections <= 16
+
+
+def test_wild_draws_keep_every_residual_at_its_row():
+    rng = np.random.default_rng(4)
+    vehicle = np.repeat(np.arange(3), 4)
+    wheel = np.repeat(np.arange(6), 2)
+    r = rng.normal(size=(12, 2))
+    nm = fs.NuisanceModel.fit(r, np.ones_like(r), vehicle, wheel)
+    d = nm.draws(20, rng, scheme="wild").reshape(12, 2, 20)
+    # each row of a draw is +- its vehicle's effect +- its wheel's effect +- its own residual
+    options = [sv * nm.vehicle_effect + sw * nm.wheel_effect + se * nm.residual
+               for sv in (-1, 1) for sw in (-1, 1) for se in (-1, 1)]
+    for b in range(20):
+        assert all(any(np.allclose(d[i, :, b], o[i]) for o in options) for i in range(12))
+    with pytest.raises(ValueError, match="scheme"):
+        nm.draws(2, rng, scheme="shuffle")
+
+
 def test_traction_extension_predicts_motor_treads_faster():
     model, df, _, routes, diagnosis = helpers.cached("traction")
     ext = apply_extension(model, diagnosis.finding("traction"))
