@@ -56,9 +56,10 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.optimize import root
 
 from wearcast.physics.contact.creep import creep_forces
-from wearcast.physics.contact.fastsim import fastsim, fastsim_forces
+from wearcast.physics.contact.fastsim import Bound, fastsim, fastsim_forces
 from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
+from wearcast.physics.contact_candidates_kernel import candidate_slots
 from wearcast.physics.profiles.measured import ProfileCurve
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -78,6 +79,11 @@ FLANGE_SPLIT_Y_MM = -30.0
 SHEAR_MODULUS_MPA = 82_000.0
 #: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
 DEFAULT_TOLERANCE = 1e-6
+#: Traction bound of the FASTSIM solution tau_max is read from: the elliptic bound mu p(x, y) has
+#: the Hertz pressure's shape, so in the slip zone tau_max <= mu p0 as in the exact (variational)
+#: solution; the parabolic bound (FASTSIM's default for forces) peaks at 4/3 mu p0 and overstates
+#: tau_max by up to 33 % (tests/physics/test_curving.py, full slip).
+TAU_MAX_BOUND: Bound = "elliptic"
 #: FASTSIM grid (n x n) of the creep forces in the curving equilibrium; 16 x 16 keeps the forces
 #: within 0.03 mu Fn of a 40 x 40 grid at the equilibria of ``benchmarks/curving_creep_law.py``.
 DEFAULT_CREEP_GRID = 16
@@ -172,12 +178,27 @@ class ContactTable:
 
         Returns arrays of shape shift.shape + (n_slots,), slot 0 the field-most candidate:
         ``gap_mm`` above the best candidate (a missing candidate gets a large gap),
-        ``weight`` in [0, 1] (1 for a separate patch, see the code),
+        ``weight`` in [0, 1] (1 for a separate patch, see ``_candidate_slots_numpy``),
         ``angle_rad`` contact angle (> 0 pushes the wheel towards the track centre),
         ``wheel_y_mm``, ``rail_y_mm``, ``lateral_mm`` (distance from the track centre line),
         ``radius_m`` rolling radius, ``curv_a``, ``curv_b`` [1/mm], ``approach1_mm``,
-        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N.
+        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N. The slots come from the compiled kernel
+        (``contact_candidates_kernel``); ``_candidate_slots_numpy`` is its reference.
         """
+        s = np.asarray(shift_mm, dtype=float)
+        flat = np.ascontiguousarray(s.reshape(-1))
+        slots = candidate_slots(self.gap_mm, self.gap2_per_mm, self.smoothing_mm,
+                                float(self.shift_mm[0]),
+                                float(self.shift_mm[1] - self.shift_mm[0]), self.wheel_y_mm,
+                                flat, n_slots, PROMINENCE_MM, SEPARATION_MM, SHARE_GAP_MM,
+                                _NO_CONTACT_GAP_MM)
+        yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
+        return self._candidate_columns(s, yc, gap, g2, weight)
+
+    def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = 3
+                               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Reference implementation of the candidate slots (wheel y, gap, g'', weight), each
+        shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel``."""
         s = np.asarray(shift_mm, dtype=float)
         grid = self.shift_mm
         step = grid[1] - grid[0]
@@ -261,6 +282,11 @@ class ContactTable:
         gap = np.take_along_axis(gap, order, axis=-1)
         g2 = np.take_along_axis(g2, order, axis=-1)
         weight = np.take_along_axis(weight, order, axis=-1)
+        return yc, gap, g2, weight
+
+    def _candidate_columns(self, s: NDArray, yc: NDArray, gap: NDArray, g2: NDArray,
+                           weight: NDArray) -> dict[str, NDArray]:
+        """The candidate columns of ``candidates`` from the slots."""
         wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
         slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
         rail_y = yc + self.rail_offset_mm + s[..., None]
@@ -947,7 +973,8 @@ def contact_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n,
     -------
     dict with ``t_gamma_n`` = |Fx xi| + |Fy eta| + |Mz phi| [N] (seed 004 eq. 1),
     ``tau_max_mpa`` the largest surface shear traction of the FASTSIM solution [MPa]
-    (parabolic bound, CONTACT's flexibilities; seed 001 §2.2, Al-Maliki), ``p0_mpa`` the Hertz
+    (elliptic traction bound ``TAU_MAX_BOUND``, CONTACT's flexibilities; seed 001 §2.2,
+    Al-Maliki), ``p0_mpa`` the Hertz
     peak pressure 3N/(2 pi a b), ``in_contact`` (loaded with at least 1 N). Unloaded contacts
     get zeros.
     """
@@ -963,7 +990,8 @@ def contact_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n,
     if np.any(loaded):
         sel = [v[loaded] for v in flat[:5]]
         fs = fastsim(sel[0], sel[1], sel[2], sel[3], sel[4], fn[loaded], mu,
-                     SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
+                     SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid,
+                     bound=TAU_MAX_BOUND)
         tau[loaded] = wear_tau_max(fs)
         p0[loaded] = 1.5 * fn[loaded] / (np.pi * sel[3] * sel[4])
     return {"t_gamma_n": t_gamma.reshape(shape), "tau_max_mpa": tau.reshape(shape),
@@ -1094,13 +1122,13 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1],
                                    params[:, 2], creep_grid=creep_grid)
 
-        idx = np.nonzero(ok)[0]
-        q_f, norm_f, ok_f = _newton_batch(fun_fastsim, q[idx], p_end[idx], tol, max_iter=30)
-        for k in np.nonzero(~ok_f)[0]:
-            q_s, n_s, ok_s = _scipy_polish(fun_fastsim, q_f[k], p_end[idx[k]], tol)
+        rows = np.nonzero(ok)[0]
+        q_f, norm_f, ok_f = _newton_batch(fun_fastsim, q[rows], p_end[rows], tol, max_iter=30)
+        for m in np.nonzero(~ok_f)[0]:
+            q_s, n_s, ok_s = _scipy_polish(fun_fastsim, q_f[m], p_end[rows[m]], tol)
             if ok_s:
-                q_f[k], norm_f[k], ok_f[k] = q_s, n_s, True
-        q[idx], norm[idx], ok[idx] = q_f, norm_f, ok_f
+                q_f[m], norm_f[m], ok_f[m] = q_s, n_s, True
+        q[rows], norm[rows], ok[rows] = q_f, norm_f, ok_f
     if not np.all(ok) and not skip_failed:
         k = int(np.nonzero(~ok)[0][0])
         kappa = cases[k].curvature_per_m
