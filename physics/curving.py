@@ -61,6 +61,7 @@ from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact_candidates_kernel import candidate_slots
 from wearcast.physics.profiles.measured import ProfileCurve
+from wearcast.physics.profiles.measured_rail import NOMINAL_GAUGE_POINT_Y_MM
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
@@ -473,10 +474,13 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     # the rigid geometry on a curve through the wheel's points (0.05 mm) and the rail's
     y_fine = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, 0.05)
     y_rail, z_rail = rail_profile(rail, step_mm=0.1, inclination=0.0)
+    # a measured head comes in the nominal rail frame with its gauge point at 60E1's
+    # (``MeasuredRail.contact_points``), which may lie under a lip its contact curve omits
+    gauge_point = None if isinstance(rail, str) else (NOMINAL_GAUGE_POINT_Y_MM, -14.0)
     track = WheelsetTrack(wheel=ProfileCurve.from_points(y_fine, wheel(y_fine)),
                           rail=ProfileCurve.from_points(y_rail, z_rail),
                           nominal_radius_mm=r0_mm, rail_inclination=inclination,
-                          wheel_sample_mm=0.1)
+                          wheel_sample_mm=0.1, rail_gauge_point_mm=gauge_point)
     # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
     centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, 0.5 * shift_step_mm)
     y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
