@@ -62,6 +62,7 @@ from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact_candidates_kernel import candidate_slots
 from wearcast.physics.profiles.measured import ProfileCurve
 from wearcast.physics.profiles.measured_rail import NOMINAL_GAUGE_POINT_Y_MM
+from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
@@ -527,9 +528,22 @@ def contact_table_for(wheel_profile: str, rail: str, inclination: float,
     return build_contact_table(None, rail, inclination, wheel_radius_m)
 
 
+@lru_cache(maxsize=16)
+def measured_wheel_table_for(wheel: MeasuredWheel, rail: str, inclination: float,
+                             wheel_radius_m: float) -> ContactTable:
+    """Cached :func:`build_contact_table` for a measured wheel (over the part of the contact
+    search range its points cover)."""
+    return build_contact_table(wheel.height_mm, rail, inclination, wheel_radius_m,
+                               wheel_y_range_mm=wheel.search_range_mm)
+
+
 def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
     """The (cached) contact table of a vehicle's profile pair."""
     rail: Any = vehicle.rail_profile  # a name or a hashable measured-rail shape
+    if isinstance(vehicle.wheel_profile, MeasuredWheel):
+        return measured_wheel_table_for(vehicle.wheel_profile, rail,
+                                        float(vehicle.rail_inclination),
+                                        float(vehicle.wheel_radius_m))
     return contact_table_for(vehicle.wheel_profile, rail,
                              float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))
 
