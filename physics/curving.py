@@ -481,9 +481,9 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     track = WheelsetTrack(wheel=ProfileCurve.from_points(y_fine, wheel(y_fine)),
                           rail=ProfileCurve.from_points(y_rail, z_rail),
                           nominal_radius_mm=r0_mm, rail_inclination=inclination,
-                          wheel_sample_mm=0.1, rail_gauge_point_mm=gauge_point)
+                          wheel_sample_mm=0.2, rail_gauge_point_mm=gauge_point)
     # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
-    centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, 0.5 * shift_step_mm)
+    centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
     y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
     contact_level = centre + r0_mm * roll
     shifts = np.arange(-max_shift_mm, max_shift_mm + 1e-9, shift_step_mm)

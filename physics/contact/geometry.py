@@ -300,22 +300,27 @@ def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray
     lo, hi = np.full(n, -0.1), np.full(n, 0.1)
     roll = np.zeros(n)
     gap = np.zeros(n)
+    active = np.arange(n)  # rows still iterating (a converged row is not evaluated again)
     for _ in range(max_iter):
-        g_left, d_left = _min_gap(sides[0], shift, roll, yaw, r0)
-        g_right, d_right = _min_gap(sides[1], shift, roll, yaw, r0)
+        sa, ra, ya = shift[active], roll[active], yaw[active]
+        g_left, d_left = _min_gap(sides[0], sa, ra, ya, r0)
+        g_right, d_right = _min_gap(sides[1], sa, ra, ya, r0)
         f = g_left - g_right
-        gap = 0.5 * (g_left + g_right)
+        gap[active] = 0.5 * (g_left + g_right)
         if not np.all(np.isfinite(f)):
             raise ValueError("a wheel is off its rail for some shift (no rail under the wheel)")
-        if np.all(np.abs(f) < tol_mm):
+        done = np.abs(f) < tol_mm
+        if np.all(done):
             break
-        hi = np.where(f > 0, roll, hi)
-        lo = np.where(f <= 0, roll, lo)
+        la = np.where(f <= 0, ra, lo[active])
+        ha = np.where(f > 0, ra, hi[active])
         df = d_left - d_right
         with np.errstate(divide="ignore", invalid="ignore"):
-            step = roll - f / df
-        bad = ~np.isfinite(step) | (step <= lo) | (step >= hi) | (df <= 0)
-        roll = np.where(np.abs(f) < tol_mm, roll, np.where(bad, 0.5 * (lo + hi), step))
+            step = ra - f / df
+        bad = ~np.isfinite(step) | (step <= la) | (step >= ha) | (df <= 0)
+        lo[active], hi[active] = la, ha
+        roll[active] = np.where(done, ra, np.where(bad, 0.5 * (la + ha), step))
+        active = active[~done]
     return roll, gap
 
 
