@@ -13,11 +13,14 @@ reprofiling question is calibrated on the synthetic metro fleet of ``statistics.
 from __future__ import annotations
 
 import io
+import secrets
 import sys
 import tempfile
 import warnings
 import zipfile
 from pathlib import Path
+
+from pydantic import SecretStr
 
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.service.app import create_app
@@ -42,7 +45,10 @@ MANIFEST = {
 
 
 def main(folder: Path) -> None:
-    client = TestClient(create_app(Settings(data_dir=Path(tempfile.mkdtemp()))))
+    key = f"wc_example-{secrets.token_urlsafe(16)}"  # the run's own admin key
+    client = TestClient(create_app(Settings(data_dir=Path(tempfile.mkdtemp()),
+                                            api_key=SecretStr(key))),
+                        headers={"Authorization": f"Bearer {key}"})
     rows = ["file;wheel_id;vehicle_id;bogie_type;axle;side;mileage_km;reference_profile"]
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w") as archive:

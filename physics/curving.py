@@ -89,6 +89,12 @@ TAU_MAX_BOUND: Bound = "elliptic"
 #: FASTSIM grid (n x n) of the creep forces in the curving equilibrium; 16 x 16 keeps the forces
 #: within 0.03 mu Fn of a 40 x 40 grid at the equilibria of ``benchmarks/curving_creep_law.py``.
 DEFAULT_CREEP_GRID = 16
+#: Tolerance of the equilibrium with FASTSIM's forces (scaled residual, as DEFAULT_TOLERANCE):
+#: FASTSIM's totals are only piecewise smooth in the creepages (grid elements switch between
+#: adhesion and slip), so Newton can stall near 1e-5 of the wheel load: a solve that stalls
+#: below 1e-4 (5 N on a 50 kN wheel) counts as converged. ``CurvingResult.residual_norm``
+#: reports what was reached.
+FASTSIM_TOLERANCE = 1e-4
 #: Bounds of the lateral relative curvature B used for Hertz [1/mm] (relative radius 1 m
 #: ... 5 mm).
 MIN_CURVATURE_B_PER_MM = 5e-4
@@ -1141,11 +1147,15 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                    params[:, 2], creep_grid=creep_grid)
 
         rows = np.nonzero(ok)[0]
-        q_f, norm_f, ok_f = _newton_batch(fun_fastsim, q[rows], p_end[rows], tol, max_iter=30)
+        q_f, norm_f, ok_f = _newton_batch(fun_fastsim, q[rows], p_end[rows], tol,
+                                          max_iter=30)
         for m in np.nonzero(~ok_f)[0]:
             q_s, n_s, ok_s = _scipy_polish(fun_fastsim, q_f[m], p_end[rows[m]], tol)
-            if ok_s:
-                q_f[m], norm_f[m], ok_f[m] = q_s, n_s, True
+            if n_s < norm_f[m]:
+                q_f[m], norm_f[m], ok_f[m] = q_s, n_s, ok_s
+        # a solve that stalled below FASTSIM_TOLERANCE has found the equilibrium as far as
+        # FASTSIM's piecewise-smooth forces allow (the residual is reported)
+        ok_f = ok_f | (norm_f < max(tol, FASTSIM_TOLERANCE))
         q[rows], norm[rows], ok[rows] = q_f, norm_f, ok_f
     if not np.all(ok) and not skip_failed:
         k = int(np.nonzero(~ok)[0][0])

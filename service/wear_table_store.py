@@ -270,7 +270,9 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
             _convergence_field(classes, radius),
             f"the quasi-static curving solver found no equilibrium at {where} for {label} "
             f"(residual norm {exc.residual_norm:.3g}); check the radius, cant and speed "
-            "of this class") from exc
+            "of this class" + ("" if wheel_info is None else ", and whether the measured "
+                               "wheel fits this track (flange thickness, datum placement)")
+        ) from exc
     except ValueError as exc:
         raise from_value_error(exc, "radii" if body.radii is not None else "route_id") from exc
     try:

@@ -3,8 +3,12 @@
 The points are a copy of a measurement placed in the wheel frame of docs/conventions.md (y from
 the tape circle, negative towards the flange; z the radius increase over the tape-circle radius,
 as ``profiles.s1002.s1002_height_mm``), by the instrument's datum (``statistics.datum``):
-the measurement itself is never moved. The height between points is linear (the curving
-table smooths the gap at the scale of a contact patch, ``curving.build_contact_table``).
+the measurement itself is never moved. The contact model takes the height from a smoothing
+spline through the points (``profiles.measured.ProfileCurve``, expected scatter
+``smoothing_mm``, 0.02 mm by default, the order of a MiniProf's point scatter about a smooth
+profile), sampled every 0.1 mm: on the raw points the curving continuation failed on four of
+the nine reference wheels, with the spline on two
+(``benchmarks/curving_measured_wheels.py``).
 Equality and hashing go by content, so a MeasuredWheel keys the contact-table cache like the
 name ``S1002``.
 """
@@ -18,11 +22,15 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.profiles.measured import ProfileCurve
+
 #: Wheel-frame range the curving model searches for contact [mm] (flange tip to field side).
 CONTACT_SEARCH_Y_MM = (-55.0, 45.0)
 #: The profile must reach at least this far towards the flange [mm] (past the S1002 flange tip
 #: at about -49.5 mm) and towards the field side [mm] for the contact search to be valid.
 REQUIRED_COVER_Y_MM = (-50.0, 30.0)
+#: Spacing of the smoothed profile's samples [mm].
+SAMPLE_STEP_MM = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,6 +43,7 @@ class MeasuredWheel:
     name: str
     y_mm: NDArray[np.float64] = field(repr=False)
     z_mm: NDArray[np.float64] = field(repr=False)
+    smoothing_mm: float = 0.02
 
     def __post_init__(self) -> None:
         y = np.asarray(self.y_mm, float).ravel()
@@ -52,8 +61,15 @@ class MeasuredWheel:
             raise ValueError(f"the profile covers y {y[0]:.1f} ... {y[-1]:.1f} mm; the contact "
                              f"search needs at least {lo:g} ... {hi:g} mm (flange tip to the "
                              "field side of the tread)")
+        if self.smoothing_mm < 0:
+            raise ValueError("smoothing_mm must be >= 0")
         object.__setattr__(self, "y_mm", y)
         object.__setattr__(self, "z_mm", z)
+        curve = ProfileCurve.from_points(y, z, smoothing_mm=self.smoothing_mm)
+        grid = np.arange(y[0], y[-1], SAMPLE_STEP_MM)
+        height = curve.height_mm(grid)
+        ok = np.isfinite(height)
+        object.__setattr__(self, "_grid", (grid[ok], height[ok]))
 
     @cached_property
     def digest(self) -> str:
@@ -61,6 +77,7 @@ class MeasuredWheel:
         h = hashlib.sha256()
         h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
         h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
+        h.update(repr(self.smoothing_mm).encode())
         return h.hexdigest()
 
     def __eq__(self, other: object) -> bool:
@@ -73,8 +90,10 @@ class MeasuredWheel:
         return f"measured wheel {self.name}"
 
     def height_mm(self, y_mm: ArrayLike) -> NDArray[np.float64]:
-        """z(y) [mm], linear between points, the end heights held beyond them."""
-        return np.interp(np.asarray(y_mm, dtype=float), self.y_mm, self.z_mm)
+        """z(y) [mm] of the smoothed profile (module docstring), linear between its 0.1 mm
+        samples, the end heights held beyond them."""
+        grid, height = self._grid  # type: ignore[attr-defined]
+        return np.interp(np.asarray(y_mm, dtype=float), grid, height)
 
     @property
     def search_range_mm(self) -> tuple[float, float]:
