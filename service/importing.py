@@ -287,7 +287,8 @@ def _pool() -> ProcessPoolExecutor | None:
     can inherit held locks. None on a single core or when ``WEARCAST_IMPORT_WORKERS=0``.
     """
     global _POOL, _POOL_WORKERS
-    workers = int(os.environ.get("WEARCAST_IMPORT_WORKERS", os.cpu_count() or 1))
+    configured = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip()  # empty: unset
+    workers = int(configured) if configured else (os.cpu_count() or 1)
     if workers <= 1:
         return None
     with _POOL_LOCK:
