@@ -46,8 +46,8 @@ def create_model(body: ModelIn, session: SessionDep) -> ModelOut:
 
 
 @router.get("/models/{model_id}", response_model=ModelOut)
-def get_model(model_id: int, session: SessionDep) -> ModelOut:
-    return model_store.model_out(session, model_store.get_model_row(session, model_id))
+def get_model(model_id: int, session: SessionDep) -> Response:
+    return _json(model_store.model_out_cached(session, model_id))
 
 
 def _json(out: BaseModel) -> Response:
