@@ -9,7 +9,6 @@ created, changed or deleted what, and keeps a deleted row's content (``snapshot`
 from __future__ import annotations
 
 import datetime as dt
-from functools import cache
 from typing import Any
 
 from sqlalchemy import DateTime, Integer, String, event, func
@@ -85,15 +84,19 @@ def _aware_datetimes(target: Any, _context: Any = None) -> None:
             set_committed_value(target, key, value.replace(tzinfo=dt.UTC))
 
 
-@cache
+_DATETIME_KEYS: dict[type, tuple[str, ...]] = {}
+
+
 def _datetime_keys(cls: type) -> tuple[str, ...]:
     """The attributes of a mapped class that are date-time columns (looked up once per
     class: every loaded row runs :func:`_aware_datetimes`)."""
-    keys = []
-    for attr in sa_inspect(cls).column_attrs:
-        if any(isinstance(column.type, DateTime) for column in attr.columns):
-            keys.append(attr.key)
-    return tuple(keys)
+    keys = _DATETIME_KEYS.get(cls)
+    if keys is None:
+        mapper: Any = sa_inspect(cls)
+        keys = tuple(attr.key for attr in mapper.column_attrs
+                     if any(isinstance(column.type, DateTime) for column in attr.columns))
+        _DATETIME_KEYS[cls] = keys
+    return keys
 
 
 event.listen(Base, "load", _aware_datetimes, propagate=True)
