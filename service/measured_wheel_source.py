@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
@@ -52,3 +53,55 @@ def measured_wheel(session: Session, measurement_id: int, field: str = "measurem
             "y_range_mm": [float(wheel.y_mm[0]), float(wheel.y_mm[-1])],
             "on": "every wheel of every wheelset"}
     return wheel, info
+
+
+def latest_profile_id(session: Session, wheel_id: str, field: str = "wheel_id") -> int:
+    """The id of a wheel's latest profile measurement (404 / 422 naming ``field``)."""
+    if session.get(db.Wheel, wheel_id) is None:
+        raise NotFound(field, f"no wheel {wheel_id!r}")
+    found = session.scalar(
+        select(db.Measurement.id).where(db.Measurement.wheel_id == wheel_id,
+                                        db.Measurement.kind == "profile")
+        .order_by(db.Measurement.mileage_km.desc(), db.Measurement.id.desc()).limit(1))
+    if found is None:
+        raise Unprocessable(field, f"wheel {wheel_id!r} has no measured profile")
+    return int(found)
+
+
+def uploaded_wheel(y_mm: list[float], z_mm: list[float], reference_profile: str,
+                   field: str = "profile") -> tuple[MeasuredWheel, dict[str, Any]]:
+    """A wheel profile sent with the request (wheel frame, placed by its own datum)."""
+    from wearcast.physics.profiles.references import canonical_s1002_name
+    from wearcast.service.reference_store import ReferenceSpec, height_of
+    from wearcast.statistics.processing import process_profile
+
+    if len(y_mm) != len(z_mm):
+        raise Unprocessable(f"{field}.z_mm", f"has {len(z_mm)} values, y_mm {len(y_mm)}")
+    name = canonical_s1002_name(reference_profile)
+    if name is None:
+        raise Unprocessable(f"{field}.reference_profile", "only the built-in S1002 family is "
+                            "accepted here; store the profile to use an uploaded reference")
+    try:
+        p = process_profile(np.asarray(y_mm, float), np.asarray(z_mm, float),
+                            reference_height=height_of(ReferenceSpec(name, "builtin")),
+                            alignment="datum")
+        wheel = MeasuredWheel("uploaded profile", p.y_aligned_mm, p.z_aligned_mm)
+    except ValueError as exc:
+        raise Unprocessable(f"{field}.y_mm", f"not a usable wheel profile: {exc}") from None
+    return wheel, {"measurement_id": None, "wheel_id": None, "source_file": None,
+                   "reference_profile": name, "placement": "instrument datum (uploaded)",
+                   "y_range_mm": [float(wheel.y_mm[0]), float(wheel.y_mm[-1])],
+                   "on": "every wheel of every wheelset"}
+
+
+def requested_wheel(session: Session, body: Any) -> tuple[MeasuredWheel, dict[str, Any]] | None:
+    """The measured wheel a request names (``wheel_id``, ``measurement_id`` or ``profile``,
+    at most one, checked by the schema), or None for the preset's S1002."""
+    if body.profile is not None:
+        return uploaded_wheel(body.profile.y_mm, body.profile.z_mm,
+                              body.profile.reference_profile)
+    if body.wheel_id is not None:
+        return measured_wheel(session, latest_profile_id(session, body.wheel_id), "wheel_id")
+    if body.measurement_id is not None:
+        return measured_wheel(session, body.measurement_id)
+    return None

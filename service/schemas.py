@@ -140,6 +140,23 @@ class RadiusIn(Strict):
     share: float | None = Field(default=None, ge=0, le=1, description="share of the route [-]")
 
 
+def _at_most_one_wheel(body: Any) -> None:
+    given = [k for k in ("wheel_id", "measurement_id", "profile") if getattr(body, k) is not None]
+    if len(given) > 1:
+        raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
+                         f"{', '.join(given)})")
+
+
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=20000)
+    z_mm: list[float] = Field(min_length=20, max_length=20000)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
 class WearTableComputeIn(Strict):
     """``POST /v1/wear-tables/compute``: a table from the physics core (quasi-static curving).
 
@@ -164,11 +181,16 @@ class WearTableComputeIn(Strict):
     measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
         "(placed by the instrument's datum when the import found one)"))
+    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
+        "as measurement_id, with the wheel's latest measured profile"))
+    profile: MeasuredProfileIn | None = Field(default=None, description=(
+        "as measurement_id, with a profile sent in the request"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
         if (self.route_id is None) == (self.radii is None):
             raise ValueError("give either route_id or radii (exactly one)")
+        _at_most_one_wheel(self)
         return self
 
 
@@ -342,16 +364,6 @@ class WheelPosition(RouteRef):
     bogie_type: BogieType
     axle: Axle
     side: Side
-
-
-class MeasuredProfileIn(Strict):
-    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
-    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
-
-    y_mm: list[float] = Field(min_length=20, max_length=20000)
-    z_mm: list[float] = Field(min_length=20, max_length=20000)
-    mileage_km: float = Field(0.0, ge=0)
-    reference_profile: str = "S1002"
 
 
 class PredictIn(RouteRef):
@@ -613,11 +625,16 @@ class SimulationIn(Strict):
     measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "start the simulated wheel from this stored profile measurement instead of a new "
         "S1002 (placed by the instrument's datum when the import found one)"))
+    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
+        "as measurement_id, with the wheel's latest measured profile"))
+    profile: MeasuredProfileIn | None = Field(default=None, description=(
+        "as measurement_id, with a profile sent in the request"))
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:
         if (self.route_id is None) == (self.classes is None):
             raise ValueError("give either route_id or classes (exactly one)")
+        _at_most_one_wheel(self)
         return self
 
 

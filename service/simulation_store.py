@@ -103,10 +103,11 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
         from wearcast.service.rail_store import rail_spec
 
         spec["resolved_rail"] = rail_spec(session, body.rail_id)
-    if body.measurement_id is not None:
-        from wearcast.service.measured_wheel_source import measured_wheel
+    from wearcast.service.measured_wheel_source import requested_wheel
 
-        wheel, info = measured_wheel(session, body.measurement_id)
+    measured = requested_wheel(session, body)
+    if measured is not None:
+        wheel, info = measured
         y, z = wheel.on_grid()
         spec["resolved_wheel"] = {**info, "y_mm": y.tolist(), "z_mm": z.tolist()}
     try:

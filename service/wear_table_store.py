@@ -249,10 +249,11 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
                      "inclination": motor.rail_inclination,
                      "placement": "gauge point (14 mm below its top) at the track gauge"}
     wheel_info = None
-    if body.measurement_id is not None:  # a measured wheel in place of S1002
-        from wearcast.service.measured_wheel_source import measured_wheel
+    from wearcast.service.measured_wheel_source import requested_wheel
 
-        wheel, wheel_info = measured_wheel(session, body.measurement_id)
+    measured = requested_wheel(session, body)  # a measured wheel in place of S1002
+    if measured is not None:
+        wheel, wheel_info = measured
         motor = motor.with_(wheel_profile=wheel)
         trailer = trailer.with_(wheel_profile=wheel)
         label = f"{label}, {wheel}"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import time
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,3 +130,28 @@ def test_a_profile_too_short_for_the_contact_search_is_refused() -> None:
     with pytest.raises(ValueError, match="contact search needs"):
         MeasuredWheel("short", y, s1002_height_mm(y))
 
+
+
+def test_a_wheel_id_or_an_uploaded_profile_start_there_too(setup: dict,
+                                                          reference_dir: Path) -> None:
+    from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
+
+    client, mid = setup["client"], setup["measurement_id"]
+    by_id = _table(client, measurement_id=mid)
+    wheel_id = by_id["spec"]["wheel"]["wheel_id"]
+    by_wheel = _table(client, wheel_id=wheel_id)
+    assert by_wheel["spec"]["wheel"]["measurement_id"] == mid  # its latest (only) profile
+    assert [r["value"] for r in by_wheel["rows"]] == [r["value"] for r in by_id["rows"]]
+    name = "whl_left_iter288.whl"
+    y, z = to_wheel_frame(parse_miniprof((reference_dir / "miniprof" / name).read_bytes(),
+                                         name))
+    uploaded = _table(client, profile={"y_mm": y.tolist(), "z_mm": z.tolist()})
+    assert uploaded["spec"]["wheel"]["placement"].startswith("instrument datum")
+    r = client.post("/v1/wear-tables/compute", json={
+        "name": "t", "vehicle": "manchester", "radii": [{"radius_m": 400}],
+        "measurement_id": mid, "wheel_id": wheel_id})
+    assert r.status_code == 422 and "at most one of wheel_id, measurement_id" in r.text
+    r = client.post("/v1/wear-tables/compute", json={
+        "name": "t", "vehicle": "manchester", "radii": [{"radius_m": 400}],
+        "wheel_id": "no-such-wheel"})
+    assert r.status_code == 404 and "wheel_id" in r.text
