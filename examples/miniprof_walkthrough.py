@@ -6,8 +6,8 @@ Usage: ``.venv/bin/python examples/miniprof_walkthrough.py <folder with the .whl
 
 Runs the HTTP API in process (FastAPI's TestClient) on a temporary SQLite database; the
 requests are the ones a client would send to ``wearcast serve``. The model used for the
-reprofiling question is calibrated on the synthetic metro fleet of ``statistics.fleet_twin``
-(the real files carry no mileage history to calibrate on).
+reprofiling question is calibrated on the synthetic metro fleet of
+``statistics.generators.fleet_twin`` (the real files carry no mileage history to calibrate on).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics.cleaning import clean_profile
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")

@@ -13,7 +13,7 @@ import pytest
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
