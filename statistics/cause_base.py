@@ -15,12 +15,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.statistics.residuals import REGIONS
-
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
-
-__all__ = ["REGIONS"]
 
 
 @dataclass(frozen=True)

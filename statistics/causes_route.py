@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.statistics.cause_base import Cause, FinderData, Mask, _levels
-from wearcast.statistics.residuals import weighted_measure
+from wearcast.statistics.route_measure import weighted_measure
 from wearcast.statistics.wear_tables import MEASURES
 
 Array = NDArray[np.float64]

@@ -53,6 +53,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.extension import (
@@ -65,11 +66,11 @@ from wearcast.statistics.extension import (
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.residuals import (
     geometric_basis,
-    leading_share,
     model_residuals,
     residual_structure,
     shape_residuals,
 )
+from wearcast.statistics.route_measure import leading_shares
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table
 
@@ -218,7 +219,7 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         mileage_km=frame["mileage_km"].to_numpy(dtype=float),
         c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
         measure_index=MEASURES.index(model.measure),
-        lead_share=leading_share(frame["axle"].to_numpy(), res.mode), mode=res.mode,
+        lead_share=leading_shares(frame["axle"].to_numpy(), res.mode), mode=res.mode,
         left_right=res.left_right_shares, route=route,
         lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
                                      res.history),
@@ -385,7 +386,7 @@ def diagnose(
         if step == 0:
             nuisance = {"log_rate_sd_by_region": {"flange": {}, "tread": {}}}
             for lvl, sds in nm.sd.items():
-                for j, r in enumerate(("flange", "tread")):
+                for j, r in enumerate(REGIONS):
                     nuisance["log_rate_sd_by_region"][r][lvl] = float(sds[j])
             base_residual = residual
         base_x = full.features(data, full.theta_)
@@ -536,7 +537,7 @@ def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDAr
             out.append({"by": name, "share_of_residual": float(observed[i]),
                         "share_beyond_null": excess, "p_value": float(p_adj[i]),
                         "levels": fs.level_effects(residual, data.phi, factors[name],
-                                                   ("flange", "tread"))})
+                                                   REGIONS)})
     out.sort(key=lambda u: -u["share_beyond_null"])
     return out
 
@@ -676,7 +677,7 @@ def diagnosis_figures(diagnosis: Diagnosis, cause: str | None = None) -> dict[st
     cov = diagnosis.covariates.get(code)
     x = np.asarray(cov if cov is not None else frame["mileage_km"].tolist(), dtype=object)
     numeric = pd.to_numeric(pd.Series(x), errors="coerce")
-    for ax, region in zip(axes, ("flange", "tread"), strict=True):
+    for ax, region in zip(axes, REGIONS, strict=True):
         y = frame[f"logres_{region}"].to_numpy()
         if numeric.notna().all() and numeric.nunique() > 6:
             ax.plot(numeric.to_numpy(), y, ".", alpha=0.5)
@@ -696,7 +697,7 @@ def diagnosis_figures(diagnosis: Diagnosis, cause: str | None = None) -> dict[st
     before = np.asarray(diagnosis.predictions.get("calibrated", []), dtype=float)
     after = np.asarray(diagnosis.predictions.get(code, diagnosis.predictions.get("none", [])),
                        dtype=float)
-    for j, (ax, region) in enumerate(zip(axes, ("flange", "tread"), strict=True)):
+    for j, (ax, region) in enumerate(zip(axes, REGIONS, strict=True)):
         if meas.size:
             ax.plot(meas[:, j], before[:, j], ".", alpha=0.5, label="calibrated model")
             if after.size:

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
 from wearcast.statistics.residuals import geometric_basis
@@ -107,7 +108,7 @@ class ExtendedModel:
         g = est.log_factor(data, est.theta_)[0] if est.code != "profile_misalignment" \
             else np.zeros(2)
         return {r: math.exp(self.log_scale.get(r, 0.0) + float(g[j]))
-                for j, r in enumerate(("flange", "tread"))}
+                for j, r in enumerate(REGIONS)}
 
     def estimator(self) -> cz.Cause:
         """The fitted cause (or composite of causes) this extension carries."""
@@ -147,7 +148,7 @@ class ExtendedModel:
         s_ref = float(params["reference_mileage_km"])
         g = {r: np.where(s > 0, (np.maximum(s, 1e-9) / s_ref)
                          ** (float(params[f"beta_{r}"]) - 1.0), 1.0)
-             for r in ("flange", "tread")}
+             for r in REGIONS}
         fa = out.flange_area_mm2 * g["flange"][None, :]
         ta = out.tread_area_mm2 * g["tread"][None, :]
         median = out.quantiles.index(0.5)

@@ -21,14 +21,14 @@ from typing import Any, cast
 import numpy as np
 import pandas as pd
 
-TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
-WHEELSETS = ("leading", "trailing")
-RAILS = ("high", "low", "tangent")
-REGIONS = ("flange", "tread")
-MEASURES = ("tau_max", "t_gamma")
+from wearcast.physics.vocabulary import RAILS, REGIONS, WEAR_MEASURES, WHEELSETS
 
-# relative slack on the table's smallest radius (rounding of uploaded radii)
-_RADIUS_RTOL = 1e-9
+TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
+#: The table's keys take the shared words of :mod:`wearcast.physics.vocabulary`.
+MEASURES = WEAR_MEASURES
+
+#: Relative slack on the table's smallest radius (rounding of uploaded radii) [-].
+RADIUS_RTOL = 1e-9
 
 
 class RadiusOutOfTableError(ValueError):
@@ -217,7 +217,7 @@ def table_value(
         raise ValueError(f"radius_m: must be > 0, got {radius}")
     curvature, values = wt.curves[key]
     k = 1.0 / radius
-    if k > curvature[-1] * (1.0 + _RADIUS_RTOL):
+    if k > curvature[-1] * (1.0 + RADIUS_RTOL):
         raise RadiusOutOfTableError(radius, 1.0 / curvature[-1], key)
     return float(np.interp(min(k, curvature[-1]), curvature, values))
 

@@ -58,12 +58,12 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.processing import process_profile
-from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.routes import Route, RouteClass, rail_for
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 
 Array = NDArray[np.float64]
-REGIONS = ("flange", "tread")
 SPLIT_Y_MM = -30.0
 TABLE_RADII_M = (200.0, 300.0, 450.0, 700.0, 1000.0, 2000.0)
 INSTRUMENTS = ("DP-A", "DP-B", "DP-C")
@@ -230,12 +230,6 @@ class DepotFleet:
     table: pd.DataFrame
 
 
-def _rail(side: str, direction: str | None) -> str:
-    if direction is None:
-        return "tangent"
-    return "high" if side != direction else "low"   # left curve: right wheels on the high rail
-
-
 def _position_measures(route: Route, bogie: str, side: str, left_share: float | None,
                        blend: float, norm: dict[str, float]) -> Array:
     """(2 wheelsets, 2 regions) route measure of a wheel (leading row 0, trailing row 1)."""
@@ -251,7 +245,7 @@ def _position_measures(route: Route, bogie: str, side: str, left_share: float | 
                 if left_share is not None and c.direction is not None and total > 0:
                     want = left_share if c.direction == "left" else 1.0 - left_share
                     share = c.share * want * total / curved[c.direction]
-                rail = _rail(side, c.direction)
+                rail = rail_for(c, side)
                 tau = depot_measure(bogie, ws, rail, c.radius_m, region, "tau_max")
                 gam = depot_measure(bogie, ws, rail, c.radius_m, region, "t_gamma")
                 acc += share * ((1.0 - blend) * tau + blend * gam * norm[region])
@@ -297,7 +291,7 @@ def generate_depot_fleet(config: DepotConfig | None = None) -> DepotFleet:
     doy = np.array([(d - d.astype("datetime64[Y]")).astype(int) for d in dates], dtype=float)
     season = 1.0 + fx.seasonal * np.cos(2 * np.pi * (doy - fx.season_peak_day) / 365.25)
     # the T_gamma blend is normalised on the fleet's mean tau_max / T_gamma ratio per region
-    norm = {}
+    norm: dict[str, float] = {}
     for j, region in enumerate(REGIONS):
         tau = [_position_measures(r, b, s, None, 0.0, {"flange": 1, "tread": 1})[0, j]
                for r in routes.values() for b in ("motor", "trailer") for s in ("left", "right")]

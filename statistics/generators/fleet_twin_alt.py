@@ -54,12 +54,11 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics.processing import process_profile
-from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.routes import Route, RouteClass, rail_for
 
 Array = NDArray[np.float64]
-REGIONS = ("flange", "tread")
-MEASURES = ("tau_max", "t_gamma")
 SPLIT_Y_MM = -30.0
 TABLE_RADII_M = (180.0, 250.0, 350.0, 500.0, 800.0, 1200.0, 2500.0)
 _FINE_Y = np.arange(-70.0, 60.0 + 1e-9, 0.05)
@@ -125,7 +124,7 @@ def alt_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
     rows = []
     for bogie in ("motor", "trailer"):
         for ws in ("leading", "trailing"):
-            for measure in MEASURES:
+            for measure in WEAR_MEASURES:
                 for region in REGIONS:
                     rows.append((bogie, ws, "tangent", np.nan, region, measure,
                                  alt_measure(bogie, ws, "tangent", None, region, measure)))
@@ -138,12 +137,6 @@ def alt_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
                                        "measure", "value"])
 
 
-def _rail(side: str, direction: str | None) -> str:
-    if direction is None:
-        return "tangent"
-    return "high" if side != direction else "low"   # left curve: right wheels on the high rail
-
-
 def _route_p(route: Route, bogie: str, axle: int, side: str, lead_share: float,
              left_share: float | None, measure: str) -> dict[str, float]:
     """Weighted measure per region with an axle-1 leading share and a true left share."""
@@ -151,7 +144,7 @@ def _route_p(route: Route, bogie: str, axle: int, side: str, lead_share: float,
               for d in ("left", "right")}
     total = curved["left"] + curved["right"]
     p_lead = lead_share if axle == 1 else 1.0 - lead_share
-    out = {}
+    out: dict[str, float] = {}
     for region in REGIONS:
         acc = 0.0
         for c in route.classes:
@@ -159,7 +152,7 @@ def _route_p(route: Route, bogie: str, axle: int, side: str, lead_share: float,
             if left_share is not None and c.direction is not None and total > 0:
                 want = left_share if c.direction == "left" else 1.0 - left_share
                 share = c.share * want * total / curved[c.direction]
-            rail = _rail(side, c.direction)
+            rail = rail_for(c, side)
             acc += share * (p_lead * alt_measure(bogie, "leading", rail, c.radius_m, region,
                                                  measure)
                             + (1 - p_lead) * alt_measure(bogie, "trailing", rail, c.radius_m,
@@ -274,7 +267,7 @@ def generate_alt_fleet(config: AltConfig | None = None) -> AltFleet:
     rng = np.random.default_rng(cfg.seed)
     routes, attrs = alt_routes()
     table = alt_wear_table()
-    midx = MEASURES.index(cfg.measure)
+    midx = WEAR_MEASURES.index(cfg.measure)
     wheels: list[dict[str, Any]] = []
     for unit in cfg.units:
         for v, (car, route_name) in enumerate(zip(unit.cars, unit.routes, strict=True), 1):

@@ -20,12 +20,10 @@ from wearcast.statistics import hybrid, reprofiling
 from wearcast.statistics.hybrid import (
     HybridModel,
     RegionCalibration,
-    _weighted_measure_vectorised,
     parameters_at_areas,
     predict,
     profile_at_areas,
     region_rates,
-    wheelset_weights,
 )
 from wearcast.statistics.profile_parameters import WheelLimits, flange_parameters
 from wearcast.statistics.reprofiling import (
@@ -34,6 +32,7 @@ from wearcast.statistics.reprofiling import (
     _margins,
     reprofiling_mileage,
 )
+from wearcast.statistics.route_measure import weighted_wear_measure, wheelset_weights
 from wearcast.statistics.routes import Route, RouteClass, rail_for
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 from wearcast.statistics.wear_rates import WearRate
@@ -44,7 +43,12 @@ from wearcast.statistics.wear_states import (
     wear_curve_at_area,
     wear_curves_at_areas,
 )
-from wearcast.statistics.wear_tables import TABLE_COLUMNS, compile_wear_table, table_value
+from wearcast.statistics.wear_tables import (
+    TABLE_COLUMNS,
+    RadiusOutOfTableError,
+    compile_wear_table,
+    table_value,
+)
 
 KW = {"bogie_type": "motor", "axle": 1}
 Y = np.asarray(DEFAULT_GRID_Y_MM)
@@ -225,14 +229,15 @@ def test_vectorised_weighted_measure_is_the_class_by_class_sum(table):
         route = Route("random", classes)
         for axle, side, mode, region in itertools.product(
                 (1, 2), ("left", "right"), ("lead", "mixed"), ("flange", "tread")):
-            fast = _weighted_measure_vectorised(route, table, "motor",
-                                                wheelset_weights(axle, mode), side, region,
-                                                "tau_max")
+            fast = weighted_wear_measure(route, table, bogie_type="motor", axle=axle,
+                                         side=side, running_mode=mode, region=region,
+                                         measure="tau_max")
             assert fast == _loop_measure(route, table, axle=axle, side=side, running_mode=mode,
                                          region=region, measure="tau_max")
     tight = Route("tight", (RouteClass(100.0, "left", 0.0, 40.0, 1.0),))
-    assert _weighted_measure_vectorised(tight, table, "motor", {"leading": 1.0}, "left",
-                                        "flange", "tau_max") is None  # the loop raises
+    with pytest.raises(RadiusOutOfTableError, match="radius_m"):  # as the class-by-class sum
+        weighted_wear_measure(tight, table, bogie_type="motor", axle=1, side="left",
+                              running_mode="lead", region="flange", measure="tau_max")
 
 
 def test_given_weighted_measures_give_the_same_prediction(table):
