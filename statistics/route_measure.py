@@ -16,13 +16,13 @@ twin (:mod:`wearcast.statistics.generators.fleet_twin`) — calls these function
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.vocabulary import RAILS, SIDES, WHEELSETS, leading_share
+from wearcast.physics.vocabulary import DIRECTIONS, RAILS, SIDES, WHEELSETS, Rail, leading_share
 from wearcast.statistics.routes import Route, RouteClass, rail_for
 from wearcast.statistics.wear_tables import (
     MEASURES,
@@ -163,6 +163,45 @@ def weighted_wear_measure(
     return float(sum((shares * p).tolist()))
 
 
+def curve_direction_shares(route: Route, left_share: float | None) -> list[float]:
+    """Class shares c_i [-] with the route's curved length re-split so that a share
+    ``left_share`` of it bends left (the curve-asymmetry effect of the generators); tangent
+    shares unchanged. None, or a route without curves, keeps the route's own shares."""
+    curved: dict[str, float] = {
+        d: sum(c.share for c in route.classes if c.direction == d) for d in DIRECTIONS}
+    total = curved["left"] + curved["right"]
+    if left_share is None or total <= 0:
+        return [c.share for c in route.classes]
+    out = []
+    for c in route.classes:
+        if c.direction is None:
+            out.append(c.share)
+            continue
+        want = left_share if c.direction == "left" else 1.0 - left_share
+        out.append(c.share * want * total / curved[c.direction])
+    return out
+
+
+def analytic_wear_measure(route: Route, side: str,
+                          value: Callable[[str, Rail, float | None], float],
+                          shares: Sequence[float] | None = None) -> dict[str, float]:
+    """P = sum_i c_i P_i (seed 001 eq. 2) per wheelset position for an analytic wear measure.
+
+    value : P_i as a function of (wheelset, rail, radius_m), radius_m None on tangent track
+    shares : the classes' c_i (default the route's own; see :func:`curve_direction_shares`)
+
+    Returns {'leading': P, 'trailing': P}; the rail of each class follows the rail rule.
+    """
+    c_i = [c.share for c in route.classes] if shares is None else list(shares)
+    out: dict[str, float] = {}
+    for ws in WHEELSETS:
+        acc = 0.0
+        for c, share in zip(route.classes, c_i, strict=True):
+            acc += share * value(ws, rail_for(c, side), c.radius_m)
+        out[ws] = acc
+    return out
+
+
 def route_parts(route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str, side: str,
                 region: str, measure: str) -> NDArray[np.float64]:
     """Route's wear measure split by wheelset and curve direction (seed 001 eq. 2 by parts).
@@ -212,5 +251,6 @@ def leading_shares(axle: ArrayLike, running_mode: ArrayLike) -> NDArray[np.float
     return out
 
 
-__all__ = ["PARTS", "UnknownBogieTypeError", "class_measures", "leading_shares", "route_parts",
-           "weighted_measure", "weighted_wear_measure", "wheelset_weights"]
+__all__ = ["PARTS", "UnknownBogieTypeError", "analytic_wear_measure", "class_measures",
+           "curve_direction_shares", "leading_shares", "route_parts", "weighted_measure",
+           "weighted_wear_measure", "wheelset_weights"]

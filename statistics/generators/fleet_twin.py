@@ -609,15 +609,8 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
             y, z = measure_profile(config, y_nominal, z_true, rng)
             for profile_effect in config.profile_effects:
                 y, z = profile_effect(wheel, float(mileage), y, z)
-            frames.append(pd.DataFrame({
-                "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
-                "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-                "mileage_km": csv_number(mileage), "y_mm": np.round(y, config.decimals),
-                "z_mm": np.round(z, config.decimals),
-                "measured_on": str(history.measured_on[i]), "route_id": wheel.route.name,
-                "running_mode": wheel.running_mode, "instrument_id": wheel.instrument_id,
-                "load_t": wheel.load_t, **wheel.covariates,
-            }))
+            frames.append(profile_rows(config, wheel, float(mileage),
+                                       str(history.measured_on[i]), y, z))
             truth.append({
                 "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
                 "unit_id": wheel.unit_id, "bogie_type": wheel.bogie_type, "axle": wheel.axle,
@@ -632,6 +625,20 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
                 "rate_flange_mm2_per_km": wheel.rate_mm2_per_km["flange"],
             })
         yield wheel, pd.concat(frames, ignore_index=True), pd.DataFrame(truth)
+
+
+def profile_rows(config: FleetConfig, wheel: WheelSpec, mileage_km: float, measured_on: str,
+                 y_mm: Array, z_mm: Array) -> pd.DataFrame:
+    """The long-CSV rows (``PROFILE_COLUMNS`` + the unit's covariates) of one measured
+    profile, points rounded to ``config.decimals`` [mm]."""
+    return pd.DataFrame({
+        "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
+        "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
+        "mileage_km": csv_number(mileage_km), "y_mm": np.round(y_mm, config.decimals),
+        "z_mm": np.round(z_mm, config.decimals), "measured_on": measured_on,
+        "route_id": wheel.route.name, "running_mode": wheel.running_mode,
+        "instrument_id": wheel.instrument_id, "load_t": wheel.load_t, **wheel.covariates,
+    })
 
 
 def csv_number(value: float) -> float | int:

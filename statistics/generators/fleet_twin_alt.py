@@ -56,7 +56,9 @@ from numpy.typing import NDArray
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics.processing import process_profile
-from wearcast.statistics.routes import Route, RouteClass, rail_for
+from wearcast.statistics.route_measure import analytic_wear_measure, curve_direction_shares
+from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.wear_tables import sample_wear_table
 
 Array = NDArray[np.float64]
 SPLIT_Y_MM = -30.0
@@ -121,43 +123,21 @@ def alt_measure(bogie_type: str, wheelset: str, rail: str, radius_m: float | Non
 def alt_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
     """The curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling
     ``alt_measure``, both measures."""
-    rows = []
-    for bogie in ("motor", "trailer"):
-        for ws in ("leading", "trailing"):
-            for measure in WEAR_MEASURES:
-                for region in REGIONS:
-                    rows.append((bogie, ws, "tangent", np.nan, region, measure,
-                                 alt_measure(bogie, ws, "tangent", None, region, measure)))
-                    for rail in ("high", "low"):
-                        for r in radii_m:
-                            rows.append((bogie, ws, rail, r, region, measure,
-                                         round(alt_measure(bogie, ws, rail, r, region,
-                                                           measure), 5)))
-    return pd.DataFrame(rows, columns=["bogie_type", "wheelset", "rail", "radius_m", "region",
-                                       "measure", "value"])
+    return sample_wear_table(alt_measure, radii_m)
 
 
 def _route_p(route: Route, bogie: str, axle: int, side: str, lead_share: float,
              left_share: float | None, measure: str) -> dict[str, float]:
     """Weighted measure per region with an axle-1 leading share and a true left share."""
-    curved = {d: sum(c.share for c in route.classes if c.direction == d)
-              for d in ("left", "right")}
-    total = curved["left"] + curved["right"]
     p_lead = lead_share if axle == 1 else 1.0 - lead_share
+    shares = curve_direction_shares(route, left_share)
     out: dict[str, float] = {}
     for region in REGIONS:
-        acc = 0.0
-        for c in route.classes:
-            share = c.share
-            if left_share is not None and c.direction is not None and total > 0:
-                want = left_share if c.direction == "left" else 1.0 - left_share
-                share = c.share * want * total / curved[c.direction]
-            rail = rail_for(c, side)
-            acc += share * (p_lead * alt_measure(bogie, "leading", rail, c.radius_m, region,
-                                                 measure)
-                            + (1 - p_lead) * alt_measure(bogie, "trailing", rail, c.radius_m,
-                                                         region, measure))
-        out[region] = acc
+        def value(ws: str, rail: str, radius_m: float | None, region: str = region) -> float:
+            return alt_measure(bogie, ws, rail, radius_m, region, measure)
+
+        p = analytic_wear_measure(route, side, value, shares)
+        out[region] = p_lead * p["leading"] + (1 - p_lead) * p["trailing"]
     return out
 
 

@@ -49,8 +49,8 @@ from wearcast.statistics.generators.fleet_twin import (
     WearHistory,
     WheelSpec,
     arc_length_samples,
-    csv_number,
     measure_profile,
+    profile_rows,
 )
 
 Array = NDArray[np.float64]
@@ -193,13 +193,7 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
         y, z = measure_profile(config, y_nominal, z_true, rng)
         for profile_effect in config.profile_effects:
             y, z = profile_effect(wheel, float(km), y, z)
-        frames.append(pd.DataFrame({
-            "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
-            "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-            "mileage_km": csv_number(km), "y_mm": np.round(y, config.decimals),
-            "z_mm": np.round(z, config.decimals), "measured_on": str(history.measured_on[i]),
-            "route_id": wheel.route.name, "running_mode": wheel.running_mode,
-            "instrument_id": wheel.instrument_id, "load_t": wheel.load_t, **wheel.covariates}))
+        frames.append(profile_rows(config, wheel, float(km), str(history.measured_on[i]), y, z))
         a_tread, a_flange = _region_areas(y_loop, w, config.split_y_mm)
         rows.append({
             "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.processing import process_profile
-from wearcast.statistics.route_measure import weighted_wear_measure
+from wearcast.statistics.route_measure import curve_direction_shares, weighted_wear_measure
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import compile_wear_table
 
@@ -105,16 +105,11 @@ def running_direction(table: pd.DataFrame, leading_share: float, *, mode: str = 
 
 
 def asymmetric_route(route: ft.TwinRoute, left_share: float) -> ft.TwinRoute:
-    """The route with a share ``left_share`` of its curved length bending left."""
-    left = sum(c.share for c in route.classes if c.direction == "left")
-    right = sum(c.share for c in route.classes if c.direction == "right")
-    total = left + right
-    classes = tuple(
-        replace(c, share=c.share * (left_share * total / left if c.direction == "left"
-                                    else (1 - left_share) * total / right
-                                    if c.direction == "right" else 1.0))
-        for c in route.classes)
-    return replace(route, classes=classes)
+    """The route with a share ``left_share`` of its curved length bending left
+    (:func:`wearcast.statistics.route_measure.curve_direction_shares`)."""
+    shares = curve_direction_shares(route, left_share)
+    return replace(route, classes=tuple(replace(c, share=share)
+                                        for c, share in zip(route.classes, shares, strict=True)))
 
 
 def curve_asymmetry(table: pd.DataFrame, left_share: float, *,
