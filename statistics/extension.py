@@ -21,27 +21,14 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
+from wearcast.statistics.findings import json_value
 from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
 from wearcast.statistics.residuals import geometric_basis
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable
 
 if TYPE_CHECKING:
-    from wearcast.statistics.discrepancy import Finding
-
-
-def _json(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return {str(k): _json(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json(value.tolist())
-    if isinstance(value, np.generic):
-        return _json(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    from wearcast.statistics.findings import Finding
 
 
 def build_finder_data(*args: Any, **kwargs: Any) -> cz.FinderData:
@@ -67,7 +54,7 @@ class ExtendedModel:
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "extended", "base": self.base.to_dict(), "cause": self.cause,
-                "parameters": _json(self.parameters), "log_scale": dict(self.log_scale)}
+                "parameters": json_value(self.parameters), "log_scale": dict(self.log_scale)}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ExtendedModel:
