@@ -50,7 +50,7 @@ Effects (``DepotEffects``), each from its physical description
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -409,8 +409,3 @@ def _measured_profile(cfg: DepotConfig, rng: np.random.Generator, instrument: st
                          "instrument_id": instrument})
     return (float(p.areas.flange_mm2), float(p.areas.tread_mm2),
             np.nan_to_num(p.wear_mm, nan=0.0), prof)
-
-
-def with_effects(config: DepotConfig, **changes: Any) -> DepotConfig:
-    """A copy of ``config`` with some effects changed."""
-    return replace(config, effects=replace(config.effects, **changes))

@@ -30,7 +30,7 @@ Pure: numpy/pandas in and out, deterministic for a given seed.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -205,8 +205,3 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
             "max_depth_mm": float(w.max()), "sd_mm": params.sd_mm, "sh_mm": params.sh_mm,
             "qr_mm": params.qr_mm})
     return pd.concat(frames, ignore_index=True), pd.DataFrame(rows)
-
-
-def with_truth(truth: LoopTruth, **changes: Any) -> LoopTruth:
-    """A copy of ``truth`` with some fields changed."""
-    return replace(truth, **changes)

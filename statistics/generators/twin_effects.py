@@ -23,7 +23,6 @@ areas: ``processing.process_profile``) into the measurement frame and wear curve
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -174,9 +173,6 @@ def flange_tread_offset(instrument_id: str, offset_mm: float, split_y_mm: float 
 def to_route(route: ft.TwinRoute) -> Route:
     """The statistics ``Route`` of a twin route (attributes are returned separately)."""
     return Route(route.name, route.classes)
-
-
-EffectFactory = Callable[..., ft.WearEffect]
 
 
 def twin_measurements(twin: ft.FleetTwin) -> tuple[pd.DataFrame, Array]:
