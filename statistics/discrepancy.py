@@ -53,7 +53,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.physics.vocabulary import REGIONS
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.extension import (
@@ -78,7 +78,7 @@ from wearcast.statistics.residuals import (
 )
 from wearcast.statistics.route_measure import leading_shares
 from wearcast.statistics.routes import Route
-from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table
+from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
 DEFAULT_ALPHA = 0.04
 DEFAULT_STRUCTURE_ALPHA = 0.01
@@ -172,7 +172,7 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         frame=frame, measured=res.measured_mm2, base=res.predicted_mm2, floor=res.floor_mm2,
         mileage_km=frame["mileage_km"].to_numpy(dtype=float),
         c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
-        measure_index=MEASURES.index(model.measure),
+        measure_index=WEAR_MEASURES.index(model.measure),
         lead_share=leading_shares(frame["axle"].to_numpy(), res.mode), mode=res.mode,
         left_right=res.left_right_shares, route=route,
         lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),

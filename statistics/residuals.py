@@ -30,12 +30,12 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES
+from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.route_measure import leading_shares, route_parts, weighted_measure
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_states import join_regions, wear_curves_at_areas
-from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table
+from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
 REQUIRED_COLUMNS = ("wheel_id", "bogie_type", "axle", "side", "mileage_km",
                     "flange_area_mm2", "tread_area_mm2")
@@ -185,7 +185,7 @@ def model_residuals(
             if bogie not in wt.bogie_types:
                 raise ValueError(f"bogie_type: {bogie!r} (row {i}) is not in the wear table")
             block = np.zeros((2, 2, 2, 3))
-            for m, measure in enumerate(MEASURES):
+            for m, measure in enumerate(WEAR_MEASURES):
                 if measure not in wt.measures:
                     block[m] = np.nan
                     continue
@@ -199,7 +199,7 @@ def model_residuals(
         parts = np.asarray(history @ parts.reshape(n, -1)).reshape(parts.shape)
         shares = np.asarray(history @ shares)
     lead = leading_shares(df["axle"].to_numpy(), mode)
-    p = weighted_measure(parts, lead, MEASURES.index(model.measure))
+    p = weighted_measure(parts, lead, WEAR_MEASURES.index(model.measure))
     mileage = df["mileage_km"].to_numpy()
     c_s = np.array([model.flange.c_s, model.tread.c_s])
     predicted = c_s[None, :] * p * mileage[:, None]

@@ -22,12 +22,19 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.vocabulary import DIRECTIONS, RAILS, SIDES, WHEELSETS, Rail, leading_share
+from wearcast.physics.vocabulary import (
+    DIRECTIONS,
+    RAILS,
+    REGIONS,
+    SIDES,
+    WEAR_MEASURES,
+    WHEELSETS,
+    Rail,
+    leading_share,
+)
 from wearcast.statistics.routes import Route, RouteClass, rail_for
 from wearcast.statistics.wear_tables import (
-    MEASURES,
     RADIUS_RTOL,
-    REGIONS,
     WearTable,
     compile_wear_table,
     table_value,
@@ -145,7 +152,7 @@ def weighted_wear_measure(
     """
     _check_choice(side, SIDES, "side")
     _check_choice(region, REGIONS, "region")
-    _check_choice(measure, MEASURES, "measure")
+    _check_choice(measure, WEAR_MEASURES, "measure")
     wt = compile_wear_table(table)
     if bogie_type not in wt.bogie_types:
         raise UnknownBogieTypeError(
@@ -226,7 +233,7 @@ def weighted_measure(parts: NDArray[np.float64], lead_share: ArrayLike, measure_
 
     parts : (n, measure, region, wheelset, part) route parts (:func:`route_parts` stacked)
     lead_share : (n,) share of distance the wheelset leads (P = p P_lead + (1 - p) P_trail)
-    measure_index : index of the measure in ``MEASURES``
+    measure_index : index of the measure in ``vocabulary.WEAR_MEASURES``
     left_right : optional (n, 2) weights multiplying the left and right curve parts
     """
     block = parts[:, measure_index]                      # (n, region, wheelset, part)

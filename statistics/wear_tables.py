@@ -24,9 +24,6 @@ import pandas as pd
 from wearcast.physics.vocabulary import BOGIE_TYPES, RAILS, REGIONS, WEAR_MEASURES, WHEELSETS
 
 TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
-#: The table's keys take the shared words of :mod:`wearcast.physics.vocabulary`.
-MEASURES = WEAR_MEASURES
-
 #: Relative slack on the table's smallest radius (rounding of uploaded radii) [-].
 RADIUS_RTOL = 1e-9
 
@@ -71,7 +68,7 @@ def validate_wear_table(table: pd.DataFrame) -> pd.DataFrame:
         ("wheelset", WHEELSETS),
         ("rail", RAILS),
         ("region", REGIONS),
-        ("measure", MEASURES),
+        ("measure", WEAR_MEASURES),
     ):
         values = df[column].astype(str).str.strip().str.lower()
         bad = ~values.isin(allowed)

@@ -534,31 +534,39 @@ def arc_length_samples(n_points: int) -> Array:
     return np.interp(np.linspace(0.0, s[-1], n_points), s, _FINE_Y_MM)
 
 
-def _wheels(config: FleetConfig, table: pd.DataFrame,
-            rng: np.random.Generator) -> list[WheelSpec]:
-    index = compile_wear_table(table)
-    wheels: list[WheelSpec] = []
+def fleet_wheels(config: FleetConfig) -> Iterator[WheelSpec]:
+    """Every wheel of the fleet's layout, unit by unit, vehicle, bogie, axle, side (the order
+    the generators draw their random numbers in), with ``measure_p`` and ``rate_mm2_per_km``
+    not yet known (NaN). Wheel ids read ``<vehicle>-<M|T><axle><L|R>``."""
+    unknown: dict[str, float] = {r: math.nan for r in TWIN_REGION_ORDER}
     for unit in config.units:
         for v in range(1, unit.vehicles + 1):
             vehicle_id = f"{unit.unit_id}{v}"
             for bogie in config.bogies:
                 for axle in config.axles:
                     for side in config.sides:
-                        p: dict[str, float] = {r: weighted_wear_measure(
-                                 unit.route, index, bogie_type=bogie, axle=axle, side=side,
-                                 running_mode=unit.running_mode, region=r,
-                                 measure=config.measure)
-                             for r in REGIONS}
-                        factor = float(np.exp(rng.normal(0.0, config.rate_scatter)))
-                        rate: dict[str, float] = {
-                            r: config.calibration_factor[r] * p[r] * factor for r in REGIONS}
-                        wheels.append(WheelSpec(
+                        yield WheelSpec(
                             wheel_id=f"{vehicle_id}-{bogie[0].upper()}{axle}{side[0].upper()}",
                             vehicle_id=vehicle_id, unit_id=unit.unit_id, bogie_type=bogie,
                             axle=axle, side=side, route=unit.route,
                             running_mode=unit.running_mode, instrument_id=unit.instrument_id,
-                            load_t=unit.load_t, measure_p=p, rate_mm2_per_km=rate,
-                            covariates=dict(unit.covariates)))
+                            load_t=unit.load_t, measure_p=dict(unknown),
+                            rate_mm2_per_km=dict(unknown), covariates=dict(unit.covariates))
+
+
+def _wheels(config: FleetConfig, table: pd.DataFrame,
+            rng: np.random.Generator) -> list[WheelSpec]:
+    index = compile_wear_table(table)
+    wheels: list[WheelSpec] = []
+    for wheel in fleet_wheels(config):
+        p: dict[str, float] = {r: weighted_wear_measure(
+            wheel.route, index, bogie_type=wheel.bogie_type, axle=wheel.axle, side=wheel.side,
+            running_mode=wheel.running_mode, region=r, measure=config.measure)
+            for r in REGIONS}
+        factor = float(np.exp(rng.normal(0.0, config.rate_scatter)))
+        rate: dict[str, float] = {
+            r: config.calibration_factor[r] * p[r] * factor for r in REGIONS}
+        wheels.append(replace(wheel, measure_p=p, rate_mm2_per_km=rate))
     return wheels
 
 

@@ -49,6 +49,7 @@ from wearcast.statistics.generators.fleet_twin import (
     WearHistory,
     WheelSpec,
     arc_length_samples,
+    fleet_wheels,
     measure_profile,
     profile_rows,
 )
@@ -136,29 +137,18 @@ def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
 
     y_nominal = arc_length_samples(config.points_per_profile)
     profiles, truths, wheels = [], [], []
-    for unit in config.units:
-        for v in range(1, unit.vehicles + 1):
-            vehicle_id = f"{unit.unit_id}{v}"
-            for bogie in config.bogies:
-                for axle in config.axles:
-                    for side in config.sides:
-                        axles = (1, 2) if unit.running_mode == "mixed" else (axle,)
-                        loop = [run(unit.route, bogie, a, side) for a in axles]
-                        factor = float(np.clip(np.exp(rng.normal(0.0, config.rate_scatter)),
-                                               0.0, max_rate_factor))
-                        wheel = WheelSpec(
-                            wheel_id=f"{vehicle_id}-{bogie[0].upper()}{axle}{side[0].upper()}",
-                            vehicle_id=vehicle_id, unit_id=unit.unit_id, bogie_type=bogie,
-                            axle=axle, side=side, route=unit.route,
-                            running_mode=unit.running_mode, instrument_id=unit.instrument_id,
-                            load_t=unit.load_t, measure_p={"tread": np.nan, "flange": np.nan},
-                            rate_mm2_per_km={"tread": np.nan, "flange": np.nan},
-                            covariates=dict(unit.covariates))
-                        rows, truth_rows = _wheel_rows(config, truth, wheel, unit, loop, factor,
-                                                       y_nominal, rng)
-                        wheels.append(wheel)
-                        profiles.append(rows)
-                        truths.append(truth_rows)
+    units = {u.unit_id: u for u in config.units}
+    for wheel in fleet_wheels(config):
+        unit = units[wheel.unit_id]
+        axles = (1, 2) if unit.running_mode == "mixed" else (wheel.axle,)
+        loop = [run(unit.route, wheel.bogie_type, a, wheel.side) for a in axles]
+        factor = float(np.clip(np.exp(rng.normal(0.0, config.rate_scatter)),
+                               0.0, max_rate_factor))
+        rows, truth_rows = _wheel_rows(config, truth, wheel, unit, loop, factor,
+                                       y_nominal, rng)
+        wheels.append(wheel)
+        profiles.append(rows)
+        truths.append(truth_rows)
     fleet = FleetTwin(pd.concat(profiles, ignore_index=True),
                       pd.concat(truths, ignore_index=True), tuple(wheels))
     return LoopFleetTwin(fleet=fleet, simulations=sims)
