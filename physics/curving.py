@@ -21,14 +21,17 @@ Model (Wickens / Elkins-Gostling style steady curving, solved as a nonlinear equ
   gravitational stiffness comes through the lateral components N sin(delta) of the normal
   forces.
 * Contacts: up to three patches per wheel from the local minima of a tabulated, smoothed
-  wheel-rail gap (:class:`ContactTable`), elastic (Hertz: N = (approach / delta_1)^1.5,
+  wheel-rail gap (:class:`ContactTable`, built from the rigid multi-point geometry of
+  ``contact.geometry`` with its solved roll), elastic (Hertz: N = (approach / delta_1)^1.5,
   ``contact.hertz``), attributed to the flange when wheel y < -30 mm.
 * Creepages in each wheel's local frame (lateral axis towards that wheel's field side, the
   right wheel's frame mirrored so both wheels are described alike): xi = 1 - kappa y_c - (1+e)
   r/r0, eta = -s psi cos(delta), phi = (-(1+e) sin(delta)/r0 + s kappa cos(delta)) [1/m]; s = +1
-  left, -1 right; y_c the contact's distance from the track centre line. Creep forces: Kalker's
-  linear theory saturated by Shen-Hedrick-Elkins (``contact.creep``, smooth, spin included);
-  FASTSIM (``contact.fastsim``) on the final state only, for tau_max.
+  left, -1 right; y_c the contact's distance from the track centre line. Creep forces of the
+  equilibrium: FASTSIM (``contact.fastsim``, CONTACT's flexibilities, 16 x 16) on each patch;
+  the continuation runs with Kalker's linear theory saturated by Shen-Hedrick-Elkins
+  (``contact.creep``, smooth, spin included) and its equilibrium starts Newton with FASTSIM;
+  tau_max from FASTSIM on the final state.
 * Primary suspension per axle box (longitudinal k_px at +-b1, lateral k_py); the secondary
   suspension carries the body share's unbalanced force and a yaw stiffness to the body chord
   (front bogie: body yaw -kappa L/2 relative to the bogie's tangent).
@@ -53,8 +56,13 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.optimize import root
 
 from wearcast.physics.contact.creep import creep_forces
-from wearcast.physics.contact.fastsim import fastsim
+from wearcast.physics.contact.fastsim import Bound, fastsim, fastsim_forces
+from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
+from wearcast.physics.contact_candidates_kernel import candidate_slots
+from wearcast.physics.profiles.measured import ProfileCurve
+from wearcast.physics.profiles.measured_rail import NOMINAL_GAUGE_POINT_Y_MM
+from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
@@ -73,6 +81,14 @@ FLANGE_SPLIT_Y_MM = -30.0
 SHEAR_MODULUS_MPA = 82_000.0
 #: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
 DEFAULT_TOLERANCE = 1e-6
+#: Traction bound of the FASTSIM solution tau_max is read from: the elliptic bound mu p(x, y) has
+#: the Hertz pressure's shape, so in the slip zone tau_max <= mu p0 as in the exact (variational)
+#: solution; the parabolic bound (FASTSIM's default for forces) peaks at 4/3 mu p0 and overstates
+#: tau_max by up to 33 % (tests/physics/test_curving.py, full slip).
+TAU_MAX_BOUND: Bound = "elliptic"
+#: FASTSIM grid (n x n) of the creep forces in the curving equilibrium; 16 x 16 keeps the forces
+#: within 0.03 mu Fn of a 40 x 40 grid at the equilibria of ``benchmarks/curving_creep_law.py``.
+DEFAULT_CREEP_GRID = 16
 #: Bounds of the lateral relative curvature B used for Hertz [1/mm] (relative radius 1 m
 #: ... 5 mm).
 MIN_CURVATURE_B_PER_MM = 5e-4
@@ -85,6 +101,10 @@ PROMINENCE_MM = 0.005
 SHARE_GAP_MM = 0.01
 #: Gap assigned to a slot without a contact candidate [mm].
 _NO_CONTACT_GAP_MM = 50.0
+
+#: Wheel y [mm] below which the gap is smoothed at the flange scale, and above which at the
+#: tread scale (``build_contact_table``), blended linearly between.
+FLANK_SMOOTHING_Y_MM = (-25.0, -15.0)
 
 SIDES = ("left", "right")
 _SIDE_SIGN = np.array([1.0, -1.0])  # left wheel at +y
@@ -160,12 +180,27 @@ class ContactTable:
 
         Returns arrays of shape shift.shape + (n_slots,), slot 0 the field-most candidate:
         ``gap_mm`` above the best candidate (a missing candidate gets a large gap),
-        ``weight`` in [0, 1] (1 for a separate patch, see the code),
+        ``weight`` in [0, 1] (1 for a separate patch, see ``_candidate_slots_numpy``),
         ``angle_rad`` contact angle (> 0 pushes the wheel towards the track centre),
         ``wheel_y_mm``, ``rail_y_mm``, ``lateral_mm`` (distance from the track centre line),
         ``radius_m`` rolling radius, ``curv_a``, ``curv_b`` [1/mm], ``approach1_mm``,
-        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N.
+        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N. The slots come from the compiled kernel
+        (``contact_candidates_kernel``); ``_candidate_slots_numpy`` is its reference.
         """
+        s = np.asarray(shift_mm, dtype=float)
+        flat = np.ascontiguousarray(s.reshape(-1))
+        slots = candidate_slots(self.gap_mm, self.gap2_per_mm, self.smoothing_mm,
+                                float(self.shift_mm[0]),
+                                float(self.shift_mm[1] - self.shift_mm[0]), self.wheel_y_mm,
+                                flat, n_slots, PROMINENCE_MM, SEPARATION_MM, SHARE_GAP_MM,
+                                _NO_CONTACT_GAP_MM)
+        yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
+        return self._candidate_columns(s, yc, gap, g2, weight)
+
+    def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = 3
+                               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Reference implementation of the candidate slots (wheel y, gap, g'', weight), each
+        shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel``."""
         s = np.asarray(shift_mm, dtype=float)
         grid = self.shift_mm
         step = grid[1] - grid[0]
@@ -249,6 +284,11 @@ class ContactTable:
         gap = np.take_along_axis(gap, order, axis=-1)
         g2 = np.take_along_axis(g2, order, axis=-1)
         weight = np.take_along_axis(weight, order, axis=-1)
+        return yc, gap, g2, weight
+
+    def _candidate_columns(self, s: NDArray, yc: NDArray, gap: NDArray, g2: NDArray,
+                           weight: NDArray) -> dict[str, NDArray]:
+        """The candidate columns of ``candidates`` from the slots."""
         wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
         slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
         rail_y = yc + self.rail_offset_mm + s[..., None]
@@ -397,18 +437,28 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
                         smoothing_mm: tuple[float, float] = (2.0, 2.0)) -> ContactTable:
     """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
 
+    The gap comes from the rigid multi-point geometry (``contact.geometry``, the module checked
+    against the Manchester benchmark): for each shift of the wheelset centre the roll that puts
+    both wheels on their rails is solved, and the vertical gap of every wheel point over the
+    rail is taken in that pose. The table's shift is the shift at rail level (contact frame),
+    centre shift plus r0 times the rigid roll, on a uniform grid.
+
     Parameters
     ----------
     wheel_height_mm : wheel profile z(y) in the wheel frame [mm]; default S1002
         (``profiles.s1002``)
-    rail : ``60E1`` or ``60E2`` (``profiles.rails``)
+    rail : ``60E1`` or ``60E2`` (``profiles.rails``) or a measured rail shape
     inclination : rail inclination slope (1/40, 1/20)
     wheel_radius_m : nominal rolling radius at the tape circle [m]
     max_shift_mm, shift_step_mm : table range +-max_shift and step of the shift [mm]
     wheel_step_mm : spacing of the wheel points [mm]
     wheel_y_range_mm : part of the wheel profile searched for contact [mm]
     smoothing_mm : standard deviations of the Gaussian smoothing of the gap along y on the
-        tread (y > -15 mm) and on the flange (y < -25 mm), blended linearly between [mm]
+        tread (y > -15 mm) and on the flange (y < -25 mm), blended linearly between [mm]. The
+        tread's 2 mm is the scale of a tread patch (S1002 on a rail crown is nearly conformal
+        and the raw gap has shallow double minima); the flange's 0.3 mm keeps the flank contact
+        where the rigid geometry has it (a 2 mm smoothing moved it 6-8 mm down to the flange
+        root, at a contact angle of 27 deg instead of 66 deg).
 
     Returns
     -------
@@ -417,20 +467,42 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     (valid while contact angles stay below ~75 deg; the S1002 flank is at 70 deg).
     """
     wheel = s1002_height_mm if wheel_height_mm is None else wheel_height_mm
-    rail_y, rail_z, rail_origin = _rail_envelope(rail, inclination)
+    r0_mm = 1000.0 * wheel_radius_m
     y_w = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, wheel_step_mm)
     z_w = wheel(y_w)
     h = 0.2
     slope = (wheel(y_w + h) - wheel(y_w - h)) / (2 * h)
+    # the rigid geometry on a curve through the wheel's points (0.05 mm) and the rail's
+    y_fine = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, 0.05)
+    y_rail, z_rail = rail_profile(rail, step_mm=0.1, inclination=0.0)
+    # a measured head comes in the nominal rail frame with its gauge point at 60E1's
+    # (``MeasuredRail.contact_points``), which may lie under a lip its contact curve omits
+    gauge_point = None if isinstance(rail, str) else (NOMINAL_GAUGE_POINT_Y_MM, -14.0)
+    track = WheelsetTrack(wheel=ProfileCurve.from_points(y_fine, wheel(y_fine)),
+                          rail=ProfileCurve.from_points(y_rail, z_rail),
+                          nominal_radius_mm=r0_mm, rail_inclination=inclination,
+                          wheel_sample_mm=0.2, rail_gauge_point_mm=gauge_point)
+    # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
+    centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
+    y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
+    contact_level = centre + r0_mm * roll
     shifts = np.arange(-max_shift_mm, max_shift_mm + 1e-9, shift_step_mm)
+    order = np.argsort(y_geo)
+    y_geo, raw_geo = y_geo[order], raw_geo[:, order]
+    raw_geo = np.where(np.isfinite(raw_geo), raw_geo, 100.0)
+    # rows: linear in the contact-level shift; columns: onto the uniform wheel grid
+    pos = np.interp(shifts, contact_level, np.arange(centre.size))
+    k = np.clip(np.floor(pos).astype(int), 0, centre.size - 2)
+    w = (pos - k)[:, None]
+    rows = (1.0 - w) * raw_geo[k] + w * raw_geo[k + 1]
+    raw = np.stack([np.interp(y_w, y_geo, row, left=100.0, right=100.0) for row in rows])
+    # the wheel's rigid rise so that the roll of the pair is (rise(y) - rise(-y)) / 1500 mm
+    rigid_roll = np.interp(shifts, contact_level, roll)
+    rigid_rise = TAPE_CIRCLE_HALF_SPACING_MM * rigid_roll
+    _, _, rail_origin = _rail_envelope(rail, inclination)
     offset = TAPE_CIRCLE_HALF_SPACING_MM - rail_origin  # rail y of wheel y = 0 at zero shift
-    rail_at = np.interp(y_w[None, :] + offset + shifts[:, None], rail_y, rail_z,
-                        left=np.nan, right=np.nan)
-    raw = -z_w[None, :] - rail_at
-    raw = np.where(np.isfinite(raw), raw, 100.0)
-    lowest = np.min(raw, axis=1)
-    rigid_rise = -(lowest - np.interp(0.0, shifts, lowest))
-    blend = np.clip((y_w + 25.0) / 10.0, 0.0, 1.0)  # 1 on the tread, 0 on the flange
+    lo, hi = FLANK_SMOOTHING_Y_MM
+    blend = np.clip((y_w - lo) / (hi - lo), 0.0, 1.0)  # 1 on the tread, 0 on the flank
     sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
     gap = np.zeros_like(raw)
     gap2 = np.zeros_like(raw)
@@ -456,9 +528,22 @@ def contact_table_for(wheel_profile: str, rail: str, inclination: float,
     return build_contact_table(None, rail, inclination, wheel_radius_m)
 
 
+@lru_cache(maxsize=16)
+def measured_wheel_table_for(wheel: MeasuredWheel, rail: str, inclination: float,
+                             wheel_radius_m: float) -> ContactTable:
+    """Cached :func:`build_contact_table` for a measured wheel (over the part of the contact
+    search range its points cover)."""
+    return build_contact_table(wheel.height_mm, rail, inclination, wheel_radius_m,
+                               wheel_y_range_mm=wheel.search_range_mm)
+
+
 def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
     """The (cached) contact table of a vehicle's profile pair."""
     rail: Any = vehicle.rail_profile  # a name or a hashable measured-rail shape
+    if isinstance(vehicle.wheel_profile, MeasuredWheel):
+        return measured_wheel_table_for(vehicle.wheel_profile, rail,
+                                        float(vehicle.rail_inclination),
+                                        float(vehicle.wheel_radius_m))
     return contact_table_for(vehicle.wheel_profile, rail,
                              float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))
 
@@ -565,8 +650,12 @@ class _Contacts:
     lateral_mm: NDArray
 
 
-def _contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu) -> _Contacts:
+def _contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu,
+              creep_grid: int | None = None) -> _Contacts:
     """Contact forces of wheelsets; y, psi, e: (..., W); d: (..., W, 2).
+
+    ``creep_grid`` None: creep forces from the smooth saturation law (``contact.creep``);
+    an integer n: from FASTSIM on an n x n grid (``contact.fastsim.fastsim_forces``).
 
     Returns per-contact arrays of shape (..., W, 2, slots)."""
     s = _SIDE_SIGN  # (2,)
@@ -590,9 +679,14 @@ def _contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu) -> _Contac
     eta = -ss * psi[..., None, None] * cos
     phi = (-ratio * sin / r0 + ss * k * cos) / 1000.0
     loaded = normal > 0
-    cf = creep_forces(xi, eta, phi, np.where(loaded, a, 1.0), np.where(loaded, b, 1.0), normal,
-                      mu, SHEAR_MODULUS_MPA)
-    fx, fy, mz = cf.fx_n, cf.fy_n, cf.mz_nmm
+    a_safe, b_safe = np.where(loaded, a, 1.0), np.where(loaded, b, 1.0)
+    if creep_grid is None:
+        cf = creep_forces(xi, eta, phi, a_safe, b_safe, normal, mu, SHEAR_MODULUS_MPA)
+        fx, fy, mz = cf.fx_n, cf.fy_n, cf.mz_nmm
+    else:
+        ff = fastsim_forces(xi, eta, phi, a_safe, b_safe, normal, mu, SHEAR_MODULUS_MPA,
+                            n_x=creep_grid, n_y=creep_grid)
+        fx, fy, mz = ff.fx_n, ff.fy_n, ff.mz_nmm
     return _Contacts(normal, ang, xi, eta, phi, fx, fy, mz, a, b, col["radius_m"],
                      col["wheel_y_mm"], col["rail_y_mm"], col["lateral_mm"])
 
@@ -633,7 +727,7 @@ def _wheel_loads(vehicle: BogieVehicle, a_unb) -> NDArray:
 
 
 def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
-                    return_contacts: bool = False):
+                    return_contacts: bool = False, creep_grid: int | None = None):
     """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...)."""
     kappa = np.asarray(kappa, dtype=float)
     a_unb = np.asarray(a_unb, dtype=float)
@@ -645,7 +739,7 @@ def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb,
     yb = q[..., 10]
     psib = q[..., 11] * 1e-3
     r0 = table.nominal_radius_m
-    c = _contacts(table, y, psi, e, d, kappa, r0, vehicle.friction)
+    c = _contacts(table, y, psi, e, d, kappa, r0, vehicle.friction, creep_grid)
     lat, vert, yaw, pitch = _wheelset_loads(c)
     am = vehicle.semi_wheelbase_m
     x = np.array([am, -am])
@@ -825,7 +919,8 @@ class CurvingResult:
     p0 [MPa], and from FASTSIM on this state tau_max [MPa] and T_gamma [N]; ``in_contact`` marks
     loaded patches. Also: the operating point, ``high_rail_side`` (None on tangent track) and the
     residual norm of the scaled equilibrium and the solver ``state`` (scaled unknowns, used to
-    continue from this solution).
+    continue from this solution); ``creep_grid`` the FASTSIM grid of the equilibrium's creep
+    forces (None: the saturation law, ``contact.creep``).
     """
 
     radius_m: float
@@ -860,6 +955,7 @@ class CurvingResult:
     in_contact: NDArray
     residual_norm: float
     state: NDArray
+    creep_grid: int | None = None
 
     @property
     def high_rail_side(self) -> str | None:
@@ -895,7 +991,8 @@ def contact_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n,
     -------
     dict with ``t_gamma_n`` = |Fx xi| + |Fy eta| + |Mz phi| [N] (seed 004 eq. 1),
     ``tau_max_mpa`` the largest surface shear traction of the FASTSIM solution [MPa]
-    (parabolic bound, CONTACT's flexibilities; seed 001 §2.2, Al-Maliki), ``p0_mpa`` the Hertz
+    (elliptic traction bound ``TAU_MAX_BOUND``, CONTACT's flexibilities; seed 001 §2.2,
+    Al-Maliki), ``p0_mpa`` the Hertz
     peak pressure 3N/(2 pi a b), ``in_contact`` (loaded with at least 1 N). Unloaded contacts
     get zeros.
     """
@@ -911,7 +1008,8 @@ def contact_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n,
     if np.any(loaded):
         sel = [v[loaded] for v in flat[:5]]
         fs = fastsim(sel[0], sel[1], sel[2], sel[3], sel[4], fn[loaded], mu,
-                     SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid)
+                     SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid,
+                     bound=TAU_MAX_BOUND)
         tau[loaded] = wear_tau_max(fs)
         p0[loaded] = 1.5 * fn[loaded] / (np.pi * sel[3] * sel[4])
     return {"t_gamma_n": t_gamma.reshape(shape), "tau_max_mpa": tau.reshape(shape),
@@ -926,7 +1024,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
                   speed_m_s: float | None = None, direction: str = "left",
                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_m_s: float = 30.0,
                   table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                  fastsim_grid: int = 20) -> CurvingResult:
+                  fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
+                  ) -> CurvingResult:
     """Quasi-static curving of a two-axle bogie (module docstring).
 
     Parameters
@@ -943,6 +1042,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     tol : tolerance on the norm of the scaled residual (forces [N] and moments [N m] divided by
         the static wheel load [N]); the default 1e-6 is 0.05 N on a 50 kN wheel
     fastsim_grid : FASTSIM grid n (n x n) for tau_max on the final state
+    creep_grid : FASTSIM grid of the equilibrium's creep forces, None for the saturation law
+        (:func:`solve_curving_cases_or_none`)
 
     Returns
     -------
@@ -955,17 +1056,18 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     case = curve_case(radius_m, cant_mm, speed_m_s, direction, unbalanced_acceleration_m_s2,
                       vehicle.traction_torque_nm, tangent_speed_m_s)
     return solve_curving_cases(vehicle, [case], [(radius_m, direction, cant_mm)], table, tol,
-                               fastsim_grid)[0]
+                               fastsim_grid, creep_grid)[0]
 
 
 def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
                         labels: list[tuple[float | None, str, float]] | None = None,
                         table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                        fastsim_grid: int = 20) -> list[CurvingResult]:
+                        fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
+                        ) -> list[CurvingResult]:
     """:func:`solve_curving_cases_or_none` that raises CurvingConvergenceError naming the
     first case that did not converge."""
     results = solve_curving_cases_or_none(vehicle, cases, labels, table, tol, fastsim_grid,
-                                          skip_failed=False)
+                                          skip_failed=False, creep_grid=creep_grid)
     return [r for r in results if r is not None]
 
 
@@ -974,7 +1076,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                 table: ContactTable | None = None,
                                 tol: float = DEFAULT_TOLERANCE, fastsim_grid: int = 20,
                                 skip_failed: bool = True,
-                                initial_states: list[NDArray | None] | None = None
+                                initial_states: list[NDArray | None] | None = None,
+                                creep_grid: int | None = DEFAULT_CREEP_GRID
                                 ) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
@@ -996,6 +1099,12 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     initial_states : per case an equilibrium state (``CurvingResult.state``) to start Newton
         from at the case's own load parameters instead of the continuation from centred
         wheelsets (None: continuation); the wear loop's warm retry after a profile update
+    creep_grid : creep forces of the equilibrium from FASTSIM on an n x n grid (default
+        ``DEFAULT_CREEP_GRID``): the continuation runs with the smooth saturation law
+        (``contact.creep``) and its equilibrium starts a Newton solution with FASTSIM's forces
+        (Powell hybrid as fallback); a case that does not converge with FASTSIM fails like one
+        that does not converge at all. None: the saturation law's equilibrium (faster; its
+        forces are up to ~0.5 mu Fn off under large spin, ``contact.creep``)
 
     Returns
     -------
@@ -1025,13 +1134,26 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])
 
     q, norm, ok = _continuation_batch(fun, q0, p_start, p_end, tol)
+    if creep_grid is not None and np.any(ok):
+        # the saturation law's equilibrium is the start of Newton with FASTSIM's forces
+        def fun_fastsim(q, params):
+            return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1],
+                                   params[:, 2], creep_grid=creep_grid)
+
+        rows = np.nonzero(ok)[0]
+        q_f, norm_f, ok_f = _newton_batch(fun_fastsim, q[rows], p_end[rows], tol, max_iter=30)
+        for m in np.nonzero(~ok_f)[0]:
+            q_s, n_s, ok_s = _scipy_polish(fun_fastsim, q_f[m], p_end[rows[m]], tol)
+            if ok_s:
+                q_f[m], norm_f[m], ok_f[m] = q_s, n_s, True
+        q[rows], norm[rows], ok[rows] = q_f, norm_f, ok_f
     if not np.all(ok) and not skip_failed:
         k = int(np.nonzero(~ok)[0][0])
         kappa = cases[k].curvature_per_m
         raise CurvingConvergenceError("quasi-static curving did not converge",
                                       np.inf if kappa == 0 else 1.0 / kappa, float(norm[k]))
     res, c = _bogie_residual(q, vehicle, table, p_end[:, 0], p_end[:, 1], p_end[:, 2],
-                             return_contacts=True)
+                             return_contacts=True, creep_grid=creep_grid)
     norm = np.linalg.norm(res, axis=-1)
     wear = contact_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
                                  c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
@@ -1058,7 +1180,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
             tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
             in_contact=wear["in_contact"][k], residual_norm=float(norm[k]),
-            state=q[k].copy()))
+            state=q[k].copy(), creep_grid=creep_grid))
     return results
 
 

@@ -158,6 +158,9 @@ class WearTableComputeIn(Strict):
     rail_id: int | None = Field(default=None, ge=1, description=(
         "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
         "both sides, placed by its gauge point"))
+    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
+        "(placed by the instrument's datum when the import found one)"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
@@ -604,6 +607,9 @@ class SimulationIn(Strict):
     rail_id: int | None = Field(default=None, ge=1, description=(
         "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
         "both sides, placed by its gauge point"))
+    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "start the simulated wheel from this stored profile measurement instead of a new "
+        "S1002 (placed by the instrument's datum when the import found one)"))
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:

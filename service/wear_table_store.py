@@ -248,6 +248,14 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
         rail_info = {"rail_id": body.rail_id, "name": rail.name, "kind": rail.kind,
                      "inclination": motor.rail_inclination,
                      "placement": "gauge point (14 mm below its top) at the track gauge"}
+    wheel_info = None
+    if body.measurement_id is not None:  # a measured wheel in place of S1002
+        from wearcast.service.measured_wheel_source import measured_wheel
+
+        wheel, wheel_info = measured_wheel(session, body.measurement_id)
+        motor = motor.with_(wheel_profile=wheel)
+        trailer = trailer.with_(wheel_profile=wheel)
+        label = f"{label}, {wheel}"
     classes = _classes(session, body)
     try:
         table, contacts = wear_table_for_route(
@@ -271,7 +279,7 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
         raise from_value_error(exc, "table") from exc
     spec = body.model_dump(mode="json")
     spec.update(route_name=classes.route_name, vehicle_label=label,
-                n_classes=len(classes.radii_m), rail=rail_info,
+                n_classes=len(classes.radii_m), rail=rail_info, wheel=wheel_info,
                 engine="wearcast.physics.wear_tables.wear_table_for_route")
     return frame, contacts, spec
 

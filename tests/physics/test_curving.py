@@ -130,8 +130,16 @@ def test_free_conical_wheelset_follows_linear_steady_curving_theory(radius_m):
     patch = int(np.argmin(centre["gap_mm"]))
     r0_m = centre["radius_m"][patch]
     b0_m = centre["lateral_mm"][patch] / 1000
+    # the table's pose includes the rigid roll (contact.geometry): the rolled cone meets the
+    # curved rail crown a little further out, so its rolling-radius difference grows by ~1.7 %
+    # over 2 lambda y; the theory takes that effective conicity from the table's geometry
+    side = table.candidates(np.array([1.0, -1.0]))
+    pick = np.argmin(side["gap_mm"], axis=-1)
+    radius_diff_m = side["radius_m"][0, pick[0]] - side["radius_m"][1, pick[1]]
+    effective = radius_diff_m * 1000 / 2.0
+    assert effective == pytest.approx(conicity, rel=0.03)
     shift_mm, yaw_rad, xi = cv.solve_free_wheelset(table, radius_m, direction="left")
-    expected_mm = -r0_m * b0_m / (conicity * radius_m) * 1000
+    expected_mm = -r0_m * b0_m / (effective * radius_m) * 1000
     # the cone is exactly linear, so only spin and the discretisation of the table
     # (0.1 mm shift step, 0.2 mm wheel points) separate us from the theory: 0.5 %
     assert shift_mm == pytest.approx(expected_mm, rel=5e-3)
@@ -286,3 +294,37 @@ def test_initial_states_restart_newton_at_the_solution(trailer):
                                           initial_states=[cold[0].state, None])
     assert np.allclose(warm[0].state, cold[0].state, atol=1e-9)
     assert np.array_equal(warm[1].state, cold[1].state)
+
+
+def test_tau_max_in_full_slip_is_mu_p0_with_the_elliptic_bound():
+    # full slip (creepage 50x the characteristic one): the traction equals mu p everywhere, so
+    # tau_max = mu p0 for the Hertz (elliptic) pressure; the parabolic bound would give 4/3 of it
+    a, b, fn, mu = 6.0, 4.0, 80_000.0, 0.3
+    out = cv.contact_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
+    p0 = 1.5 * fn / (np.pi * a * b)
+    # the grid's element centres miss the patch centre by half an element: (1 - rho^2)^0.5 there
+    assert float(out["tau_max_mpa"]) == pytest.approx(mu * p0, rel=2e-3)
+    from wearcast.physics.contact.fastsim import fastsim
+    parabolic = fastsim(0.05, 0.0, 0.0, a, b, fn, mu, cv.SHEAR_MODULUS_MPA, n_x=40, n_y=40)
+    assert float(np.max(parabolic.shear_traction_mpa)) == pytest.approx(4 / 3 * mu * p0,
+                                                                         rel=2e-3)
+
+
+@pytest.mark.parametrize("wheel", ["s1002", "worn"])
+def test_compiled_candidates_equal_the_numpy_reference(wheel):
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+    if wheel == "s1002":
+        table = cv.build_contact_table(None, "60E1", 1 / 40, 0.46)
+    else:  # a hollow-worn tread and a thinner flange: more minima, merged patches
+        def worn(y):
+            y = np.asarray(y, dtype=float)
+            return s1002_height_mm(y) + 0.4 * np.exp(-((y - 5.0) / 12.0) ** 2) \
+                + 0.3 * np.exp(-((y + 38.0) / 4.0) ** 2)
+        table = cv.build_contact_table(worn, "60E1", 1 / 20, 0.46)
+    shifts = np.random.default_rng(3).uniform(-16.0, 16.0, 400)
+    ref = table._candidate_slots_numpy(shifts)
+    cols = table.candidates(shifts)
+    for name, r in zip(("wheel_y_mm", "gap_mm", None, "weight"), ref, strict=True):
+        if name is None:
+            continue
+        assert np.allclose(cols[name], r, rtol=1e-9, atol=1e-9), name
