@@ -697,6 +697,17 @@ def generate_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None) 
                      pd.concat(truths, ignore_index=True), tuple(wheels))
 
 
+def metro_calibration_config(seed: int = 7) -> FleetConfig:
+    """A small fleet that calibrates a model on the metro line (seed 000 Table 1) exactly: one
+    car in ``lead`` mode, measured at 30,000, 80,000 and 130,000 km, no rate or area scatter,
+    0.005 mm noise, 300 points a profile."""
+    return FleetConfig(
+        units=(UnitConfig("B", metro_route(), vehicles=1, running_mode="lead"),),
+        mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
+        calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
+        area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=seed)
+
+
 def example_fleet_config(seed: int = 20240601, points_per_profile: int = 400) -> FleetConfig:
     """The bundled example fleet (``service/example_fleet``).
 
