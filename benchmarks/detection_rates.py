@@ -28,55 +28,32 @@ from typing import Any
 
 import pandas as pd
 
-from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
+from wearcast.statistics.generators import scenarios as sc
 from wearcast.statistics.generators import twin_effects as te
 
 TABLE = ft.synthetic_wear_table()
 
 
+def _verdict(scenario: sc.Scenario) -> str:
+    args, kwargs = scenario.finder_arguments()
+    return diagnose(*args, **kwargs, n_boot=300).verdict
+
+
 def run_twin(effect: Any, seed: int) -> str:
     we, pe = effect
-    cfg = te.scenario_config(seed=seed, wear_effects=we, profile_effects=pe)
-    df, curves = te.twin_measurements(ft.generate_fleet(cfg, TABLE))
-    routes, attrs = te.scenario_routes(cfg)
-    cal = (df["vehicle_id"].str.startswith("A") & (df["bogie_type"] == "motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], routes, TABLE, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    return diagnose(model, df, curves, routes, TABLE, route_attributes=attrs,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
+    return _verdict(sc.twin_scenario(we, pe, seed=seed, table=TABLE))
 
 
 def run_alt(effect: Any, seed: int) -> str:
-    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effect, seed=seed))
-    df, curves = fleet.measurements, fleet.wear_curves
-    cal = (df["unit"].eq("U1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    return diagnose(model, df, curves, fleet.routes, fleet.table,
-                    route_attributes=fleet.route_attributes,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
-
-
-def depot_case(effects: dp.DepotEffects, seed: int) -> tuple[Any, ...]:
-    fleet = dp.generate_depot_fleet(dp.DepotConfig(
-        effects=effects, seed=seed, profiles=effects.instrument_scale is not None))
-    df = fleet.measurements
-    cal = (df["unit"].eq("N1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table,
-                             wear_curves_mm=fleet.wear_curves[cal], measure="tau_max",
-                             running_mode="mixed")
-    return fleet, df, cal, model
+    return _verdict(sc.alt_scenario(effect, seed))
 
 
 def run_depot(effect: Any, seed: int) -> str:
-    fleet, df, cal, model = depot_case(effect, seed)
-    return diagnose(model, df, fleet.wear_curves, fleet.routes, fleet.table,
-                    route_attributes=fleet.route_attributes,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300).verdict
+    return _verdict(sc.depot_scenario(effect, seed))
 
 
 # (strength, effect) from weak to strong; the last entry is the tests' moderate strength

@@ -6,8 +6,8 @@ Usage: ``.venv/bin/python examples/miniprof_walkthrough.py <folder with the .whl
 
 Runs the HTTP API in process (FastAPI's TestClient) on a temporary SQLite database; the
 requests are the ones a client would send to ``wearcast serve``. The model used for the
-reprofiling question is calibrated on the synthetic metro fleet of ``statistics.fleet_twin``
-(the real files carry no mileage history to calibrate on).
+reprofiling question is calibrated on the synthetic metro fleet of
+``statistics.generators.fleet_twin`` (the real files carry no mileage history to calibrate on).
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics.cleaning import clean_profile
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -96,12 +96,7 @@ def main(folder: Path) -> None:
     print(f"  reference {m['reference_profile']}, fits {m['reference_fits']}, areas "
           f"{m['flange_area_mm2']:.2f}/{m['tread_area_mm2']:.2f} mm²")
 
-    config = ft.FleetConfig(
-        units=(ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead"),),
-        mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
-        calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
-        area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=7)
-    fleet = ft.generate_fleet(config)
+    fleet = ft.generate_fleet(ft.metro_calibration_config())
     client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
     client.post("/v1/routes", json=ft.metro_route().to_json())

@@ -33,6 +33,7 @@ import orjson
 from sqlalchemy import bindparam, func, insert, select
 from sqlalchemy.orm import Session, defer
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.service import measurement_store, route_store, wear_table_store
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
@@ -53,7 +54,6 @@ from wearcast.statistics.discrepancy import ExtendedModel
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
 
-REGIONS = ("flange", "tread")
 #: Deserialised models kept in process (a model's state is ~100 kB of JSON).
 MODEL_CACHE_SIZE = 32
 AnyModel: TypeAlias = hybrid.HybridModel | ExtendedModel

@@ -29,6 +29,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.service import measurement_store, model_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.picture_cache import PictureJob, render
@@ -57,7 +58,7 @@ def wear_area_figure(prediction: Prediction, measured: pd.DataFrame, *, title: s
     q = prediction.quantiles
     lo, mid, hi = q.index(min(q)), q.index(0.5), q.index(max(q))
     s_1000 = prediction.mileage_km / 1000.0
-    for ax, region in zip(axes, ("flange", "tread"), strict=True):
+    for ax, region in zip(axes, REGIONS, strict=True):
         areas = getattr(prediction, f"{region}_area_mm2")
         colour = REGION_COLOURS[region]
         ax.fill_between(s_1000, areas[lo], areas[hi], color=colour, alpha=0.2,

@@ -11,12 +11,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-BogieType = Literal["motor", "trailer"]
-Axle = Literal[1, 2]
-Side = Literal["left", "right"]
-Direction = Literal["left", "right"]
-Measure = Literal["tau_max", "t_gamma"]
-RunningMode = Literal["lead", "mixed"]
+from wearcast.physics.vocabulary import Axle, BogieType, Direction, RunningMode, Side
+from wearcast.physics.vocabulary import WearMeasure as Measure
+
 FilterValue = str | int | float | bool | None
 Filter = dict[str, FilterValue | list[FilterValue]]
 

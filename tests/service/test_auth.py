@@ -25,7 +25,7 @@ with warnings.catch_warnings():
 from wearcast.service.app import create_app
 from wearcast.service.models_access import ApiKey
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 ROUTE = {"name": "line", "classes": [
     {"radius_m": None, "speed_kmh": 80, "share": 0.7},
