@@ -15,7 +15,7 @@ from wearcast.service import picture_cache
 from wearcast.service.app import create_app
 from wearcast.service.picture_cache import PictureJob, RenderedCache, picture_key
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
