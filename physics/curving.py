@@ -66,6 +66,7 @@ from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
+from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, SIDES, rail_for
 from wearcast.physics.wear_measures import t_gamma as wear_t_gamma
 from wearcast.physics.wear_measures import tau_max as wear_tau_max
 
@@ -75,8 +76,8 @@ GAUGE_MM = 1435.0
 TAPE_CIRCLE_HALF_SPACING_MM = 750.0
 #: Lateral distance used for the cant angle (rail-centre spacing) [mm].
 CANT_BASE_MM = 1500.0
-#: Wheel-frame lateral position separating flange (y < split) from tread [mm] (docs/conventions.md).
-FLANGE_SPLIT_Y_MM = -30.0
+#: Wheel-frame lateral position separating flange (y < split) from tread [mm]: the vocabulary's.
+FLANGE_SPLIT_Y_MM = REGION_SPLIT_Y_MM
 #: Shear modulus of wheel and rail steel [MPa].
 SHEAR_MODULUS_MPA = 82_000.0
 #: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
@@ -112,9 +113,7 @@ _NO_CONTACT_GAP_MM = 50.0
 #: tread scale (``build_contact_table``), blended linearly between.
 FLANK_SMOOTHING_Y_MM = (-25.0, -15.0)
 
-SIDES = ("left", "right")
-_SIDE_SIGN = np.array([1.0, -1.0])  # left wheel at +y
-REGIONS = ("tread", "flange")
+_SIDE_SIGN = np.array([1.0, -1.0])  # left wheel at +y (vocabulary.SIDES order)
 
 
 class CurvingConvergenceError(RuntimeError):
@@ -971,11 +970,9 @@ class CurvingResult:
         return "right" if self.direction == "left" else "left"
 
     def rail_of(self, side: str) -> str:
-        """``high``, ``low`` or ``tangent`` for the wheels on ``side``."""
-        high = self.high_rail_side
-        if high is None:
-            return "tangent"
-        return "high" if side == high else "low"
+        """``high``, ``low`` or ``tangent`` for the wheels on ``side`` (vocabulary.rail_for)."""
+        return rail_for(None if not np.isfinite(self.radius_m) else self.direction,  # type: ignore[arg-type]
+                        side)  # type: ignore[arg-type]
 
     @property
     def flange_contact(self) -> NDArray:
