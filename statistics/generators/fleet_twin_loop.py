@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
+from wearcast.physics.vocabulary import Direction
 from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_loop import LoopClass, WearSimulation, WearSteps, simulate_wear
 from wearcast.statistics.generators.fleet_twin import (
@@ -90,7 +91,8 @@ class LoopFleetTwin:
 
 
 def _loop_classes(route: TwinRoute) -> list[LoopClass]:
-    return [LoopClass(c.radius_m, c.cant_mm, c.speed_kmh, c.direction or "left", c.share)
+    return [LoopClass(c.radius_m, c.cant_mm, c.speed_kmh, cast(Direction, c.direction or "left"),
+                      c.share)
             for c in route.classes]
 
 
