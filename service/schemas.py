@@ -137,13 +137,6 @@ class RadiusIn(Strict):
     share: float | None = Field(default=None, ge=0, le=1, description="share of the route [-]")
 
 
-def _at_most_one_wheel(body: Any) -> None:
-    given = [k for k in ("wheel_id", "measurement_id", "profile") if getattr(body, k) is not None]
-    if len(given) > 1:
-        raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
-                         f"{', '.join(given)})")
-
-
 class MeasuredProfileIn(Strict):
     """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
     circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
@@ -154,7 +147,33 @@ class MeasuredProfileIn(Strict):
     reference_profile: str = "S1002"
 
 
-class WearTableComputeIn(Strict):
+class MeasuredProfilesIn(Strict):
+    """The measured wheel and rail a physics request may use instead of the preset's S1002 on
+    its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
+
+    rail_id: int | None = Field(default=None, ge=1, description=(
+        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
+        "both sides, placed by its gauge point"))
+    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
+        "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
+        "datum when the import found one"))
+    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
+        "as measurement_id, with the wheel's latest measured profile"))
+    profile: MeasuredProfileIn | None = Field(default=None, description=(
+        "as measurement_id, with a profile sent in the request"))
+
+    @model_validator(mode="after")
+    def _at_most_one_wheel(self) -> MeasuredProfilesIn:
+        given = [k for k in ("wheel_id", "measurement_id", "profile")
+                 if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
+                             f"{', '.join(given)})")
+        return self
+
+
+class WearTableComputeIn(MeasuredProfilesIn):
     """``POST /v1/wear-tables/compute``: a table from the physics core (quasi-static curving).
 
     ``vehicle`` is a preset name (motor and trailer variants) or ``{motor, trailer}`` preset
@@ -172,22 +191,11 @@ class WearTableComputeIn(Strict):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
-    rail_id: int | None = Field(default=None, ge=1, description=(
-        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
-        "both sides, placed by its gauge point"))
-    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
-        "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
-        "(placed by the instrument's datum when the import found one)"))
-    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
-        "as measurement_id, with the wheel's latest measured profile"))
-    profile: MeasuredProfileIn | None = Field(default=None, description=(
-        "as measurement_id, with a profile sent in the request"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
         if (self.route_id is None) == (self.radii is None):
             raise ValueError("give either route_id or radii (exactly one)")
-        _at_most_one_wheel(self)
         return self
 
 
@@ -596,7 +604,7 @@ class SmoothingIn(Strict):
     window_mm: float | None = Field(default=None, gt=0, le=50)
 
 
-class SimulationIn(Strict):
+class SimulationIn(MeasuredProfilesIn):
     """``POST /v1/simulations``: the wear loop of one wheel over a route's curve classes."""
 
     name: str | None = Field(default=None, max_length=200)
@@ -616,22 +624,11 @@ class SimulationIn(Strict):
     smoothing: SmoothingIn | None = None
     unbalanced_acceleration_m_s2: float = Field(default=0.58, ge=0, le=2)
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
-    rail_id: int | None = Field(default=None, ge=1, description=(
-        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
-        "both sides, placed by its gauge point"))
-    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
-        "start the simulated wheel from this stored profile measurement instead of a new "
-        "S1002 (placed by the instrument's datum when the import found one)"))
-    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
-        "as measurement_id, with the wheel's latest measured profile"))
-    profile: MeasuredProfileIn | None = Field(default=None, description=(
-        "as measurement_id, with a profile sent in the request"))
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:
         if (self.route_id is None) == (self.classes is None):
             raise ValueError("give either route_id or classes (exactly one)")
-        _at_most_one_wheel(self)
         return self
 
 
