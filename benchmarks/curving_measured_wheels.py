@@ -12,45 +12,25 @@ Run: ``.venv/bin/python benchmarks/curving_measured_wheels.py [folder]``
 
 from __future__ import annotations
 
-import io
-import secrets
 import sys
-import tempfile
 import time
 import warnings
-import zipfile
 from pathlib import Path
-
-from pydantic import SecretStr
-
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
-    from fastapi.testclient import TestClient
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-from miniprof_walkthrough import MANIFEST  # noqa: E402
+from miniprof_walkthrough import MANIFEST, in_process_client, wheels_zip  # noqa: E402
 
 RADII = [150, 200, 250, 300, 400, 500, 700, 1000, 1500, 2000, 3000, 5000]
 
 
 def main(folder: Path) -> None:
-    tmp = Path(tempfile.mkdtemp())
-    key = f"wc_bench-{secrets.token_urlsafe(16)}"  # the run's own admin key
-    client = TestClient(create_app(Settings(data_dir=tmp, api_key=SecretStr(key),
-                                            database_url=f"sqlite:///{tmp / 'w.db'}")),
-                        headers={"Authorization": f"Bearer {key}"})
-    rows = ["file;wheel_id;vehicle_id;bogie_type;axle;side;mileage_km;reference_profile"]
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w") as archive:
-        for name, (wheel, side, km) in MANIFEST.items():
-            archive.writestr(name, (folder / name).read_bytes())
-            rows.append(f"{name};{wheel};V-{wheel};M;1;{side};{km};S1002")
+    client = in_process_client()
+    data, manifest, _ = wheels_zip(folder)
     r = client.post("/v1/measurements/import", files={
-        "file": ("miniprof.zip", buffer.getvalue()),
-        "manifest": ("manifest.csv", ("\n".join(rows) + "\n").encode())})
+        "file": ("miniprof.zip", data), "manifest": ("manifest.csv", manifest.encode())})
     assert r.status_code == 200, r.text
     rail = client.post("/v1/rails/import", files={
         "file": ("avg_low2.ban", (folder / "avg_low2.ban").read_bytes())}).json()

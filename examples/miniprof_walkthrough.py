@@ -44,23 +44,34 @@ MANIFEST = {
 }
 
 
-def main(folder: Path) -> None:
-    key = f"wc_example-{secrets.token_urlsafe(16)}"  # the run's own admin key
-    client = TestClient(create_app(Settings(data_dir=Path(tempfile.mkdtemp()),
-                                            api_key=SecretStr(key))),
-                        headers={"Authorization": f"Bearer {key}"})
+def in_process_client() -> TestClient:
+    """The HTTP API in process on a temporary SQLite database, with the run's own admin key."""
+    key = f"wc_example-{secrets.token_urlsafe(16)}"
+    data_dir = Path(tempfile.mkdtemp())
+    return TestClient(create_app(Settings(data_dir=data_dir, api_key=SecretStr(key),
+                                          database_url=f"sqlite:///{data_dir / 'w.db'}")),
+                      headers={"Authorization": f"Bearer {key}"})
+
+
+def wheels_zip(folder: Path) -> tuple[bytes, str, list[str]]:
+    """(zip of the nine wheel files, their manifest, the manifest's rows)."""
     rows = ["file;wheel_id;vehicle_id;bogie_type;axle;side;mileage_km;reference_profile"]
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w") as archive:
         for name, (wheel, side, km) in MANIFEST.items():
             archive.writestr(name, (folder / name).read_bytes())
             rows.append(f"{name};{wheel};V-{wheel};M;1;{side};{km};S1002")
-    manifest = "\n".join(rows) + "\n"
+    return buffer.getvalue(), "\n".join(rows) + "\n", rows
+
+
+def main(folder: Path) -> None:
+    client = in_process_client()
+    data, manifest, rows = wheels_zip(folder)
     print("$ manifest.csv (';'-separated, sides L/R/links/rechts, bogie M, decimal comma)")
     print("\n".join(rows[:3]) + "\n...")
     print("\n$ POST /v1/measurements/import  file=miniprof.zip manifest=manifest.csv")
     answer = client.post("/v1/measurements/import", files={
-        "file": ("miniprof.zip", buffer.getvalue()),
+        "file": ("miniprof.zip", data),
         "manifest": ("manifest.csv", manifest.encode())}).json()
     print({k: v for k, v in answer.items() if k != "warnings"})
     for w in answer["warnings"]:
