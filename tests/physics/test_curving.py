@@ -221,11 +221,11 @@ def test_scipy_polish_survives_non_finite_probes():
         out = table[np.clip(idx, 0, 20)] * 0.0 + np.arctan(q - p)
         return np.where(np.abs(q) > 5.0, np.nan, out)
 
-    q, norm, ok = cv._scipy_polish(fun, np.array([0.2, -0.2]), np.array([0.5, -0.25]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([0.2, -0.2]), np.array([0.5, -0.25]), 1e-9)
     assert ok and np.allclose(q, [0.5, -0.25])
-    q, norm, ok = cv._scipy_polish(fun, np.array([np.nan, 0.0]), np.array([0.5, 0.0]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([np.nan, 0.0]), np.array([0.5, 0.0]), 1e-9)
     assert not ok and norm == np.inf
-    q, norm, ok = cv._scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
     assert np.all(np.isfinite(q)) and ok == (norm < 1e-9)
 
 
@@ -267,7 +267,7 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
     cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0, 1200.0)]
     ok = cv.solve_curving_cases_or_none(trailer, cases)
     assert all(r is not None for r in ok)
-    real = cv._continuation_batch
+    real = cv.continuation_batch
 
     def fail_second(fun, q0, p_start, p_end, tol, **kw):
         q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
@@ -275,7 +275,7 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
         conv[1] = False
         return q, norm, conv
 
-    monkeypatch.setattr(cv, "_continuation_batch", fail_second)
+    monkeypatch.setattr(cv, "continuation_batch", fail_second)
     skipped = cv.solve_curving_cases_or_none(trailer, cases)
     assert skipped[1] is None
     for got, want in zip((skipped[0], skipped[2]), (ok[0], ok[2]), strict=True):
