@@ -1,8 +1,9 @@
-"""API latency under load: predict and reprofiling requests from concurrent clients.
+"""API latency under load: predict, reprofiling and the common GETs from concurrent clients.
 
     .venv/bin/python benchmarks/bench_api_latency.py            # 2,000 requests per endpoint
     .venv/bin/python benchmarks/bench_api_latency.py --quick    # 200 requests per endpoint
     .venv/bin/python benchmarks/bench_api_latency.py --workers 1
+    .venv/bin/python benchmarks/bench_api_latency.py --quick --endpoints gets  # GETs only
 
 Migrates a fresh SQLite database in a temporary directory, starts ``uvicorn`` on 127.0.0.1
 (a free port) in a subprocess with ``--workers`` processes (default 2, one per core of the
@@ -14,7 +15,14 @@ and the table), and fires the timed requests from ``--clients`` concurrent
 ``httpx.AsyncClient`` workers (default 32) in a closed loop. Prints the latency of the first
 (cold) request, p50/p99 latency and throughput per endpoint. The client runs on the same
 machine and takes its share of the CPU. Every request computes its answer: only immutable
-inputs (the model, the compiled table, the route) are cached by the service.
+inputs (the model and its summary, the compiled table, the route) are cached by the service,
+and a picture's drawing under the key of its inputs — which every picture request reads and
+computes afresh (the prediction included).
+
+The GET endpoints (``--endpoints gets``, or ``all``, the default): health, the route
+list and one route, a model, a page of 20 measurements and one measurement, the job list,
+and the wear-area picture — drawn once, then answered from the server's picture cache
+(``picture``) and, with ``If-None-Match`` naming its ETag, with 304 (``picture-304``).
 
 ``--client raw`` (a minimal asyncio HTTP/1.1 client) spends far less CPU than httpx, so on a
 small machine its figures measure the server rather than the client. The header names the
@@ -34,6 +42,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import httpx
 import numpy as np
@@ -124,21 +133,28 @@ class RawConnection:
         self.reader: asyncio.StreamReader | None = None
         self.writer: asyncio.StreamWriter | None = None
 
-    async def post(self, path: str, payload: dict[str, object]) -> int:
+    async def post(self, path: str, payload: dict[str, object] | None,
+                   extra: dict[str, str] | None = None) -> int:
+        """POST ``payload`` as JSON, or GET ``path`` when it is None; the answer's status."""
         if self.writer is None:
             self.reader, self.writer = await asyncio.open_connection(self.host, self.port)
         assert self.reader is not None
-        body = json.dumps(payload).encode()
+        body = b"" if payload is None else json.dumps(payload).encode()
+        head_lines = "".join(f"{k}: {v}\r\n" for k, v in (extra or {}).items())
+        if payload is None:
+            request = f"GET {path} HTTP/1.1\r\n"
+        else:
+            request = (f"POST {path} HTTP/1.1\r\nContent-Type: application/json\r\n"
+                       f"Content-Length: {len(body)}\r\n")
         self.writer.write(
-            f"POST {path} HTTP/1.1\r\nHost: {self.host}:{self.port}\r\n"
-            f"Authorization: Bearer {BENCH_KEY}\r\n"
-            f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n"
-            .encode() + body)
+            f"{request}Host: {self.host}:{self.port}\r\n"
+            f"Authorization: Bearer {BENCH_KEY}\r\n{head_lines}\r\n".encode() + body)
         head = await self.reader.readuntil(b"\r\n\r\n")
         lines = head.decode("latin-1").split("\r\n")
         status = int(lines[0].split()[1])
         headers = dict(line.split(":", 1) for line in lines[1:] if ":" in line)
-        length = {k.strip().lower(): v.strip() for k, v in headers.items()}["content-length"]
+        length = {k.strip().lower(): v.strip() for k, v in headers.items()}.get(
+            "content-length", "0")
         await self.reader.readexactly(int(length))
         return status
 
@@ -148,12 +164,14 @@ class RawConnection:
             await self.writer.wait_closed()
 
 
-async def fire(base: str, path: str, payloads: list[dict[str, object]],
-               clients: int, client_kind: str = "httpx") -> tuple[np.ndarray, float, int]:
-    """Latencies [s] of all requests, wall time [s] and the number of non-200 answers."""
+async def fire(base: str, path: str, payloads: list[dict[str, object] | None],
+               clients: int, client_kind: str = "httpx", extra: dict[str, str] | None = None,
+               expect: int = 200) -> tuple[np.ndarray, float, int]:
+    """Latencies [s] of all requests (a None payload: a GET), wall time [s] and the number
+    of answers other than ``expect``."""
     if client_kind == "raw":
-        return await fire_raw(base, path, payloads, clients)
-    queue: asyncio.Queue[dict[str, object]] = asyncio.Queue()
+        return await fire_raw(base, path, payloads, clients, extra, expect)
+    queue: asyncio.Queue[dict[str, object] | None] = asyncio.Queue()
     for p in payloads:
         queue.put_nowait(p)
     latencies: list[float] = []
@@ -168,9 +186,12 @@ async def fire(base: str, path: str, payloads: list[dict[str, object]],
             except asyncio.QueueEmpty:
                 return
             t0 = time.perf_counter()
-            response = await client.post(path, json=payload)
+            if payload is None:
+                response = await client.get(path, headers=extra)
+            else:
+                response = await client.post(path, json=payload, headers=extra)
             latencies.append(time.perf_counter() - t0)
-            failures += response.status_code != 200
+            failures += response.status_code != expect
 
     async with httpx.AsyncClient(base_url=base, timeout=120.0, limits=limits,
                                  headers=AUTH) as client:
@@ -180,8 +201,9 @@ async def fire(base: str, path: str, payloads: list[dict[str, object]],
     return np.asarray(latencies), wall, failures
 
 
-async def fire_raw(base: str, path: str, payloads: list[dict[str, object]],
-                   clients: int) -> tuple[np.ndarray, float, int]:
+async def fire_raw(base: str, path: str, payloads: list[dict[str, object] | None],
+                   clients: int, extra: dict[str, str] | None = None,
+                   expect: int = 200) -> tuple[np.ndarray, float, int]:
     """:func:`fire` with one :class:`RawConnection` per client."""
     url = httpx.URL(base)
     pending = list(reversed(payloads))
@@ -195,9 +217,9 @@ async def fire_raw(base: str, path: str, payloads: list[dict[str, object]],
             while pending:
                 payload = pending.pop()
                 t0 = time.perf_counter()
-                status = await connection.post(path, payload)
+                status = await connection.post(path, payload, extra)
                 latencies.append(time.perf_counter() - t0)
-                failures += status != 200
+                failures += status != expect
         finally:
             await connection.close()
 
@@ -232,8 +254,47 @@ def _load() -> str:
         return "unknown"
 
 
+class Endpoint(NamedTuple):
+    """One timed endpoint: a POST with generated bodies, or a GET (``body`` None)."""
+
+    name: str
+    path: str
+    body: str | None = None  # "predict" / "reprofiling": the bodies to generate
+    headers: dict[str, str] | None = None
+    expect: int = 200
+
+
+def endpoints(base: str, model_id: int, which: str) -> list[Endpoint]:
+    """The timed endpoints; the GETs' ids (a measurement, the picture's ETag) are read
+    first."""
+    out: list[Endpoint] = []
+    if which in ("all", "predict"):
+        out += [Endpoint(e, f"/v1/models/{model_id}/{e}", e) for e in ("predict", "reprofiling")]
+    if which in ("all", "gets"):
+        picture = (f"/v1/models/{model_id}/pictures/wear-area?route_id=aosta"
+                   "&bogie_type=motor&axle=1&side=left")
+        with httpx.Client(base_url=base, timeout=120.0, headers=AUTH) as client:
+            page = client.get("/v1/measurements", params={"limit": 1})
+            page.raise_for_status()
+            measurement_id = page.json()["items"][0]["id"]
+            drawn = client.get(picture)  # drawn once, then served from the picture cache
+            drawn.raise_for_status()
+            etag = drawn.headers.get("etag")  # None from a server without picture ETags
+        out += [Endpoint("health", "/v1/health"), Endpoint("routes", "/v1/routes"),
+                Endpoint("route", "/v1/routes/aosta"),
+                Endpoint("model", f"/v1/models/{model_id}"),
+                Endpoint("measurements", "/v1/measurements?bogie_type=motor&limit=20"),
+                Endpoint("measurement", f"/v1/measurements/{measurement_id}"),
+                Endpoint("jobs", "/v1/jobs"),
+                Endpoint("picture", picture)]
+        if etag is not None:
+            out.append(Endpoint("picture-304", picture, headers={"If-None-Match": etag},
+                                expect=304))
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description="predict/reprofiling latency under load")
+    parser = argparse.ArgumentParser(description="API latency under load")
     parser.add_argument("--quick", action="store_true", help="200 requests per endpoint")
     parser.add_argument("--requests", type=int, default=None, help="requests per endpoint")
     parser.add_argument("--clients", type=int, default=32, help="concurrent clients")
@@ -243,6 +304,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="untimed requests per endpoint first (default 4 per client)")
     parser.add_argument("--client", choices=("httpx", "raw"), default="httpx",
                         help="httpx.AsyncClient (default) or a minimal asyncio HTTP/1.1 client")
+    parser.add_argument("--endpoints", choices=("all", "predict", "gets"), default="all",
+                        help="predict and reprofiling, the common GETs, or both (default)")
     args = parser.parse_args(argv)
     n = args.requests or (200 if args.quick else 2_000)
     warmup = args.warmup if args.warmup is not None else 4 * args.clients
@@ -264,26 +327,34 @@ def main(argv: list[str] | None = None) -> None:
                   f"machine load average (1/5/15 min) at the start: {_load()}")
             print("CPU columns: milliseconds of CPU per request spent by the server processes "
                   "and by the client; load: 1-min load average after the endpoint's run")
-            print(f"{'endpoint':<12} {'cold ms':>8} {'p50 ms':>8} {'p99 ms':>8} {'req/s':>8} "
-                  f"{'errors':>7} {'srv CPU':>8} {'cli CPU':>8} {'load':>6}")
-            for endpoint in ("predict", "reprofiling"):
-                path = f"/v1/models/{model_id}/{endpoint}"
-                first = bodies(endpoint, 1)[0]
+            print(f"{'endpoint':<13} {'cold ms':>8} {'p50 ms':>8} {'p95 ms':>8} {'p99 ms':>8} "
+                  f"{'req/s':>8} {'errors':>7} {'srv CPU':>8} {'cli CPU':>8} {'load':>6}")
+            for e in endpoints(base, model_id, args.endpoints):
+                def payloads(k: int, e: Endpoint = e) -> list[dict[str, object] | None]:
+                    return list(bodies(e.body, k)) if e.body else [None] * k
+
+                first = payloads(1)[0]
                 t_cold = time.perf_counter()
-                httpx.post(base + path, json=first, timeout=120.0,
-                           headers=AUTH).raise_for_status()
+                if first is None:
+                    answer = httpx.get(base + e.path, timeout=120.0,
+                                       headers={**AUTH, **(e.headers or {})})
+                else:
+                    answer = httpx.post(base + e.path, json=first, timeout=120.0,
+                                        headers=AUTH)
+                assert answer.status_code == e.expect, (e.name, answer.status_code)
                 cold = (time.perf_counter() - t_cold) * 1e3
                 if warmup:
-                    asyncio.run(fire(base, path, bodies(endpoint, warmup), args.clients,
-                                     args.client))
+                    asyncio.run(fire(base, e.path, payloads(warmup), args.clients,
+                                     args.client, e.headers, e.expect))
                 server_cpu, client_cpu = cpu_seconds(server.pid), own_cpu_seconds()
                 latencies, wall, failures = asyncio.run(
-                    fire(base, path, bodies(endpoint, n), args.clients, args.client))
+                    fire(base, e.path, payloads(n), args.clients, args.client, e.headers,
+                         e.expect))
                 server_cpu = (cpu_seconds(server.pid) - server_cpu) / n * 1e3
                 client_cpu = (own_cpu_seconds() - client_cpu) / n * 1e3
-                p50, p99 = np.percentile(latencies, [50, 99]) * 1e3
-                print(f"{endpoint:<12} {cold:>8.1f} {p50:>8.1f} {p99:>8.1f} {n / wall:>8.1f} "
-                      f"{failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f} "
+                p50, p95, p99 = np.percentile(latencies, [50, 95, 99]) * 1e3
+                print(f"{e.name:<13} {cold:>8.1f} {p50:>8.1f} {p95:>8.1f} {p99:>8.1f} "
+                      f"{n / wall:>8.1f} {failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f} "
                       f"{os.getloadavg()[0]:>6.2f}", flush=True)
         finally:
             server.terminate()

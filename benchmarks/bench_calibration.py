@@ -11,8 +11,9 @@ import time
 import numpy as np
 import pandas as pd
 
-from wearcast.statistics.hybrid import calibrate, predict, weighted_wear_measure
+from wearcast.statistics.hybrid import calibrate, predict
 from wearcast.statistics.reprofiling import reprofiling_mileage
+from wearcast.statistics.route_measure import weighted_wear_measure
 from wearcast.statistics.routes import Route, RouteClass
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 from wearcast.statistics.wear_states import region_area_mm2

@@ -2,12 +2,17 @@
 
     .venv/bin/python benchmarks/bench_import.py            # 10,000 and 100,000 profiles
     .venv/bin/python benchmarks/bench_import.py --quick    # 1,000 and 10,000 profiles
+    .venv/bin/python benchmarks/bench_import.py --sizes 3000 \
+        --postgres postgresql+psycopg://postgres@127.0.0.1:5432/test   # SQLite and PostgreSQL
 
 For each size: writes the file under a temporary directory (streamed in chunks; 100,000 x 400
 rows is ~3.5 GB), then imports it in a *fresh child process* through the service's import
 function (``wearcast.service.importing.import_upload``, not HTTP) into a fresh SQLite
-database, and prints profiles/s, points/s and the child's peak RSS
+database — and with ``--postgres URL`` also into a throw-away database created on that
+server (dropped afterwards) —, and prints profiles/s, points/s and the child's peak RSS
 (``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so each size's memory is measured alone.
+``WEARCAST_IMPORT_WORKERS`` (default: one per CPU; 0 or 1: in the importing process) sets the
+processing pool, as for the service; the header prints it and the machine's load average.
 
 The profiles are the fleet twin's (``wearcast.statistics.generators.fleet_twin``): a pool of
 realistic worn, noisy, misaligned profiles is generated once and repeated under new wheel ids.
@@ -17,11 +22,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import subprocess
 import sys
 import tempfile
 import time
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 POINTS = 400
@@ -62,13 +71,14 @@ def write_csv(path: Path, n_profiles: int, points: int = POINTS) -> int:
     return path.stat().st_size
 
 
-def import_once(csv_path: Path, work_dir: Path) -> dict[str, float]:
+def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None
+                ) -> dict[str, float]:
     """Import one file into a fresh database (run in a child process)."""
     from wearcast.service import importing
     from wearcast.service.db import Database
     from wearcast.service.settings import Settings
 
-    settings = Settings(data_dir=work_dir, database_url=None)
+    settings = Settings(data_dir=work_dir, database_url=database_url or None)
     database = Database(settings)
     database.migrate()
     start = time.perf_counter()
@@ -86,30 +96,68 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="long-CSV import throughput")
     parser.add_argument("--quick", action="store_true", help="1,000 and 10,000 profiles")
     parser.add_argument("--sizes", type=int, nargs="*", help="explicit profile counts")
-    parser.add_argument("--child", nargs=2, metavar=("CSV", "DIR"), help=argparse.SUPPRESS)
+    parser.add_argument("--postgres", metavar="URL", default=None,
+                        help="also import into a throw-away database on this PostgreSQL "
+                             "server (SQLAlchemy URL of a database the user may CREATE in)")
+    parser.add_argument("--child", nargs=3, metavar=("CSV", "DIR", "URL"),
+                        help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
-        print(json.dumps(import_once(Path(args.child[0]), Path(args.child[1]))))
+        print(json.dumps(import_once(Path(args.child[0]), Path(args.child[1]),
+                                     args.child[2])))
         return
     sizes = args.sizes or ([1_000, 10_000] if args.quick else [10_000, 100_000])
-    print(f"{'profiles':>9} {'file MB':>9} {'write s':>8} {'import s':>9} {'profiles/s':>11} "
-          f"{'points/s':>11} {'peak RSS MB':>12}")
+    workers = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip() or f"{os.cpu_count()}"
+    print(f"import workers: {workers}; {os.cpu_count()} CPUs; load average (1/5/15 min) "
+          f"{'/'.join(f'{v:.2f}' for v in os.getloadavg())}")
+    print(f"{'database':<10} {'profiles':>9} {'file MB':>9} {'write s':>8} {'import s':>9} "
+          f"{'profiles/s':>11} {'points/s':>11} {'peak RSS MB':>12}")
     for n in sizes:
         with tempfile.TemporaryDirectory(prefix="wearcast-bench-") as tmp:
             csv_path = Path(tmp) / f"profiles_{n}.csv"
             t0 = time.perf_counter()
             size = write_csv(csv_path, n)
             write_s = time.perf_counter() - t0
-            child = subprocess.run([sys.executable, __file__, "--child", str(csv_path),
-                                    str(Path(tmp) / "data")],
-                                   capture_output=True, text=True, check=False)
-            if child.returncode != 0:
-                sys.exit(f"import of {n} profiles failed:\n{child.stderr[-3000:]}")
-            r = json.loads(child.stdout.strip().splitlines()[-1])
-            assert r["profiles"] == n, r
-            print(f"{n:>9,} {size / 1e6:>9.1f} {write_s:>8.1f} {r['seconds']:>9.1f} "
-                  f"{n / r['seconds']:>11,.0f} {r['points'] / r['seconds']:>11,.0f} "
-                  f"{r['peak_rss_mb']:>12.0f}", flush=True)
+            backends = [("sqlite", None)] + ([("postgresql", args.postgres)]
+                                             if args.postgres else [])
+            for name, server_url in backends:
+                with _database(server_url) as url:
+                    child = subprocess.run(
+                        [sys.executable, __file__, "--child", str(csv_path),
+                         str(Path(tmp) / f"data-{name}"), url],
+                        capture_output=True, text=True, check=False)
+                if child.returncode != 0:
+                    sys.exit(f"import of {n} profiles into {name} failed:\n"
+                             f"{child.stderr[-3000:]}")
+                r = json.loads(child.stdout.strip().splitlines()[-1])
+                assert r["profiles"] == n, r
+                print(f"{name:<10} {n:>9,} {size / 1e6:>9.1f} {write_s:>8.1f} "
+                      f"{r['seconds']:>9.1f} {n / r['seconds']:>11,.0f} "
+                      f"{r['points'] / r['seconds']:>11,.0f} {r['peak_rss_mb']:>12.0f}",
+                      flush=True)
+
+
+@contextmanager
+def _database(server_url: str | None) -> Iterator[str]:
+    """``""`` (the default SQLite file) or a fresh database on ``server_url``, dropped
+    afterwards."""
+    if server_url is None:
+        yield ""
+        return
+    from sqlalchemy import create_engine, text
+    from sqlalchemy.engine import make_url
+
+    url = make_url(server_url)
+    admin = create_engine(url, isolation_level="AUTOCOMMIT")
+    name = f"wearcast_bench_{uuid.uuid4().hex[:12]}"
+    with admin.connect() as connection:
+        connection.execute(text(f'CREATE DATABASE "{name}"'))
+    try:
+        yield url.set(database=name).render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as connection:
+            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+        admin.dispose()
 
 
 if __name__ == "__main__":

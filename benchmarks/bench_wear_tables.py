@@ -1,5 +1,6 @@
 """Benchmark: a full curve-radius wear table (30 curve classes, motor and trailer bogies, both
-wheelsets and sides, tread and flange, tau_max and T-gamma) on one core.
+wheelsets and sides, tread and flange, tau_max and T-gamma) on one core, and the Aosta route
+(seed 003 Table 3's classes, Minuetto motor and trailer bogies; issue 11's target 0.5 s).
 
 Run: ``.venv/bin/python benchmarks/bench_wear_tables.py`` (target: under 2 s warm).
 """
@@ -17,6 +18,7 @@ import numpy as np  # noqa: E402
 
 from wearcast.physics import curving  # noqa: E402
 from wearcast.physics.wear_tables import wear_table_for_route  # noqa: E402
+from wearcast.statistics.generators.fleet_twin import aosta_route  # noqa: E402
 
 
 def thirty_classes() -> tuple[list[float | None], list[float]]:
@@ -45,5 +47,21 @@ def main() -> None:
               f"{cold:5.2f} s  warm best {min(warm):5.2f} s  median {np.median(warm):5.2f} s")
 
 
+def aosta() -> None:
+    route = aosta_route()
+    radii = [c.radius_m for c in route.classes]
+    cant = [c.cant_mm for c in route.classes]
+    speed = [c.speed_kmh for c in route.classes]
+    wear_table_for_route("minuetto", radii, cant_mm=cant, speed_kmh=speed)  # warm the caches
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        table = wear_table_for_route("minuetto", radii, cant_mm=cant, speed_kmh=speed)
+        times.append(time.perf_counter() - t0)
+    print(f"  aosta (minuetto, {len(radii)} classes + tangent) rows {len(table):4d}  warm best "
+          f"{min(times):5.2f} s  median {np.median(times):5.2f} s  (target 0.5 s)")
+
+
 if __name__ == "__main__":
     main()
+    aosta()

@@ -49,50 +49,29 @@ from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import fleet_twin_loop as fl
+from wearcast.statistics.generators import scenarios as sc
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.routes import RouteClass
 
 TABLE = ft.synthetic_wear_table()
 
 
+def _diagnosis(scenario: sc.Scenario) -> Any:
+    args, kwargs = scenario.finder_arguments()
+    return diagnose(*args, **kwargs, n_boot=300)
+
+
 def run_twin(effect: Any, seed: int) -> Any:
     we, pe = effect
-    cfg = te.scenario_config(seed=seed, wear_effects=we, profile_effects=pe)
-    df, curves = te.twin_measurements(ft.generate_fleet(cfg, TABLE))
-    routes, attrs = te.scenario_routes(cfg)
-    cal = (df["vehicle_id"].str.startswith("A") & (df["bogie_type"] == "motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], routes, TABLE, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    return diagnose(model, df, curves, routes, TABLE, route_attributes=attrs,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300)
+    return _diagnosis(sc.twin_scenario(we, pe, seed=seed, table=TABLE))
 
 
 def run_alt(effect: Any, seed: int) -> Any:
-    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effect, seed=seed))
-    df, curves = fleet.measurements, fleet.wear_curves
-    cal = (df["unit"].eq("U1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    return diagnose(model, df, curves, fleet.routes, fleet.table,
-                    route_attributes=fleet.route_attributes,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300)
-
-
-def depot_case(effects: dp.DepotEffects, seed: int) -> tuple[Any, ...]:
-    fleet = dp.generate_depot_fleet(dp.DepotConfig(
-        effects=effects, seed=seed, profiles=effects.instrument_scale is not None))
-    df = fleet.measurements
-    cal = (df["unit"].eq("N1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table,
-                             wear_curves_mm=fleet.wear_curves[cal], measure="tau_max",
-                             running_mode="mixed")
-    return fleet, df, cal, model
+    return _diagnosis(sc.alt_scenario(effect, seed))
 
 
 def run_depot(effect: Any, seed: int) -> Any:
-    fleet, df, cal, model = depot_case(effect, seed)
-    return diagnose(model, df, fleet.wear_curves, fleet.routes, fleet.table,
-                    route_attributes=fleet.route_attributes,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300)
+    return _diagnosis(sc.depot_scenario(effect, seed))
 
 
 # --- the loop-driven generator ---------------------------------------------------------------
@@ -104,11 +83,10 @@ def run_depot(effect: Any, seed: int) -> Any:
 # are deterministic and cached across seeds.
 
 def _loop_classes(radius_m: float | None, cant_mm: float, speed_kmh: float, share: float
-                  ) -> list[ft.TwinCurveClass]:
+                  ) -> list[RouteClass]:
     if radius_m is None:
-        return [ft.TwinCurveClass(None, None, 0.0, speed_kmh, share)]
-    return [ft.TwinCurveClass(radius_m, d, cant_mm, speed_kmh, share / 2.0)
-            for d in ("left", "right")]
+        return [RouteClass(None, None, 0.0, speed_kmh, share)]
+    return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
 
 
 # (radius [m] or None, cant [mm], speed [km/h], share): tangent track and 500 m curves, half
@@ -124,7 +102,7 @@ _LOOP_TABLE: list[pd.DataFrame] = []
 
 
 def loop_route(name: str, lubricated: bool = False) -> ft.TwinRoute:
-    classes: list[ft.TwinCurveClass] = []
+    classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share in LOOP_CLASSES:
         classes += _loop_classes(radius_m, cant_mm, speed_kmh, share)
     return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})

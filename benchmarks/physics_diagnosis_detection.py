@@ -13,13 +13,11 @@ interval low end, Holm p, fitted value and scale).
 
 from __future__ import annotations
 
-import time
-
-import numpy as np
-import pandas as pd
-
-from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
 from wearcast.physics.wear_loop import LoopClass
+from wearcast.statistics.generators.scenarios import (
+    cached_vehicle_simulator,
+    measured_vehicle_series,
+)
 from wearcast.statistics.physics_diagnosis import PhysicsCause, diagnose_physics
 
 ROUTE = [LoopClass(250.0, 100.0, None, "left", 0.15),
@@ -34,32 +32,14 @@ HIDDEN = ({}, {"flange_wear_factor": 0.5}, {"friction": 0.5}, {"patch_width": "k
 
 
 def main() -> None:
-    cache: dict = {}
+    def report(params, seconds):
+        print(f"  loop run {dict(params) or 'null'}: {seconds:.0f} s", flush=True)
 
-    def simulate(params):
-        key = tuple(sorted(params.items()))
-        if key not in cache:
-            t0 = time.perf_counter()
-            cache[key] = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=3000.0,
-                                               depth_per_step_mm=1.0,
-                                               options=VehicleWearOptions(**params))
-            print(f"  loop run {dict(key) or 'null'}: {time.perf_counter() - t0:.0f} s",
-                  flush=True)
-        return cache[key]
-
+    simulate = cached_vehicle_simulator(ROUTE, "metro_b", law="usfd", mileage_km=3000.0,
+                                        depth_per_step_mm=1.0, on_run=report)
     for hidden in HIDDEN:
-        truth = simulate(hidden)
-        rng = np.random.default_rng(7)
-        rows = []
-        for v in range(5):
-            km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
-            ft = np.interp(1.2 * km, truth.mileage_km, truth.mean("sd_mm"))
-            qr = np.interp(1.2 * km, truth.mileage_km, truth.mean("qr_mm"))
-            rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
-                     for k, a, b in zip(km, ft + rng.normal(0, 0.02, km.size),
-                                        qr + rng.normal(0, 0.02, km.size), strict=True)]
-        d = diagnose_physics(simulate, pd.DataFrame(rows), catalogue=CATALOGUE,
-                             n_bootstrap=500)
+        measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02)
+        d = diagnose_physics(simulate, measured, catalogue=CATALOGUE, n_bootstrap=500)
         print(f"hidden {hidden or 'nothing'} (scale 1.2) -> verdict {d.verdict}; null scale "
               f"{d.null_fit['wear_scale']:.3f}")
         for f in d.findings:

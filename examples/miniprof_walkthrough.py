@@ -6,25 +6,28 @@ Usage: ``.venv/bin/python examples/miniprof_walkthrough.py <folder with the .whl
 
 Runs the HTTP API in process (FastAPI's TestClient) on a temporary SQLite database; the
 requests are the ones a client would send to ``wearcast serve``. The model used for the
-reprofiling question is calibrated on the synthetic metro fleet of ``statistics.fleet_twin``
-(the real files carry no mileage history to calibrate on).
+reprofiling question is calibrated on the synthetic metro fleet of
+``statistics.generators.fleet_twin`` (the real files carry no mileage history to calibrate on).
 """
 
 from __future__ import annotations
 
 import io
+import secrets
 import sys
 import tempfile
 import warnings
 import zipfile
 from pathlib import Path
 
+from pydantic import SecretStr
+
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
 from wearcast.statistics.cleaning import clean_profile
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -41,20 +44,34 @@ MANIFEST = {
 }
 
 
-def main(folder: Path) -> None:
-    client = TestClient(create_app(Settings(data_dir=Path(tempfile.mkdtemp()))))
+def in_process_client() -> TestClient:
+    """The HTTP API in process on a temporary SQLite database, with the run's own admin key."""
+    key = f"wc_example-{secrets.token_urlsafe(16)}"
+    data_dir = Path(tempfile.mkdtemp())
+    return TestClient(create_app(Settings(data_dir=data_dir, api_key=SecretStr(key),
+                                          database_url=f"sqlite:///{data_dir / 'w.db'}")),
+                      headers={"Authorization": f"Bearer {key}"})
+
+
+def wheels_zip(folder: Path) -> tuple[bytes, str, list[str]]:
+    """(zip of the nine wheel files, their manifest, the manifest's rows)."""
     rows = ["file;wheel_id;vehicle_id;bogie_type;axle;side;mileage_km;reference_profile"]
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w") as archive:
         for name, (wheel, side, km) in MANIFEST.items():
             archive.writestr(name, (folder / name).read_bytes())
             rows.append(f"{name};{wheel};V-{wheel};M;1;{side};{km};S1002")
-    manifest = "\n".join(rows) + "\n"
+    return buffer.getvalue(), "\n".join(rows) + "\n", rows
+
+
+def main(folder: Path) -> None:
+    client = in_process_client()
+    data, manifest, rows = wheels_zip(folder)
     print("$ manifest.csv (';'-separated, sides L/R/links/rechts, bogie M, decimal comma)")
     print("\n".join(rows[:3]) + "\n...")
     print("\n$ POST /v1/measurements/import  file=miniprof.zip manifest=manifest.csv")
     answer = client.post("/v1/measurements/import", files={
-        "file": ("miniprof.zip", buffer.getvalue()),
+        "file": ("miniprof.zip", data),
         "manifest": ("manifest.csv", manifest.encode())}).json()
     print({k: v for k, v in answer.items() if k != "warnings"})
     for w in answer["warnings"]:
@@ -90,12 +107,7 @@ def main(folder: Path) -> None:
     print(f"  reference {m['reference_profile']}, fits {m['reference_fits']}, areas "
           f"{m['flange_area_mm2']:.2f}/{m['tread_area_mm2']:.2f} mm²")
 
-    config = ft.FleetConfig(
-        units=(ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead"),),
-        mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
-        calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
-        area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=7)
-    fleet = ft.generate_fleet(config)
+    fleet = ft.generate_fleet(ft.metro_calibration_config())
     client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
     client.post("/v1/routes", json=ft.metro_route().to_json())

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape
 
 GRAVITY_M_S2 = 9.81
@@ -63,7 +64,8 @@ class BogieVehicle:
     bogie_centre_distance_m : distance of the two bogie pivots [m] (body chord in curves)
     cog_height_m : height above rail of the centre of gravity of the mass carried by one
         wheelset, used for the load transfer under cant deficiency [m]
-    wheel_profile : wheel profile name (``S1002``)
+    wheel_profile : wheel profile name (``S1002``) or a measured wheel
+        (``profiles.measured_wheel.MeasuredWheel``, on every wheel)
     rail_profile : ``60E1`` or ``60E2``, or a measured rail
         (``profiles.measured_rail.MeasuredRail``, placed by its gauge point)
     rail_inclination : rail inclination as a slope (1/40 or 1/20)
@@ -85,7 +87,7 @@ class BogieVehicle:
     secondary_yaw_stiffness_nm_per_rad: float
     bogie_centre_distance_m: float
     cog_height_m: float
-    wheel_profile: str = "S1002"
+    wheel_profile: str | MeasuredWheel = "S1002"
     rail_profile: str | RailShape = "60E1"
     rail_inclination: float = 1.0 / 40.0
     friction: float = 0.35
@@ -94,6 +96,14 @@ class BogieVehicle:
     def __post_init__(self) -> None:
         if self.bogie_type not in ("motor", "trailer"):
             raise ValueError(f"bogie_type must be 'motor' or 'trailer', got {self.bogie_type!r}")
+        if isinstance(self.wheel_profile, str):
+            if self.wheel_profile.upper() != "S1002":
+                raise ValueError("wheel_profile must be 'S1002' (or a measured wheel), got "
+                                 f"{self.wheel_profile!r}")
+        elif not isinstance(self.wheel_profile, MeasuredWheel):
+            raise ValueError("wheel_profile must be 'S1002' or a measured wheel "
+                             f"(profiles.measured_wheel.MeasuredWheel), got "
+                             f"{self.wheel_profile!r}")
         if isinstance(self.rail_profile, str):
             if self.rail_profile not in ("60E1", "60E2"):
                 raise ValueError("rail_profile must be '60E1' or '60E2' (or a measured rail), "

@@ -23,6 +23,7 @@ from typing import Literal, get_args
 
 Region = Literal["flange", "tread"]
 BogieType = Literal["motor", "trailer"]
+Axle = Literal[1, 2]
 Wheelset = Literal["leading", "trailing"]
 Side = Literal["left", "right"]
 Direction = Literal["left", "right"]
@@ -39,7 +40,7 @@ DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
 RAILS: tuple[Rail, ...] = get_args(Rail)
 RUNNING_MODES: tuple[RunningMode, ...] = get_args(RunningMode)
 WEAR_MEASURES: tuple[WearMeasure, ...] = get_args(WearMeasure)
-AXLES: tuple[int, ...] = (1, 2)
+AXLES: tuple[Axle, ...] = get_args(Axle)
 
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm].
 REGION_SPLIT_Y_MM = -30.0

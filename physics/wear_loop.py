@@ -40,7 +40,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, TypeAlias
+from typing import Any, TypeAlias, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,6 +58,7 @@ from wearcast.physics.curving import (
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle, vehicle_preset
+from wearcast.physics.vocabulary import CurveClass, Direction
 from wearcast.physics.wear_distribution import (
     Smoothing,
     apply_normal_wear,
@@ -76,7 +77,6 @@ from wearcast.physics.wear_laws import (
     wheel_rail_split,
 )
 from wearcast.physics.wear_measures import rigid_sliding_velocity_m_s
-from wearcast.physics.wear_tables import CurveClass
 
 #: Default lateral grid of the wheel profile [mm] (what the contact table searches, +-1 mm).
 WHEEL_GRID_MM = (-70.0, 60.0, 0.2)
@@ -108,7 +108,7 @@ LoopClass: TypeAlias = CurveClass
 
 def as_loop_classes(route_classes: Any) -> list[LoopClass]:
     """Curve classes from LoopClass objects, mappings, objects with the same attributes
-    (``wear_tables.CurveClass``, ``statistics.routes.RouteClass``) or a route with ``classes``."""
+    (``vocabulary.CurveClass``, ``statistics.routes.RouteClass``) or a route with ``classes``."""
     items = getattr(route_classes, "classes", route_classes)
     out = []
     for item in items:
@@ -124,7 +124,7 @@ def as_loop_classes(route_classes: Any) -> list[LoopClass]:
         out.append(LoopClass(radius_m=None if radius is None else float(radius),
                              cant_mm=float(get("cant_mm", 0.0) or 0.0),
                              speed_kmh=None if speed is None else float(speed),
-                             direction=str(get("direction", "left") or "left"),
+                             direction=cast(Direction, str(get("direction", "left") or "left")),
                              share=float(get("share", 1.0))))
     if not out:
         raise ValueError("route_classes is empty")

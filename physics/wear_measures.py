@@ -61,7 +61,11 @@ def t_gamma(fx_n: ArrayLike, fy_n: ArrayLike, mz_nmm: ArrayLike, xi: ArrayLike, 
 
 
 def tau_max(result: FastsimResult) -> NDArray[np.float64]:
-    """Maximum surface shear traction magnitude of a FASTSIM solution [MPa] (the default)."""
+    """Maximum surface shear traction magnitude of a FASTSIM solution [MPa] (the default).
+
+    Take it from a solution with the elliptic traction bound (``curving.TAU_MAX_BOUND``): the
+    parabolic bound's peak 2 Fn / (pi a b) is 4/3 of the Hertz p0, so in full slip it reports
+    4/3 mu p0 where the exact solution has mu p0."""
     return np.max(result.shear_traction_mpa, axis=(-2, -1))
 
 

@@ -28,7 +28,6 @@ Conventions
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
@@ -41,6 +40,7 @@ from wearcast.physics.curving import (
     solve_curving_cases,
 )
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
+from wearcast.physics.vocabulary import WEAR_MEASURES, CurveClass
 from wearcast.physics.wear_measures import (
     krause_poll_index,
     kth_archard_index,
@@ -50,37 +50,8 @@ from wearcast.physics.wear_measures import (
 
 #: Columns of the curve-radius table (docs/conventions.md "Curve-radius table CSV").
 TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value"]
-MEASURES = ("tau_max", "t_gamma")
+MEASURES = WEAR_MEASURES
 _KMH = 3.6
-
-
-@dataclass(frozen=True)
-class CurveClass:
-    """One curve class: radius [m] (None = tangent), cant [mm], speed [km/h] (None = from the
-    unbalanced lateral acceleration), direction, share of the route [-] (for merging)."""
-
-    radius_m: float | None
-    cant_mm: float = 0.0
-    speed_kmh: float | None = None
-    direction: str = "left"
-    share: float = 1.0
-
-    def __post_init__(self) -> None:
-        if self.radius_m is not None and not (np.isfinite(self.radius_m) and self.radius_m > 0):
-            if not (np.isinf(self.radius_m) and self.radius_m > 0):
-                raise ValueError(f"radius_m must be positive or None, got {self.radius_m}")
-        if self.cant_mm < 0:
-            raise ValueError(f"cant_mm must be >= 0, got {self.cant_mm}")
-        if self.speed_kmh is not None and not self.speed_kmh > 0:
-            raise ValueError(f"speed_kmh must be positive, got {self.speed_kmh}")
-        if self.direction not in ("left", "right"):
-            raise ValueError(f"direction must be 'left' or 'right', got {self.direction!r}")
-        if not self.share >= 0:
-            raise ValueError(f"share must be >= 0, got {self.share}")
-
-    @property
-    def is_tangent(self) -> bool:
-        return self.radius_m is None or not np.isfinite(self.radius_m)
 
 
 ClassLike = CurveClass | Mapping[str, object]

@@ -368,7 +368,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
     """What the model gets wrong, the named cause, the extended model and its gain."""
     from wearcast.service import diagnosis_store
     from wearcast.service.schemas import DiagnoseIn
-    from wearcast.statistics import discrepancy
+    from wearcast.statistics import discrepancy_report
 
     body = _validated(DiagnoseIn, {"filter": _json_option(filter, "filter"),
                                    "save_as": save_as, "causes": cause or None})
@@ -379,8 +379,9 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
             saved, reason = diagnosis_store.save_extension(session, run, save_as)
         out = diagnosis_store.diagnosis_out(session, model_id, run, saved, reason)
         if report is not None:
-            figures = discrepancy.diagnosis_figures(run.diagnosis)
-            report.write_text(discrepancy.report_html(run.diagnosis, figures), encoding="utf-8")
+            figures = discrepancy_report.diagnosis_figures(run.diagnosis)
+            report.write_text(discrepancy_report.report_html(run.diagnosis, figures),
+                              encoding="utf-8")
     table = Table(title=f"model {model_id}: verdict [bold]{out.verdict}[/bold] "
                   f"({out.n_measurements} measurements, {out.n_groups} groups)")
     for column in ("cause", "relative gain [95 % CI]", "p (max-T)", "reported", "summary"):

@@ -93,6 +93,8 @@ class Database:
         self.settings = settings
         self.engine = make_engine(settings.resolved_database_url)
         self.session_factory = make_session_factory(self.engine)
+        #: SQLite: an embedded file database (no server round trips)
+        self.is_sqlite = self.engine.dialect.name == "sqlite"
 
     def migrate(self) -> None:
         migrate(self.engine)

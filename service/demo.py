@@ -307,7 +307,7 @@ def _diagnose(session: Session, out: Path, model_id: int,
     and findings, write the HTML report, save the extended model and predict with it."""
     from wearcast.service import diagnosis_store, model_store
     from wearcast.service.schemas import DiagnoseIn, PredictIn
-    from wearcast.statistics import discrepancy
+    from wearcast.statistics import discrepancy_report
 
     run = diagnosis_store.run_diagnosis(session, model_id, DiagnoseIn())
     d = run.diagnosis
@@ -328,7 +328,7 @@ def _diagnose(session: Session, out: Path, model_id: int,
     for code, skip_reason in d.skipped.items():
         echo(f"  skipped {code}: {skip_reason}")
     report = out / report_name
-    report.write_text(discrepancy.report_html(d, discrepancy.diagnosis_figures(d)),
+    report.write_text(discrepancy_report.report_html(d, discrepancy_report.diagnosis_figures(d)),
                       encoding="utf-8")
     echo(f"wrote {report}")
     saved, reason = diagnosis_store.save_extension(session, run, f"demo: {d.verdict} extension")

@@ -33,7 +33,7 @@ from wearcast.service import measurement_store, model_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.errors import Unprocessable, from_value_error
 from wearcast.service.schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
-from wearcast.statistics import discrepancy, hybrid
+from wearcast.statistics import discrepancy, discrepancy_report, hybrid
 from wearcast.statistics.causes import CATALOGUE
 
 #: Columns of ``calibration_frame`` that are not covariates the finder should see twice.
@@ -245,5 +245,5 @@ def report_html(session: Session, model_id: int, body: DiagnoseIn,
     run = run_diagnosis(session, model_id, body)
     if cause is not None and run.diagnosis.finding(cause) is None:
         raise Unprocessable("cause", f"no finding for cause {cause!r} in this diagnosis")
-    figures = discrepancy.diagnosis_figures(run.diagnosis, cause)
-    return discrepancy.report_html(run.diagnosis, figures)
+    figures = discrepancy_report.diagnosis_figures(run.diagnosis, cause)
+    return discrepancy_report.report_html(run.diagnosis, figures)

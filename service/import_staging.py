@@ -189,11 +189,14 @@ def write_stage(session: Session, stage: Stage, batch_id: int) -> _Counts:
     """Insert the staged rows under ``batch_id`` in the session's transaction; rows stored
     meanwhile by another import count as duplicates. Returns the final counts."""
     write_new_wheels(session, stage.registry)
-    statement = insert_ignoring_duplicates(session, db.Measurement, ["wheel_id", "mileage_km"])
+    # Core executemany on the table (not the ORM entity): no per-row ORM bookkeeping
+    statement = insert_ignoring_duplicates(session, db.Measurement.__table__,
+                                           ["wheel_id", "mileage_km"])
+    connection = session.connection()
     for rows in stage.rows():
         for row in rows:
             row["batch_id"] = batch_id
-        session.execute(statement, rows)
+        connection.execute(statement, rows)
     created = int(session.scalar(select(func.count()).select_from(db.Measurement)
                                  .where(db.Measurement.batch_id == batch_id)) or 0)
     for wheel_id in sorted(stage.registry.own_wheels):  # baseline = own first measurement

@@ -41,7 +41,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
-from typing import Any, BinaryIO, NamedTuple, TypeAlias
+from typing import Any, BinaryIO, TypeAlias
 
 import numpy as np
 from sqlalchemy import insert, select, tuple_
@@ -51,6 +51,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
 from wearcast.service.errors import ApiError, Conflict, NotFound, Unprocessable
+from wearcast.service.import_worker import Processed, RefTuple, process_arrays, process_batch
 from wearcast.service.readers.bundle import ZipLimits
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ParameterRecord, ProfileRecord
@@ -198,81 +199,21 @@ class _Registry:
         self.session.execute(insert(db.Wheel), list(new_wheels.values()))
 
 
-class _Processed(NamedTuple):
-    """What the measurements row keeps of a processed profile (small, so it pickles fast)."""
+#: What the measurements row keeps of a processed profile.
+_Processed = Processed
 
-    wear_mm: np.ndarray
-    grid_start_mm: float
-    grid_step_mm: float
-    flange_area_mm2: float
-    tread_area_mm2: float
-    lateral_shift_mm: float
-    vertical_shift_mm: float
-    rotation_rad: float
-    rms_residual_mm: float
-    sd_mm: float
-    sh_mm: float
-    qr_mm: float
-    reference: str = "S1002"
-    reference_fits: bool = True
-    reference_reasons: tuple[str, ...] = ()
-    placement: dict[str, Any] | None = None
-    n_raw: int = 0
-    n_removed: int = 0
-    cleaning_notes: tuple[str, ...] = ()
+
+def ref_tuple(spec: ReferenceSpec | None) -> RefTuple | None:
+    """A resolved reference as the plain tuple the processing (and its workers) take."""
+    return None if spec is None else (spec.name, spec.kind, spec.y_mm, spec.z_mm)
 
 
 def _process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, spec: ReferenceSpec | None = None,
-                    datum: bool = False) -> _Processed | str:
-    """The processed profile, or the reason it cannot be used.
-
-    ``spec`` is the declared reference (default S1002); ``datum`` places the profile by the
-    instrument's datum instead of the free rigid fit. Runs in worker processes too, so it
-    returns the error as text instead of raising.
-    """
-    from wearcast.service.reference_store import height_of
-    from wearcast.statistics.processing import process_profile
-    from wearcast.statistics.profile_parameters import flange_parameters
-
-    spec = spec if spec is not None else ReferenceSpec("S1002", "builtin")
-    try:
-        p = process_profile(y_mm, z_mm, reference_height=height_of(spec),
-                            alignment="datum" if datum else "free")
-    except ValueError as exc:
-        return str(exc)
-    if datum:
-        params = p.parameters  # of the profile as placed on its datum (= as measured)
-    else:
-        # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument),
-        # not of the profile moved by the free fit: its lateral shift would move Sd.
-        params = flange_parameters(p.cleaned.y_mm, p.cleaned.z_mm)
-    grid = np.asarray(p.grid_y_mm)
-    placement: dict[str, Any] = {"alignment": p.alignment}
-    if p.datum is not None:
-        d = p.datum
-        placement.update(
-            back_face_found=d.back_face_found,
-            back_face_y_mm=_finite_or_none(d.back_face_y_mm),
-            tape_circle_z_mm=_finite_or_none(d.tape_circle_z_mm),
-            tilt_back_face_rad=_finite_or_none(d.tilt_back_face_rad),
-            tilt_field_rad=_finite_or_none(d.tilt_field_rad),
-            tilt_applied_rad=d.tilt_applied_rad, notes=list(d.notes))
-    check = p.reference_check
-    assert check is not None
-    placement["rejected_areas_mm2"] = (None if check.fits else
-                                       [float(p.areas.flange_mm2), float(p.areas.tread_mm2)])
-    return _Processed(np.asarray(p.wear_mm, dtype=np.float32), float(grid[0]),
-                      float(grid[1] - grid[0]), float(p.areas.flange_mm2),
-                      float(p.areas.tread_mm2), float(p.lateral_shift_mm),
-                      float(p.vertical_shift_mm), float(p.rotation_rad),
-                      float(p.rms_residual_mm), float(params.sd_mm), float(params.sh_mm),
-                      float(params.qr_mm), spec.name, check.fits, check.reasons, placement,
-                      int(np.asarray(y_mm).size), int(p.cleaned.n_removed), p.cleaned.notes)
-
-
-def _process_batch(profiles: list[tuple[np.ndarray, np.ndarray, ReferenceSpec | None, bool]]
-                   ) -> list[_Processed | str]:
-    return [_process_arrays(y, z, spec, datum) for y, z, spec, datum in profiles]
+                    datum: bool = False) -> Processed | str:
+    """The processed profile, or the reason it cannot be used (see
+    :func:`wearcast.service.import_worker.process_arrays`); ``spec`` is the declared
+    reference (default S1002)."""
+    return process_arrays(y_mm, z_mm, ref_tuple(spec), datum)
 
 
 _POOL: ProcessPoolExecutor | None = None
@@ -287,7 +228,8 @@ def _pool() -> ProcessPoolExecutor | None:
     can inherit held locks. None on a single core or when ``WEARCAST_IMPORT_WORKERS=0``.
     """
     global _POOL, _POOL_WORKERS
-    workers = int(os.environ.get("WEARCAST_IMPORT_WORKERS", os.cpu_count() or 1))
+    configured = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip()  # empty: unset
+    workers = int(configured) if configured else (os.cpu_count() or 1)
     if workers <= 1:
         return None
     with _POOL_LOCK:
@@ -315,14 +257,14 @@ def _submit(records: list[ProfileRecord], registry: _Registry | None = None
     profile, naming its file and line.
     """
     specs = [registry.reference(r) if registry is not None else None for r in records]
-    arrays = [(r.y_mm, r.z_mm, spec, r.instrument_datum)
+    arrays = [(r.y_mm, r.z_mm, ref_tuple(spec), r.instrument_datum)
               for r, spec in zip(records, specs, strict=True)]
     pool = _pool() if len(records) >= PARALLEL_MIN_PROFILES else None
     futures = []
     if pool is not None:
         size = -(-len(arrays) // (_POOL_WORKERS * 2))
         try:
-            futures = [pool.submit(_process_batch, arrays[i:i + size])
+            futures = [pool.submit(process_batch, arrays[i:i + size])
                        for i in range(0, len(arrays), size)]
         except (BrokenProcessPool, RuntimeError):
             _discard_pool()
@@ -335,7 +277,7 @@ def _submit(records: list[ProfileRecord], registry: _Registry | None = None
             _discard_pool()
             done = None
         if done is None:
-            done = _process_batch(arrays)
+            done = process_batch(arrays)
         for record, result in zip(records, done, strict=True):
             if isinstance(result, str):
                 meta = record.meta

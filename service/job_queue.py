@@ -71,7 +71,7 @@ def run(job_id: int) -> None:
         stop.set()
 
 
-_BROKER_URL = os.environ.get("WEARCAST_BROKER_URL", "redis://127.0.0.1:6379/0")
+_BROKER_URL = os.environ.get("WEARCAST_BROKER_URL", "").strip() or "redis://127.0.0.1:6379/0"
 
 
 @cache

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from sqlalchemy import Select, func, or_, select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, defer
 
 from wearcast.service import models_db as db
 from wearcast.service import route_store
@@ -177,20 +177,27 @@ def load(session: Session, ids: list[int], include_points: bool = False
          ) -> list[MeasurementOut]:
     if not ids:
         return []
-    rows = session.execute(select(M, W).join(W, W.wheel_id == M.wheel_id)
-                           .where(M.id.in_(ids)).order_by(M.id)).all()
+    query = select(M, W).join(W, W.wheel_id == M.wheel_id).where(M.id.in_(ids)).order_by(M.id)
+    if not include_points:  # a page without points reads none of the point blobs
+        query = query.options(defer(M.y_mm), defer(M.z_mm), defer(M.wear_mm))
+    rows = session.execute(query).all()
     return [to_out(m, w, include_points) for m, w in rows]
 
 
+#: Fields of an answer read from the measurement row (the points are added separately).
+_ROW_FIELDS = tuple(c for c in MeasurementOut.model_fields
+                    if hasattr(db.Measurement, c) and c not in {"y_mm", "z_mm"})
+
+
 def to_out(m: db.Measurement, w: db.Wheel, include_points: bool = False) -> MeasurementOut:
-    data = {c: getattr(m, c) for c in MeasurementOut.model_fields
-            if hasattr(m, c) and c not in {"y_mm", "z_mm"}}
+    data = {c: getattr(m, c) for c in _ROW_FIELDS}
     data.update(vehicle_id=w.vehicle_id, bogie_type=w.bogie_type, axle=w.axle, side=w.side,
                 covariates=m.covariates or {})
-    y_points, z_points = from_f32(m.y_mm), from_f32(m.z_mm)
-    if include_points and y_points is not None and z_points is not None:
-        data["y_mm"] = [round(v, 4) for v in y_points.tolist()]
-        data["z_mm"] = [round(v, 4) for v in z_points.tolist()]
+    if include_points:
+        y_points, z_points = from_f32(m.y_mm), from_f32(m.z_mm)
+        if y_points is not None and z_points is not None:
+            data["y_mm"] = [round(v, 4) for v in y_points.tolist()]
+            data["z_mm"] = [round(v, 4) for v in z_points.tolist()]
     return MeasurementOut.model_validate(data)
 
 

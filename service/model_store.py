@@ -33,6 +33,7 @@ import orjson
 from sqlalchemy import bindparam, func, insert, select
 from sqlalchemy.orm import Session, defer
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.service import measurement_store, route_store, wear_table_store
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
@@ -53,7 +54,6 @@ from wearcast.statistics.discrepancy import ExtendedModel
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import RadiusOutOfTableError, WearTable
 
-REGIONS = ("flange", "tread")
 #: Deserialised models kept in process (a model's state is ~100 kB of JSON).
 MODEL_CACHE_SIZE = 32
 AnyModel: TypeAlias = hybrid.HybridModel | ExtendedModel
@@ -250,6 +250,31 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
                     route_id=row.route_id, calibration=row.spec.get("calibration", {}),
                     n_calibration_measurements=int(n), summary=summary, kind=kind,
                     derived_from=row.spec.get("derived_from"), extension=extension)
+
+
+#: Answers of ``GET /v1/models/{id}`` kept in process (models are never updated).
+MODEL_OUT_CACHE_SIZE = 256
+_model_outs: LruCache[ModelOut] = LruCache(MODEL_OUT_CACHE_SIZE)
+_MODEL_OUT_KEY = (
+    select(db.Model.created_at,
+           select(func.count()).select_from(db.ModelCalibrationMeasurement)
+           .where(db.ModelCalibrationMeasurement.model_id == bindparam("model_id"))
+           .scalar_subquery())
+    .where(db.Model.id == bindparam("model_id")))
+
+
+def model_out_cached(session: Session, model_id: int) -> ModelOut:
+    """:func:`model_out` of a stored model; its summary (from the model's JSON state, read
+    only on a miss) is cached in process under (database URL, id, created_at), as models
+    are never updated; the count of calibration measurements is read every time."""
+    found = session.execute(_MODEL_OUT_KEY, {"model_id": model_id}).first()
+    if found is None:
+        raise NotFound("model_id", f"no model with id {model_id}")
+    created_at, n = found
+    out = _model_outs.get_or_create(
+        (str(session.get_bind().engine.url), model_id, created_at),
+        lambda: model_out(session, get_model_row(session, model_id)))
+    return out.model_copy(update={"n_calibration_measurements": int(n or 0)})
 
 
 def _q(values: np.ndarray, quantiles: tuple[float, ...]) -> QuantileValues:

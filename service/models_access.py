@@ -77,10 +77,26 @@ def _aware_datetimes(target: Any, _context: Any = None) -> None:
     """SQLite gives back ``DateTime(timezone=True)`` columns without their zone; they are
     stored in UTC, so every loaded row gets UTC attached (answers carry an offset, as their
     OpenAPI ``date-time`` format requires)."""
-    for attr in sa_inspect(type(target)).column_attrs:
-        value = target.__dict__.get(attr.key)
+    state = target.__dict__
+    for key in _datetime_keys(type(target)):
+        value = state.get(key)
         if isinstance(value, dt.datetime) and value.tzinfo is None:
-            set_committed_value(target, attr.key, value.replace(tzinfo=dt.UTC))
+            set_committed_value(target, key, value.replace(tzinfo=dt.UTC))
+
+
+_DATETIME_KEYS: dict[type, tuple[str, ...]] = {}
+
+
+def _datetime_keys(cls: type) -> tuple[str, ...]:
+    """The attributes of a mapped class that are date-time columns (looked up once per
+    class: every loaded row runs :func:`_aware_datetimes`)."""
+    keys = _DATETIME_KEYS.get(cls)
+    if keys is None:
+        mapper: Any = sa_inspect(cls)
+        keys = tuple(attr.key for attr in mapper.column_attrs
+                     if any(isinstance(column.type, DateTime) for column in attr.columns))
+        _DATETIME_KEYS[cls] = keys
+    return keys
 
 
 event.listen(Base, "load", _aware_datetimes, propagate=True)

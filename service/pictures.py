@@ -6,8 +6,11 @@
   profile and measured profiles near that mileage, plus the wear curves (seed 001
   Figs. 12–14).
 
-The figure builders are pure (arrays in, bytes out); ``wear_area_picture``/
-``profile_picture`` load what they need from storage for the HTTP routes and the CLI.
+The figure builders are pure (arrays in, bytes out); ``wear_area_job``/``profile_job`` load
+what they need from storage and name the builder and its inputs
+(:class:`~wearcast.service.picture_cache.PictureJob`), which the HTTP routes key, cache and
+answer conditionally (:mod:`wearcast.service.picture_cache`); ``wear_area_picture``/
+``profile_picture`` return the bytes (CLI, demo).
 Matplotlib's object API is used (no pyplot state), so pictures can be drawn from threads.
 """
 
@@ -26,8 +29,10 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.service import measurement_store, model_store, route_store
 from wearcast.service import models_db as db
+from wearcast.service.picture_cache import PictureJob, render
 from wearcast.statistics.hybrid import Prediction
 
 ImageFormat = Literal["svg", "png"]
@@ -53,7 +58,7 @@ def wear_area_figure(prediction: Prediction, measured: pd.DataFrame, *, title: s
     q = prediction.quantiles
     lo, mid, hi = q.index(min(q)), q.index(0.5), q.index(max(q))
     s_1000 = prediction.mileage_km / 1000.0
-    for ax, region in zip(axes, ("flange", "tread"), strict=True):
+    for ax, region in zip(axes, REGIONS, strict=True):
         areas = getattr(prediction, f"{region}_area_mm2")
         colour = REGION_COLOURS[region]
         ax.fill_between(s_1000, areas[lo], areas[hi], color=colour, alpha=0.2,
@@ -133,6 +138,18 @@ def _position_measurements(session: Session, model_id: int, bogie_type: str, axl
 def wear_area_picture(session: Session, model_id: int, *, route_id: int | str,
                       bogie_type: str, axle: int, side: str, wheel_id: str | None = None,
                       max_mileage_km: float | None = None, fmt: ImageFormat = "svg") -> bytes:
+    """The wear-area picture's bytes (see :func:`wear_area_job`)."""
+    return render(wear_area_job(session, model_id, route_id=route_id, bogie_type=bogie_type,
+                                axle=axle, side=side, wheel_id=wheel_id,
+                                max_mileage_km=max_mileage_km, fmt=fmt))
+
+
+def wear_area_job(session: Session, model_id: int, *, route_id: int | str,
+                  bogie_type: str, axle: int, side: str, wheel_id: str | None = None,
+                  max_mileage_km: float | None = None, fmt: ImageFormat = "svg"
+                  ) -> PictureJob:
+    """Inputs of :func:`wear_area_figure` read from storage: the model's prediction at the
+    wheel position on the route and the measured areas shown beside it."""
     loaded = model_store.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
     keys = (row.name, str(row.id)) if row else ()
@@ -144,13 +161,26 @@ def wear_area_picture(session: Session, model_id: int, *, route_id: int | str,
                                             mileage_km=np.linspace(0.0, top, 41).tolist())
     who = wheel_id or f"{bogie_type} bogie, axle {axle}, {side}"
     title = f"model {loaded.row.name!r} on route {row.name if row else 'inline'}: {who}"
-    return wear_area_figure(prediction, measured, title=title, fmt=fmt)
+    return PictureJob(wear_area_figure, (prediction, measured), {"title": title, "fmt": fmt})
 
 
 def profile_picture(session: Session, model_id: int, *, route_id: int | str,
                     bogie_type: str, axle: int, side: str, mileage_km: float,
                     wheel_id: str | None = None, window: float = 0.2,
                     fmt: ImageFormat = "svg") -> bytes:
+    """The profile picture's bytes (see :func:`profile_job`)."""
+    return render(profile_job(session, model_id, route_id=route_id, bogie_type=bogie_type,
+                              axle=axle, side=side, mileage_km=mileage_km, wheel_id=wheel_id,
+                              window=window, fmt=fmt))
+
+
+def profile_job(session: Session, model_id: int, *, route_id: int | str,
+                bogie_type: str, axle: int, side: str, mileage_km: float,
+                wheel_id: str | None = None, window: float = 0.2,
+                fmt: ImageFormat = "svg") -> PictureJob:
+    """Inputs of :func:`profile_figure` read from storage: the predicted profile at
+    ``mileage_km`` and the measured wear curves within ``window`` (a share of the mileage)
+    of it."""
     loaded = model_store.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
     prediction = model_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
@@ -171,7 +201,8 @@ def profile_picture(session: Session, model_id: int, *, route_id: int | str,
     who = wheel_id or f"{bogie_type} bogie, axle {axle}, {side}"
     title = (f"model {loaded.row.name!r} on route {row.name if row else 'inline'}: {who}, "
              f"{mileage_km:,.0f} km")
-    return profile_figure(prediction, curves, labels, title=title, fmt=fmt)
+    return PictureJob(profile_figure, (prediction, curves, labels),
+                      {"title": title, "fmt": fmt})
 
 
 def write_demo_pictures(out_dir: Path | str, *, model_id: int, predictions: list[Any],

@@ -11,12 +11,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-BogieType = Literal["motor", "trailer"]
-Axle = Literal[1, 2]
-Side = Literal["left", "right"]
-Direction = Literal["left", "right"]
-Measure = Literal["tau_max", "t_gamma"]
-RunningMode = Literal["lead", "mixed"]
+from wearcast.physics.vocabulary import Axle, BogieType, Direction, RunningMode, Side
+from wearcast.physics.vocabulary import WearMeasure as Measure
+
 FilterValue = str | int | float | bool | None
 Filter = dict[str, FilterValue | list[FilterValue]]
 
@@ -140,7 +137,43 @@ class RadiusIn(Strict):
     share: float | None = Field(default=None, ge=0, le=1, description="share of the route [-]")
 
 
-class WearTableComputeIn(Strict):
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=20000)
+    z_mm: list[float] = Field(min_length=20, max_length=20000)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
+class MeasuredProfilesIn(Strict):
+    """The measured wheel and rail a physics request may use instead of the preset's S1002 on
+    its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
+
+    rail_id: int | None = Field(default=None, ge=1, description=(
+        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
+        "both sides, placed by its gauge point"))
+    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
+        "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
+        "datum when the import found one"))
+    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
+        "as measurement_id, with the wheel's latest measured profile"))
+    profile: MeasuredProfileIn | None = Field(default=None, description=(
+        "as measurement_id, with a profile sent in the request"))
+
+    @model_validator(mode="after")
+    def _at_most_one_wheel(self) -> MeasuredProfilesIn:
+        given = [k for k in ("wheel_id", "measurement_id", "profile")
+                 if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
+                             f"{', '.join(given)})")
+        return self
+
+
+class WearTableComputeIn(MeasuredProfilesIn):
     """``POST /v1/wear-tables/compute``: a table from the physics core (quasi-static curving).
 
     ``vehicle`` is a preset name (motor and trailer variants) or ``{motor, trailer}`` preset
@@ -158,9 +191,6 @@ class WearTableComputeIn(Strict):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
-    rail_id: int | None = Field(default=None, ge=1, description=(
-        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
-        "both sides, placed by its gauge point"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
@@ -339,16 +369,6 @@ class WheelPosition(RouteRef):
     bogie_type: BogieType
     axle: Axle
     side: Side
-
-
-class MeasuredProfileIn(Strict):
-    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
-    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
-
-    y_mm: list[float] = Field(min_length=20, max_length=20000)
-    z_mm: list[float] = Field(min_length=20, max_length=20000)
-    mileage_km: float = Field(0.0, ge=0)
-    reference_profile: str = "S1002"
 
 
 class PredictIn(RouteRef):
@@ -584,7 +604,7 @@ class SmoothingIn(Strict):
     window_mm: float | None = Field(default=None, gt=0, le=50)
 
 
-class SimulationIn(Strict):
+class SimulationIn(MeasuredProfilesIn):
     """``POST /v1/simulations``: the wear loop of one wheel over a route's curve classes."""
 
     name: str | None = Field(default=None, max_length=200)
@@ -604,9 +624,6 @@ class SimulationIn(Strict):
     smoothing: SmoothingIn | None = None
     unbalanced_acceleration_m_s2: float = Field(default=0.58, ge=0, le=2)
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
-    rail_id: int | None = Field(default=None, ge=1, description=(
-        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
-        "both sides, placed by its gauge point"))
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:

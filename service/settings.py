@@ -10,13 +10,17 @@ Security and limits (every one a ``WEARCAST_<NAME>`` variable with a safe defaul
 once); ``WEARCAST_CORS_ORIGINS`` lists the web origins allowed to call the API (none by
 default); the ``max_*`` settings bound every request (413/422 naming the limit) and
 ``rate_limit_*`` every key (429 with ``Retry-After``).
+
+A variable that is set but empty (``WEARCAST_API_KEY=`` in a shell or a compose file) counts
+as unset: the setting keeps its default.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
-from pydantic import Field, SecretStr
+from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 MIB = 1024 * 1024
@@ -25,7 +29,8 @@ MIB = 1024 * 1024
 class Settings(BaseSettings):
     """Runtime settings; every field reads ``WEARCAST_<NAME>`` from the environment."""
 
-    model_config = SettingsConfigDict(env_prefix="WEARCAST_", extra="ignore")
+    model_config = SettingsConfigDict(env_prefix="WEARCAST_", extra="ignore",
+                                      env_ignore_empty=True)
 
     data_dir: Path = Field(default=Path("./data"), description="data directory")
     database_url: str | None = Field(default=None, description="SQLAlchemy URL")
@@ -67,6 +72,15 @@ class Settings(BaseSettings):
                            description="embedded (in-process threads) or dramatiq (workers)")
     broker_url: str = Field(default="redis://127.0.0.1:6379/0",
                             description="the Dramatiq broker (Redis) when job_queue=dramatiq")
+
+    @field_validator("api_key", "database_url", mode="before")
+    @classmethod
+    def _blank_is_unset(cls, value: Any) -> Any:
+        """An empty or blank optional value (from the environment or a caller) is unset."""
+        raw = value.get_secret_value() if isinstance(value, SecretStr) else value
+        if isinstance(raw, str) and not raw.strip():
+            return None
+        return value
 
     @property
     def resolved_database_url(self) -> str:

@@ -16,6 +16,7 @@ import logging
 import traceback
 from typing import Any
 
+import numpy as np
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -80,7 +81,11 @@ def simulation_arguments(spec: dict[str, Any]) -> dict[str, Any]:
         from wearcast.service.rail_store import measured_rail_from_spec, with_rail
 
         vehicle = with_rail(vehicle, measured_rail_from_spec(spec["resolved_rail"]))
-    return {"vehicle": vehicle,
+    initial = None
+    if spec.get("resolved_wheel"):  # the wheel starts from a stored measurement
+        resolved = spec["resolved_wheel"]
+        initial = (np.asarray(resolved["y_mm"], float), np.asarray(resolved["z_mm"], float))
+    return {"vehicle": vehicle, "initial_profile": initial,
             "route_classes": classes, "law": WearLaw(name=spec["law"]),
             "application": spec["application"], "steps": steps, "axle": int(spec["axle"]),
             "side": spec["side"], "smoothing": smoothing,
@@ -98,6 +103,13 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
         from wearcast.service.rail_store import rail_spec
 
         spec["resolved_rail"] = rail_spec(session, body.rail_id)
+    from wearcast.service.measured_wheel_source import requested_wheel
+
+    measured = requested_wheel(session, body)
+    if measured is not None:
+        wheel, info = measured
+        y, z = wheel.on_grid()
+        spec["resolved_wheel"] = {**info, "y_mm": y.tolist(), "z_mm": z.tolist()}
     try:
         simulation_arguments(spec)
     except ValueError as exc:

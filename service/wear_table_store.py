@@ -248,6 +248,15 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
         rail_info = {"rail_id": body.rail_id, "name": rail.name, "kind": rail.kind,
                      "inclination": motor.rail_inclination,
                      "placement": "gauge point (14 mm below its top) at the track gauge"}
+    wheel_info = None
+    from wearcast.service.measured_wheel_source import requested_wheel
+
+    measured = requested_wheel(session, body)  # a measured wheel in place of S1002
+    if measured is not None:
+        wheel, wheel_info = measured
+        motor = motor.with_(wheel_profile=wheel)
+        trailer = trailer.with_(wheel_profile=wheel)
+        label = f"{label}, {wheel}"
     classes = _classes(session, body)
     try:
         table, contacts = wear_table_for_route(
@@ -262,7 +271,9 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
             _convergence_field(classes, radius),
             f"the quasi-static curving solver found no equilibrium at {where} for {label} "
             f"(residual norm {exc.residual_norm:.3g}); check the radius, cant and speed "
-            "of this class") from exc
+            "of this class" + ("" if wheel_info is None else ", and whether the measured "
+                               "wheel fits this track (flange thickness, datum placement)")
+        ) from exc
     except ValueError as exc:
         raise from_value_error(exc, "radii" if body.radii is not None else "route_id") from exc
     try:
@@ -271,7 +282,7 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
         raise from_value_error(exc, "table") from exc
     spec = body.model_dump(mode="json")
     spec.update(route_name=classes.route_name, vehicle_label=label,
-                n_classes=len(classes.radii_m), rail=rail_info,
+                n_classes=len(classes.radii_m), rail=rail_info, wheel=wheel_info,
                 engine="wearcast.physics.wear_tables.wear_table_for_route")
     return frame, contacts, spec
 

@@ -9,8 +9,10 @@
   (after the reported vertical alignment; the stored points are not moved), the wear area
   shaded, material above the reference hatched, and the wear curve with its areas.
 
-The builders are pure (arrays in, bytes out); the ``*_picture`` functions load what they
-need from storage for the HTTP routes.
+The builders are pure (arrays in, bytes out); the ``*_job`` functions load what they need
+from storage and name the builder and its inputs, which the HTTP routes key, cache and answer
+conditionally (:mod:`wearcast.service.picture_cache`); the ``*_picture`` functions return the
+bytes.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import model_store
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable
+from wearcast.service.picture_cache import PictureJob, render
 from wearcast.service.pictures import ImageFormat, _render
 from wearcast.service.schemas import ReprofilingIn
 from wearcast.statistics.reprofiling import ParameterCorridor
@@ -144,6 +147,14 @@ def wheel_parameter_picture(session: Session, model_id: int, *, wheel_id: str,
                             fmt: ImageFormat = "svg") -> bytes:
     """Sd/Sh/qR of a stored wheel against mileage with the model's prediction from its
     latest measured profile on (see :func:`parameter_history_figure`)."""
+    return render(wheel_parameter_job(session, model_id, wheel_id=wheel_id,
+                                      route_id=route_id, horizon_km=horizon_km, fmt=fmt))
+
+
+def wheel_parameter_job(session: Session, model_id: int, *, wheel_id: str,
+                        route_id: int | str, horizon_km: float | None = None,
+                        fmt: ImageFormat = "svg") -> PictureJob:
+    """Inputs of :func:`parameter_history_figure` read from storage for a stored wheel."""
     if session.get(db.Wheel, wheel_id) is None:
         raise NotFound("wheel_id", f"no wheel {wheel_id!r}")
     body = ReprofilingIn(route_id=route_id, wheel_id=wheel_id)
@@ -165,13 +176,21 @@ def wheel_parameter_picture(session: Session, model_id: int, *, wheel_id: str,
                 if answer["crossed_limits"] else
                 f"at {answer['mileage_km']['p50']:,.0f} km (P50)"
                 if answer["mileage_km"]["p50"] is not None else "not within the horizon"))
-    return parameter_history_figure(measured, corridor, start.mileage_km, answer["limits"],
-                                    answer, title=title, fmt=fmt)
+    return PictureJob(parameter_history_figure,
+                      (measured, corridor, start.mileage_km, answer["limits"], answer),
+                      {"title": title, "fmt": fmt})
 
 
 def measurement_profile_picture(session: Session, measurement_id: int,
                                 fmt: ImageFormat = "svg") -> bytes:
     """One stored measurement over the reference its wear was taken against."""
+    return render(measurement_profile_job(session, measurement_id, fmt))
+
+
+def measurement_profile_job(session: Session, measurement_id: int,
+                            fmt: ImageFormat = "svg") -> PictureJob:
+    """Inputs of :func:`measured_profile_figure` for one stored measurement (processed
+    again against its stored reference)."""
     from wearcast.service.reference_store import height_of, stored_reference_spec
     from wearcast.statistics.processing import process_profile
 
@@ -199,7 +218,8 @@ def measurement_profile_picture(session: Session, measurement_id: int,
              f"{p.parameters.sd_mm:.2f}, Sh {p.parameters.sh_mm:.2f}, qR "
              f"{p.parameters.qr_mm:.2f} mm; shift {p.lateral_shift_mm:.2f} mm, vertical "
              f"{p.vertical_shift_mm:+.2f} mm, rotation {p.rotation_rad * 1e3:.2f} mrad")
-    return measured_profile_figure(
-        p.y_aligned_mm, p.z_aligned_mm, ref_y, ref_z, p.grid_y_mm, p.wear_mm,
-        reference=m.reference_profile, areas=(p.areas.flange_mm2, p.areas.tread_mm2),
-        fits=fits, notes=notes, title=title, fmt=fmt)
+    return PictureJob(measured_profile_figure,
+                      (p.y_aligned_mm, p.z_aligned_mm, ref_y, ref_z, p.grid_y_mm, p.wear_mm),
+                      {"reference": m.reference_profile,
+                       "areas": (p.areas.flange_mm2, p.areas.tread_mm2), "fits": fits,
+                       "notes": notes, "title": title, "fmt": fmt})

@@ -15,12 +15,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.statistics.residuals import REGIONS
-
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
-
-__all__ = ["REGIONS"]
 
 
 @dataclass(frozen=True)
@@ -31,7 +27,7 @@ class FinderData:
     measured, base : (n, 2) measured and model-predicted areas [mm²] (flange, tread)
     floor : (2,) area floor [mm²]; mileage_km : (n,) [km]
     c_s : (2,) calibration factors of the model; parts : route measures by part
-    measure_index : index of the model's measure in ``wear_tables.MEASURES``
+    measure_index : index of the model's measure in ``vocabulary.WEAR_MEASURES``
     lead_share : (n,) nominal leading share; mode : (n,) running mode per row
     left_right : (n, 2) the route's left / right curve shares
     route : (n,) route names; lubricated : (n,) share of the mileage run lubricated (0/1

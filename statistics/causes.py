@@ -41,6 +41,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.cause_base import (
     Array,
     Cause,
@@ -65,7 +66,7 @@ from wearcast.statistics.causes_route import (
     WearMeasure,
     shape_coefficients,
 )
-from wearcast.statistics.residuals import REGIONS, life_ids
+from wearcast.statistics.residuals import life_ids
 
 
 class Traction(Cause):
@@ -319,7 +320,7 @@ def cause_by_code(code: str) -> Cause:
     raise ValueError(f"cause: unknown cause code {code!r}; known: {CAUSE_CODES}")
 
 
-__all__ = ["CATALOGUE", "CAUSE_CODES", "OMEGA_PER_DAY", "REGIONS", "Array", "Cause", "Composite",
+__all__ = ["CATALOGUE", "CAUSE_CODES", "OMEGA_PER_DAY", "Array", "Cause", "Composite",
            "CurveAsymmetry", "FinderData", "Mask", "NullArea", "ProfileMisalignment",
            "RunningDirection", "SeasonalFriction", "WearMeasure", "_interval",
            "cause_by_code", "cluster_covariance", "life_ids", "lubrication_flags",

@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import WEAR_MEASURES
 from wearcast.statistics.cause_base import Cause, FinderData, Mask, _levels
-from wearcast.statistics.residuals import weighted_measure
-from wearcast.statistics.wear_tables import MEASURES
+from wearcast.statistics.route_measure import weighted_measure
 
 Array = NDArray[np.float64]
 
@@ -195,7 +195,7 @@ class WearMeasure(Cause):
         return None
 
     def prepare(self, data: FinderData, rows: Mask) -> None:
-        self.other = MEASURES[1 - data.measure_index]
+        self.other = WEAR_MEASURES[1 - data.measure_index]
 
     def param_names(self) -> list[str]:
         return ["share_other_measure"]

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -618,10 +618,3 @@ def comparison_table(problem: CalibrationProblem, methods: Sequence[str] = METHO
     return compare_methods(problem, methods, predict_mileage_km=predict_mileage_km,
                            predict_wear_mm=predict_wear_mm, seed=seed, max_runs=max_runs,
                            rtol=rtol)[0]
-
-
-def with_measurement(problem: CalibrationProblem, y_mm: ArrayLike, wear_mm: ArrayLike,
-                     mileage_km: float) -> CalibrationProblem:
-    """The same problem with another measurement."""
-    return replace(problem, y_mm=np.asarray(y_mm, dtype=float),
-                   wear_mm=np.asarray(wear_mm, dtype=float), mileage_km=float(mileage_km))

@@ -38,13 +38,13 @@ scores it out of sample and names a cause only when it is specific:
    vehicle-clustered (sandwich) covariance of the fit, Student t with groups - 1 degrees of
    freedom.
 
-Pure: no I/O. Figures are matplotlib SVG strings.
+Pure: no I/O. The figures and the HTML report are in
+:mod:`wearcast.statistics.discrepancy_report`; the gain and finding types in
+:mod:`wearcast.statistics.findings`.
 """
 
 from __future__ import annotations
 
-import html
-import io
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -54,25 +54,32 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.extension import (
     ExtendedModel,
-    _json,
     apply_extension,
     correct_profile,
     correct_wear_curves,
 )
+from wearcast.statistics.findings import (
+    FinderResult,
+    Finding,
+    Gain,
+    bootstrap_gain_interval,
+    json_value,
+)
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.residuals import (
     geometric_basis,
-    leading_share,
     model_residuals,
     residual_structure,
     shape_residuals,
 )
+from wearcast.statistics.route_measure import leading_shares
 from wearcast.statistics.routes import Route
-from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table
+from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
 DEFAULT_ALPHA = 0.04
 DEFAULT_STRUCTURE_ALPHA = 0.01
@@ -81,53 +88,11 @@ DEFAULT_N_NULL = 199
 MAX_CAUSES = 3
 
 __all__ = ["Diagnosis", "ExtendedModel", "Finding", "Gain", "apply_extension", "build_data",
-           "correct_profile", "correct_wear_curves", "diagnose", "diagnosis_figures",
-           "report_html"]
+           "correct_profile", "correct_wear_curves", "diagnose"]
 
 
 @dataclass(frozen=True)
-class Gain:
-    """Held-out error before (the baseline) and after (the cause's extension).
-
-    before_error, after_error : mean squared held-out residual per measurement (log-area
-        working residual summed over both regions, or wear-curve shape residual [mm²·points])
-    relative : 1 - after / before; ci95_low, ci95_high : bootstrap interval over groups
-    calibrated_error : error of the model exactly as calibrated (area metric)
-    metric : 'log_area' or 'wear_curve_shape'
-    """
-
-    before_error: float
-    after_error: float
-    relative: float
-    ci95_low: float
-    ci95_high: float
-    calibrated_error: float
-    metric: str
-
-    def to_dict(self) -> dict[str, Any]:
-        return {k: _json(v) for k, v in self.__dict__.items()}
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One cause: plain summary, evidence, fitted extension and gain."""
-
-    cause: str
-    summary: str
-    evidence: dict[str, Any]
-    extension: dict[str, Any]
-    gain: Gain
-    significant: bool
-    material: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"cause": self.cause, "summary": self.summary, "evidence": _json(self.evidence),
-                "extension": _json(self.extension), "gain": self.gain.to_dict(),
-                "significant": self.significant, "material": self.material}
-
-
-@dataclass(frozen=True)
-class Diagnosis:
+class Diagnosis(FinderResult):
     """Result of ``diagnose``.
 
     verdict : a cause code, ``none``, ``ambiguous`` (candidates listed) or
@@ -140,12 +105,6 @@ class Diagnosis:
     nuisance : the baseline's per-vehicle, per-wheel and per-measurement standard deviations
     """
 
-    verdict: str
-    findings: tuple[Finding, ...]
-    skipped: dict[str, str]
-    n_measurements: int
-    n_groups: int
-    group_by: str
     residuals: pd.DataFrame = field(repr=False, compare=False)
     covariates: dict[str, list[Any]] = field(default_factory=dict, repr=False, compare=False)
     predictions: dict[str, list[list[float]]] = field(default_factory=dict, repr=False,
@@ -159,23 +118,19 @@ class Diagnosis:
     nuisance: dict[str, Any] = field(default_factory=dict)
     null_test: str = ""
 
-    def finding(self, cause: str) -> Finding | None:
-        return next((f for f in self.findings if f.cause == cause), None)
-
     @property
     def reported(self) -> tuple[Finding, ...]:
         """Findings of the causes named by forward selection (the verdict first)."""
         return tuple(f for c in self.selected for f in self.findings if f.cause == c)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"verdict": self.verdict, "findings": [f.to_dict() for f in self.findings],
-                "skipped": dict(self.skipped), "n_measurements": self.n_measurements,
-                "n_groups": self.n_groups, "group_by": self.group_by,
+        return {**super().to_dict(),
                 "selected": list(self.selected), "runner_up": self.runner_up,
-                "margin": _json(self.margin), "margin_p_value": _json(self.margin_p_value),
+                "margin": json_value(self.margin),
+                "margin_p_value": json_value(self.margin_p_value),
                 "candidates": list(self.candidates),
-                "unexplained": [_json(u) for u in self.unexplained],
-                "nuisance": _json(self.nuisance), "null_test": self.null_test}
+                "unexplained": [json_value(u) for u in self.unexplained],
+                "nuisance": json_value(self.nuisance), "null_test": self.null_test}
 
 
 def _lubricated_share(flags: NDArray[np.bool_] | None, history: Any
@@ -218,8 +173,8 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         frame=frame, measured=res.measured_mm2, base=res.predicted_mm2, floor=res.floor_mm2,
         mileage_km=frame["mileage_km"].to_numpy(dtype=float),
         c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
-        measure_index=MEASURES.index(model.measure),
-        lead_share=leading_share(frame["axle"].to_numpy(), res.mode), mode=res.mode,
+        measure_index=WEAR_MEASURES.index(model.measure),
+        lead_share=leading_shares(frame["axle"].to_numpy(), res.mode), mode=res.mode,
         left_right=res.left_right_shares, route=route,
         lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
                                      res.history),
@@ -386,7 +341,7 @@ def diagnose(
         if step == 0:
             nuisance = {"log_rate_sd_by_region": {"flange": {}, "tread": {}}}
             for lvl, sds in nm.sd.items():
-                for j, r in enumerate(("flange", "tread")):
+                for j, r in enumerate(REGIONS):
                     nuisance["log_rate_sd_by_region"][r][lvl] = float(sds[j])
             base_residual = residual
         base_x = full.features(data, full.theta_)
@@ -481,7 +436,7 @@ def diagnose(
     for cause in chosen:
         if cause.code in skipped:
             continue
-        covs[cause.code] = [_json(v) for v in np.asarray(cause.covariate(data)).tolist()]
+        covs[cause.code] = [json_value(v) for v in np.asarray(cause.covariate(data)).tolist()]
         if cause.metric != "shape":
             preds[cause.code] = cause.fit(data, everything).predict(data).tolist()
     preds["none"] = cz.NullArea().fit(data, everything).predict(data).tolist()
@@ -504,12 +459,8 @@ def diagnose(
 
 def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
                    rng: np.random.Generator) -> tuple[float, float]:
-    b_g = fs.group_sums(s.before, groups)
-    a_g = fs.group_sums(s.after, groups)
-    idx = rng.integers(0, b_g.size, size=(n_boot, b_g.size))
-    rel = 1.0 - a_g[idx].sum(axis=1) / np.maximum(b_g[idx].sum(axis=1), 1e-300)
-    lo, hi = np.percentile(rel, [2.5, 97.5])
-    return float(lo), float(hi)
+    return bootstrap_gain_interval(fs.group_sums(s.before, groups),
+                                   fs.group_sums(s.after, groups), n_boot, rng)
 
 
 def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
@@ -539,7 +490,7 @@ def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDAr
             out.append({"by": name, "share_of_residual": float(observed[i]),
                         "share_beyond_null": excess, "p_value": float(p_adj[i]),
                         "levels": fs.level_effects(residual, data.phi, factors[name],
-                                                   ("flange", "tread"))})
+                                                   REGIONS)})
     out.sort(key=lambda u: -u["share_beyond_null"])
     return out
 
@@ -647,107 +598,3 @@ def _confounded(cause: cz.Cause, chosen: Sequence[cz.Cause], data: cz.FinderData
         if np.std(y) > 0 and abs(np.corrcoef(x, y)[0, 1]) > 0.9:
             out.append(other.code)
     return out
-
-
-# --- figures and report -----------------------------------------------------------------------
-
-def _svg(fig: Any) -> str:
-    buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return buf.getvalue()
-
-
-def diagnosis_figures(diagnosis: Diagnosis, cause: str | None = None) -> dict[str, str]:
-    """SVG figures: residuals against the named covariate; predicted vs measured areas.
-
-    ``cause`` defaults to the verdict (or the top finding when the verdict is 'none').
-    Returns {'residuals': svg, 'predicted_vs_measured': svg}.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    code = cause or (diagnosis.verdict if diagnosis.verdict != "none" else
-                     (diagnosis.findings[0].cause if diagnosis.findings else "none"))
-    frame = diagnosis.residuals
-    out: dict[str, str] = {}
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.5), sharey=True)
-    cov = diagnosis.covariates.get(code)
-    x = np.asarray(cov if cov is not None else frame["mileage_km"].tolist(), dtype=object)
-    numeric = pd.to_numeric(pd.Series(x), errors="coerce")
-    for ax, region in zip(axes, ("flange", "tread"), strict=True):
-        y = frame[f"logres_{region}"].to_numpy()
-        if numeric.notna().all() and numeric.nunique() > 6:
-            ax.plot(numeric.to_numpy(), y, ".", alpha=0.5)
-        else:
-            levels = sorted({str(v) for v in x})
-            for i, lev in enumerate(levels):
-                sel = np.array([str(v) == lev for v in x])
-                ax.plot(np.full(sel.sum(), i) + np.linspace(-0.2, 0.2, sel.sum()), y[sel], ".",
-                        alpha=0.5)
-            ax.set_xticks(range(len(levels)), levels)
-        ax.axhline(0.0, color="k", lw=0.8)
-        ax.set_title(f"{region}: log(measured / predicted)")
-        ax.set_xlabel(code if cov is not None else "mileage_km")
-    out["residuals"] = _svg(fig)
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4))
-    meas = np.asarray(diagnosis.predictions.get("measured", []), dtype=float)
-    before = np.asarray(diagnosis.predictions.get("calibrated", []), dtype=float)
-    after = np.asarray(diagnosis.predictions.get(code, diagnosis.predictions.get("none", [])),
-                       dtype=float)
-    for j, (ax, region) in enumerate(zip(axes, ("flange", "tread"), strict=True)):
-        if meas.size:
-            ax.plot(meas[:, j], before[:, j], ".", alpha=0.5, label="calibrated model")
-            if after.size:
-                ax.plot(meas[:, j], after[:, j], ".", alpha=0.5, label=f"extended ({code})")
-            top = float(np.nanmax([meas[:, j].max(), before[:, j].max(), 1e-9]))
-            ax.plot([0, top], [0, top], "k-", lw=0.8)
-        ax.set_xlabel(f"measured {region} area [mm²]")
-        ax.set_ylabel(f"predicted {region} area [mm²]")
-        ax.legend(fontsize=7)
-    out["predicted_vs_measured"] = _svg(fig)
-    return out
-
-
-def report_html(diagnosis: Diagnosis, figures_svg: Mapping[str, str]) -> str:
-    """A self-contained HTML report: verdict, findings table, skipped causes, figures."""
-    esc = html.escape
-    rows = []
-    for f in diagnosis.findings:
-        g = f.gain
-        rows.append(
-            f"<tr><td>{esc(f.cause)}</td><td>{esc(f.summary)}</td>"
-            f"<td>{g.before_error:.4g}</td><td>{g.after_error:.4g}</td>"
-            f"<td>{100 * g.relative:.1f} % [{100 * g.ci95_low:.1f}, {100 * g.ci95_high:.1f}]</td>"
-            f"<td>{f.evidence.get('p_value', float('nan')):.2g}</td>"
-            f"<td>{'yes' if f.significant and f.material else 'no'}</td></tr>")
-    skipped = "".join(f"<li><b>{esc(k)}</b>: {esc(v)}</li>"
-                      for k, v in diagnosis.skipped.items())
-    figs = "".join(f"<h3>{esc(name.replace('_', ' '))}</h3><div>{svg}</div>"
-                   for name, svg in figures_svg.items())
-    return (
-        "<!DOCTYPE html><html><head><meta charset='utf-8'><title>wearcast diagnosis</title>"
-        "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}"
-        "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px}</style>"
-        "</head><body><h1>wearcast diagnosis</h1>"
-        f"<p>Verdict: <b>{esc(diagnosis.verdict)}</b> ({diagnosis.n_measurements} measurements, "
-        f"{diagnosis.n_groups} groups by {esc(diagnosis.group_by)})</p>"
-        + (f"<p>Runner-up: {esc(diagnosis.runner_up)}, margin "
-           f"{100 * (diagnosis.margin or 0.0):.1f} % of the baseline's held-out error "
-           f"(randomisation p = {diagnosis.margin_p_value:.3g})</p>"
-           if diagnosis.runner_up is not None and diagnosis.margin_p_value is not None else "")
-        + (f"<p>Candidates no tested margin separates: "
-           f"{esc(', '.join(diagnosis.candidates))}</p>" if diagnosis.candidates else "")
-        + "".join(f"<p>Residual structure outside the catalogue by {esc(u['by'])}: "
-                  f"{100 * u['share_of_residual']:.1f} % of the residual "
-                  f"(p = {u['p_value']:.3g})</p>" for u in diagnosis.unexplained)
-        + "<table><tr><th>cause</th><th>summary</th><th>held-out error before</th>"
-        "<th>after</th><th>relative gain [95 % CI]</th><th>p (max-T)</th><th>reported</th>"
-        "</tr>"
-        + "".join(rows) + "</table>"
-        + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
-        + f"<h2>Figures</h2>{figs}</body></html>")

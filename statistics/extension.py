@@ -19,28 +19,16 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
+from wearcast.statistics.findings import json_value
 from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
 from wearcast.statistics.residuals import geometric_basis
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable
 
 if TYPE_CHECKING:
-    from wearcast.statistics.discrepancy import Finding
-
-
-def _json(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return {str(k): _json(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json(value.tolist())
-    if isinstance(value, np.generic):
-        return _json(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    from wearcast.statistics.findings import Finding
 
 
 def build_finder_data(*args: Any, **kwargs: Any) -> cz.FinderData:
@@ -66,7 +54,7 @@ class ExtendedModel:
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "extended", "base": self.base.to_dict(), "cause": self.cause,
-                "parameters": _json(self.parameters), "log_scale": dict(self.log_scale)}
+                "parameters": json_value(self.parameters), "log_scale": dict(self.log_scale)}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ExtendedModel:
@@ -107,7 +95,7 @@ class ExtendedModel:
         g = est.log_factor(data, est.theta_)[0] if est.code != "profile_misalignment" \
             else np.zeros(2)
         return {r: math.exp(self.log_scale.get(r, 0.0) + float(g[j]))
-                for j, r in enumerate(("flange", "tread"))}
+                for j, r in enumerate(REGIONS)}
 
     def estimator(self) -> cz.Cause:
         """The fitted cause (or composite of causes) this extension carries."""
@@ -147,7 +135,7 @@ class ExtendedModel:
         s_ref = float(params["reference_mileage_km"])
         g = {r: np.where(s > 0, (np.maximum(s, 1e-9) / s_ref)
                          ** (float(params[f"beta_{r}"]) - 1.0), 1.0)
-             for r in ("flange", "tread")}
+             for r in REGIONS}
         fa = out.flange_area_mm2 * g["flange"][None, :]
         ta = out.tread_area_mm2 * g["tread"][None, :]
         median = out.quantiles.index(0.5)

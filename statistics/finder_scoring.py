@@ -22,7 +22,7 @@ Pure numpy/pandas.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import product
 from typing import Any
@@ -324,7 +324,3 @@ def level_effects(residual: Array, weight: Array, factor: NDArray[Any],
             row[f"{col}_rate_change_pct"] = 100.0 * float(np.expm1(u))
         out.append(row)
     return out
-
-
-def to_json_map(values: Mapping[str, Any]) -> dict[str, Any]:
-    return {str(k): v for k, v in values.items()}

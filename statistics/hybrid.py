@@ -2,7 +2,7 @@
 
 * Weighted wear measure of a route (seed 001 eq. 2): P = sum_i c_i P_i, c_i the route share
   of curve class i, P_i the curve-radius table value for the wheel's bogie type, wheelset
-  position, rail and region.
+  position, rail and region (:mod:`wearcast.statistics.route_measure`).
 * Calibration (eq. 3): k_m = c_s P_m. With calibration wheels that see different P_j (other
   bogie types, axles, sides or routes) we fit the through-origin slope of wear area against
   P_j s_j over all calibration measurements (the same robust fan-shaped fit as the wear rate,
@@ -27,12 +27,14 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
 from wearcast.statistics.profile_parameters import (
     BACK_FACE_Y_MM,
     BatchGrid,
     flange_parameters_batch,
 )
-from wearcast.statistics.routes import DIRECTIONS, Route, rail_for
+from wearcast.statistics.route_measure import UnknownBogieTypeError, weighted_wear_measure
+from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, DEFAULT_SPLIT_Y_MM
 from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, normal_quantile
 from wearcast.statistics.wear_states import (
@@ -41,17 +43,8 @@ from wearcast.statistics.wear_states import (
     interpolation_weights,
     join_regions,
 )
-from wearcast.statistics.wear_tables import (
-    _RADIUS_RTOL,
-    MEASURES,
-    RAILS,
-    REGIONS,
-    WearTable,
-    compile_wear_table,
-    table_value,
-)
+from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
-RUNNING_MODES = ("lead", "mixed")
 #: Profiles for Sd/Sh/qR alone are built up to this y [mm] (flange tip, face and the Sd and
 #: qR points of any plausibly worn flange) plus the tape circle; see ``parameters_at_areas``.
 PARAMETER_MAX_Y_MM = -10.0
@@ -62,123 +55,9 @@ MEASUREMENT_COLUMNS = (
 )
 
 
-class UnknownBogieTypeError(ValueError):
-    """The model (its wear table) does not cover the requested bogie type."""
-
-
 def _check_choice(value: Any, allowed: Sequence[Any], name: str) -> None:
     if value not in allowed:
         raise ValueError(f"{name}: must be one of {tuple(allowed)}, got {value!r}")
-
-
-def wheelset_weights(axle: int, running_mode: str) -> dict[str, float]:
-    """Share of the distance a wheelset runs leading/trailing (seed 001 §4).
-
-    ``lead``: axle 1 always leads, axle 2 always trails; ``mixed``: each leads half the time.
-    """
-    _check_choice(axle, (1, 2), "axle")
-    _check_choice(running_mode, RUNNING_MODES, "running_mode")
-    if running_mode == "mixed":
-        return {"leading": 0.5, "trailing": 0.5}
-    return {"leading": 1.0} if axle == 1 else {"trailing": 1.0}
-
-
-def weighted_wear_measure(
-    route: Route,
-    table: pd.DataFrame | WearTable,
-    *,
-    bogie_type: str,
-    axle: int,
-    side: str,
-    running_mode: str,
-    region: str,
-    measure: str,
-) -> float:
-    """Weighted wear measure P = sum_i c_i P_i of a wheel on a route (seed 001 eq. 2).
-
-    Parameters
-    ----------
-    route : curve classes with their shares c_i
-    table : curve-radius table (long DataFrame or compiled)
-    bogie_type : bogie type in the table
-    axle : 1 or 2, the wheelset's position in its bogie (docs/conventions.md "Sides and curves")
-    side : 'left' or 'right' side of the vehicle
-    running_mode : 'lead' (axle 1 always leads) or 'mixed' (half leading, half trailing)
-    region : 'flange' or 'tread'
-    measure : 'tau_max' or 't_gamma'
-
-    Returns
-    -------
-    P in the unit of the table's measure. The rail of each class is tangent on tangent
-    track; in a curve bending towards the wheel's side the wheel runs on the low rail,
-    otherwise on the high rail (in a left curve the right wheels run on the high rail).
-
-    Raises RadiusOutOfTableError for a class tighter than the table covers.
-    """
-    _check_choice(side, DIRECTIONS, "side")
-    _check_choice(region, REGIONS, "region")
-    _check_choice(measure, MEASURES, "measure")
-    wt = compile_wear_table(table)
-    if bogie_type not in wt.bogie_types:
-        raise UnknownBogieTypeError(
-            f"bogie_type: {bogie_type!r} is not in the wear table (has {wt.bogie_types})"
-        )
-    weights = wheelset_weights(axle, running_mode)
-    fast = _weighted_measure_vectorised(route, wt, bogie_type, weights, side, region, measure)
-    if fast is not None:
-        return fast
-    # one class at a time: raises the error of the first class the table does not cover
-    total = 0.0
-    for c in route.classes:
-        if c.share == 0.0:
-            continue
-        rail = rail_for(c, side)
-        p_i = sum(
-            w * table_value(wt, bogie_type, ws, rail, c.radius_m, region, measure)
-            for ws, w in weights.items()
-        )
-        total += c.share * p_i
-    return total
-
-
-def _weighted_measure_vectorised(route: Route, wt: WearTable, bogie_type: str,
-                                 weights: Mapping[str, float], side: str, region: str,
-                                 measure: str) -> float | None:
-    """P = sum_i c_i P_i with one interpolation per (wheelset, rail) instead of per class.
-
-    The same arithmetic as the class-by-class loop of :func:`weighted_wear_measure` (same
-    interpolation in curvature, same order of the sum), hence the same float; None when a
-    class is not covered by the table, so that the loop raises its error.
-    """
-    classes = [c for c in route.classes if c.share != 0.0]
-    if not classes:
-        return 0.0
-    rails = np.array([rail_for(c, side) for c in classes])
-    curvature = np.array([0.0 if c.radius_m is None else 1.0 / c.radius_m for c in classes])
-    p = np.zeros(len(classes))
-    for ws, w in weights.items():
-        values = np.empty(len(classes))
-        for rail in RAILS:
-            sel = rails == rail
-            if not sel.any():
-                continue
-            if rail == "tangent":
-                tangent = wt.tangent.get((bogie_type, ws, region, measure))
-                if tangent is None:
-                    return None
-                values[sel] = tangent
-                continue
-            table_k = wt.curves.get((bogie_type, ws, rail, region, measure))
-            if table_k is None:
-                return None
-            k_table, v_table = table_k
-            k = curvature[sel]
-            if np.any(k > k_table[-1] * (1.0 + _RADIUS_RTOL)):
-                return None
-            values[sel] = np.interp(np.minimum(k, k_table[-1]), k_table, v_table)
-        p = p + w * values
-    shares = np.array([c.share for c in classes])
-    return float(sum((shares * p).tolist()))
 
 
 @dataclass(frozen=True)
@@ -537,7 +416,7 @@ def calibrate(
     HybridModel with wear states, per-region wear rate k_m, mean P_m and c_s (module
     docstring: the through-origin slope of area on P_j s_j, = k_m / P_m for equal P_j).
     """
-    _check_choice(measure, MEASURES, "measure")
+    _check_choice(measure, WEAR_MEASURES, "measure")
     _check_choice(running_mode, RUNNING_MODES, "running_mode")
     if not isinstance(measurements, pd.DataFrame):
         raise ValueError("measurements: must be a pandas DataFrame")
@@ -698,7 +577,8 @@ def region_rates(model: HybridModel, route: Route, table: pd.DataFrame | WearTab
         weighted_measures = model_weighted_measures(model, route, table, bogie_type=bogie_type,
                                                     axle=axle, side=side)
     z = normal_quantile(np.asarray(quantiles, dtype=float))
-    p_s, rates = {}, {}
+    p_s: dict[str, float] = {}
+    rates: dict[str, NDArray] = {}
     for r in REGIONS:
         cal = model.region(r)
         p_s[r] = float(weighted_measures[r])
@@ -811,7 +691,7 @@ def predict(
     q = tuple(float(v) for v in quantiles)
     if 0.5 not in q:
         raise ValueError("quantiles: must include 0.5 (the median drives the wear curves)")
-    start = {r: 0.0 for r in REGIONS}
+    start: dict[str, float] = {r: 0.0 for r in REGIONS}
     if start_areas_mm2:
         for r, v in start_areas_mm2.items():
             _check_choice(r, REGIONS, "start_areas_mm2")

@@ -35,6 +35,13 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
+from wearcast.statistics.findings import (
+    FinderResult,
+    Finding,
+    Gain,
+    bootstrap_gain_interval,
+)
+
 DEFAULT_ALPHA = 0.05
 DEFAULT_MIN_RELATIVE_GAIN = 0.05
 #: Measured column -> simulation quantity.
@@ -100,59 +107,14 @@ NOT_BUILT = {
 
 
 @dataclass(frozen=True)
-class PhysicsGain:
-    """Held-out error before (null: scale only) and after (the cause's extension) [mm^2 per
-    point, FT and qR], relative gain and its 95 % bootstrap interval."""
-
-    before_error: float
-    after_error: float
-    relative: float
-    ci95_low: float
-    ci95_high: float
-    metric: str = "ft_qr_squared_error_mm2"
-
-    def to_dict(self) -> dict[str, Any]:
-        return {k: float(v) if isinstance(v, (float, np.floating)) else v
-                for k, v in self.__dict__.items()}
-
-
-@dataclass(frozen=True)
-class PhysicsFinding:
-    cause: str
-    summary: str
-    evidence: dict[str, Any]
-    extension: dict[str, Any]
-    gain: PhysicsGain
-    significant: bool
-    material: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"cause": self.cause, "summary": self.summary, "evidence": self.evidence,
-                "extension": self.extension, "gain": self.gain.to_dict(),
-                "significant": self.significant, "material": self.material}
-
-
-@dataclass(frozen=True)
-class PhysicsDiagnosis:
+class PhysicsDiagnosis(FinderResult):
     """verdict (cause or ``none``), findings ranked by gain, skipped causes with reasons, the
     null model's fitted scale on all data and its error per vehicle."""
 
-    verdict: str
-    findings: tuple[PhysicsFinding, ...]
-    skipped: dict[str, str]
-    n_measurements: int
-    n_groups: int
-    group_by: str
     null_fit: dict[str, Any] = field(default_factory=dict)
 
-    def finding(self, cause: str) -> PhysicsFinding | None:
-        return next((f for f in self.findings if f.cause == cause), None)
-
     def to_dict(self) -> dict[str, Any]:
-        return {"verdict": self.verdict, "findings": [f.to_dict() for f in self.findings],
-                "skipped": dict(self.skipped), "n_measurements": self.n_measurements,
-                "n_groups": self.n_groups, "group_by": self.group_by,
-                "null_fit": self.null_fit}
+        return {**super().to_dict(), "null_fit": self.null_fit}
 
 
 class _Series:
@@ -294,7 +256,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     unit = vehicles if group_by == "vehicle" else np.arange(km.size).astype(str)
     units = np.unique(unit)
     pvals: list[float] = []
-    findings: list[tuple[PhysicsCause, PhysicsGain, dict[str, Any], float]] = []
+    findings: list[tuple[PhysicsCause, Gain, dict[str, Any], float]] = []
     for cause, after in rows:
         d_units = np.array([np.sum(before[unit == u] - after[unit == u]) for u in units])
         b_units = np.array([np.sum(before[unit == u]) for u in units])
@@ -304,15 +266,11 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         else:
             p = float(stats.ttest_1samp(d_units, 0.0, alternative="greater").pvalue)
         pvals.append(p if np.isfinite(p) else 1.0)
-        pick = rng.integers(0, units.size, (n_bootstrap, units.size))
-        bb = b_units[pick].sum(axis=1)
-        boot = np.where(bb > 0, 1.0 - a_units[pick].sum(axis=1) / np.where(bb > 0, bb, 1.0),
-                        0.0)
+        lo, hi = bootstrap_gain_interval(b_units, a_units, n_bootstrap, rng)
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
-        lo, hi = np.percentile(boot, [2.5, 97.5])
         theta, scale, sse = _fit(_blends(cause, runs[cause.name]), km, y, cols)
-        findings.append((cause, PhysicsGain(float(before.mean()), float(after.mean()),
-                                            float(rel), float(lo), float(hi)),
+        findings.append((cause, Gain(float(before.mean()), float(after.mean()), float(rel), lo,
+                                     hi, metric="ft_qr_squared_error_mm2"),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
                           "null_value": cause.null}, p))
     adj = _holm(pvals) if pvals else np.array([])
@@ -320,7 +278,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     for (cause, gain, ext, p), p_holm in zip(findings, adj, strict=True):
         significant = bool(p_holm < alpha and gain.ci95_low > 0)
         material = bool(gain.relative >= min_relative_gain)
-        out.append(PhysicsFinding(
+        out.append(Finding(
             cause.name, cause.summary,
             {"p_value": p, "p_holm": float(p_holm), "test_groups": group_by,
              "values_run": [v for v in cause.values]},

@@ -1,21 +1,9 @@
-"""Flange parameters Sd, Sh, qR of a wheel profile and their in-service limits.
+"""In-service limits of the flange parameters Sd, Sh, qR and the parameters of a wear curve.
 
-Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm;
-docs/conventions.md
-"Conventions"; ``reference/README.md`` "Wheel limits"), in the wheel frame y [mm] from the
-tape circle (back face at y = -70), z [mm] up towards the flange tip:
-
-* Sh, flange height: flange-tip height minus the tape-circle height z(0);
-* Sd, flange thickness: distance from the back face (y = -70) to the flange face (the
-  field-side flank of the flange) at 10 mm above the tape-circle height;
-* qR, flange slope measure: horizontal distance between the flange-face point 2 mm below the
-  tip and the Sd point.
-
-For S1002 new (EN 13715) these are 32.50 / 28.00 / 10.80 mm.
-
-The parameters themselves are computed in the physics core
-(:mod:`wearcast.physics.profiles.parameters`, also used by the wear loop) and re-exported here;
-this module adds the in-service limits and the parameters of a wear curve.
+The parameters and their definitions (EN 15313 / MiniProf; docs/conventions.md "Profile
+parameters and limits") are the physics core's (:mod:`wearcast.physics.profiles.parameters`,
+also used by the wear loop), re-exported here; this module adds the in-service limits
+(:class:`WheelLimits`) and the parameters of a profile given as a wear curve.
 """
 
 from __future__ import annotations
@@ -51,8 +39,9 @@ class WheelLimits:
     """In-service limits of the flange parameters [mm]; override any of them.
 
     Defaults: German EBO Anlage 6 (also Austrian EisbBBV Anlage 2; EN 15313 governs) as
-    summarised in ``reference/README.md`` "Wheel limits": flange thickness Sd >= 22 mm for
-    international traffic (20 mm domestic), flange height Sh <= 36 mm, qR >= 6.5 mm.
+    summarised in docs/conventions.md "Profile parameters and limits": flange thickness
+    Sd >= 22 mm for international traffic (20 mm domestic), flange height Sh <= 36 mm,
+    qR >= 6.5 mm.
     """
 
     sd_min_mm: float = 22.0

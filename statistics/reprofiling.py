@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.hybrid import (
     HybridModel,
     parameters_at_areas,
@@ -39,7 +40,7 @@ from wearcast.statistics.hybrid import (
 )
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 from wearcast.statistics.routes import Route
-from wearcast.statistics.wear_tables import REGIONS, WearTable
+from wearcast.statistics.wear_tables import WearTable
 
 LIMIT_NAMES = ("sd", "sh", "qr")
 DEFAULT_HORIZON_KM = 3_000_000.0
@@ -430,7 +431,7 @@ def reprofiling_mileage(
     lim = _as_limits(limits)
     if not (math.isfinite(horizon_km) and horizon_km > 0):
         raise ValueError("horizon_km: must be finite and > 0")
-    start = {r: 0.0 for r in REGIONS}
+    start: dict[str, float] = {r: 0.0 for r in REGIONS}
     for r, v in (start_areas or {}).items():
         if r not in REGIONS:
             raise ValueError(f"start_areas.{r}: unknown region (flange, tread)")
@@ -465,7 +466,7 @@ def reprofiling_mileage(
             reason = f"no limit is crossed within the horizon of {horizon_km:g} km"
     elif median.mileage_km == 0.0:
         reason = "a limit is already crossed at the start state"
-    equivalent = {
+    equivalent: dict[str, float] = {
         r: (start[r] / float(rates[r][1]) if rates[r][1] > 0 else (0.0 if start[r] == 0
                                                                   else math.inf))
         for r in REGIONS
@@ -565,7 +566,7 @@ def parameter_corridor(
     s = np.asarray(mileage_km, dtype=float)
     if s.ndim != 1 or not np.all(np.isfinite(s)) or np.any(s < 0):
         raise ValueError("mileage_km: must be finite mileages >= 0")
-    start = {r: float((start_areas or {}).get(r, 0.0) or 0.0) for r in REGIONS}
+    start: dict[str, float] = {r: float((start_areas or {}).get(r, 0.0) or 0.0) for r in REGIONS}
     _, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
                             quantiles=(0.9, 0.5, 0.1), weighted_measures=weighted_measures)
     params, _, extra = _evaluate(model, start, rates, DEFAULT_LIMITS,

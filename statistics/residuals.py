@@ -30,16 +30,13 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.statistics.hybrid import RUNNING_MODES, HybridModel
-from wearcast.statistics.routes import Route, rail_for
+from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
+from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.route_measure import leading_shares, route_parts, weighted_measure
+from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_states import join_regions, wear_curves_at_areas
-from wearcast.statistics.wear_tables import MEASURES, WearTable, compile_wear_table, table_value
+from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
-#: Region order of every (n, 2) array in this module and the finder.
-REGIONS = ("flange", "tread")
-WHEELSETS = ("leading", "trailing")
-#: Curve-direction parts of a route: tangent track, curves bending left, curves bending right.
-PARTS = ("tangent", "left", "right")
 REQUIRED_COLUMNS = ("wheel_id", "bogie_type", "axle", "side", "mileage_km",
                     "flange_area_mm2", "tread_area_mm2")
 FLOOR_FRACTION = 0.1
@@ -77,38 +74,11 @@ def check_measurements(measurements: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
-def route_parts(route: Route, table: WearTable, *, bogie_type: str, side: str,
-                region: str, measure: str) -> NDArray[np.float64]:
-    """Route's wear measure split by wheelset and curve direction (seed 001 eq. 2 by parts).
-
-    Returns (2, 3): rows leading/trailing, columns tangent/left/right, each sum_i c_i P_i over
-    the route's classes of that direction; their sum over columns is the P of a wheel that
-    always leads (row 0) or always trails (row 1).
-    """
-    out = np.zeros((2, 3))
-    for c in route.classes:
-        if c.share == 0.0:
-            continue
-        part = 0 if c.radius_m is None else PARTS.index(str(c.direction))
-        rail = rail_for(c, side)
-        for w, ws in enumerate(WHEELSETS):
-            out[w, part] += c.share * table_value(table, bogie_type, ws, rail, c.radius_m,
-                                                  region, measure)
-    return out
-
-
 def curve_shares(route: Route) -> tuple[float, float]:
     """(left, right) shares of the route length in curves bending left / right [-]."""
     left = sum(c.share for c in route.classes if c.direction == "left")
     right = sum(c.share for c in route.classes if c.direction == "right")
     return float(left), float(right)
-
-
-def leading_share(axle: ArrayLike, running_mode: ArrayLike) -> NDArray[np.float64]:
-    """Share of distance the wheelset runs leading: lead mode 1 (axle 1) / 0 (axle 2), mixed 0.5."""
-    a = np.asarray(axle)
-    mode = np.asarray(running_mode)
-    return np.where(mode == "mixed", 0.5, np.where(a == 1, 1.0, 0.0))
 
 
 @dataclass(frozen=True)
@@ -215,7 +185,7 @@ def model_residuals(
             if bogie not in wt.bogie_types:
                 raise ValueError(f"bogie_type: {bogie!r} (row {i}) is not in the wear table")
             block = np.zeros((2, 2, 2, 3))
-            for m, measure in enumerate(MEASURES):
+            for m, measure in enumerate(WEAR_MEASURES):
                 if measure not in wt.measures:
                     block[m] = np.nan
                     continue
@@ -228,8 +198,8 @@ def model_residuals(
     if history is not None:   # wear accrued on the routes of the life's earlier intervals
         parts = np.asarray(history @ parts.reshape(n, -1)).reshape(parts.shape)
         shares = np.asarray(history @ shares)
-    lead = leading_share(df["axle"].to_numpy(), mode)
-    p = weighted_measure(parts, lead, MEASURES.index(model.measure))
+    lead = leading_shares(df["axle"].to_numpy(), mode)
+    p = weighted_measure(parts, lead, WEAR_MEASURES.index(model.measure))
     mileage = df["mileage_km"].to_numpy()
     c_s = np.array([model.flange.c_s, model.tread.c_s])
     predicted = c_s[None, :] * p * mileage[:, None]
@@ -314,22 +284,6 @@ def route_history_weights(frame: pd.DataFrame, mileage_km: NDArray[np.float64]) 
             vals += list(inc[:j + 1] / s[j])
     n = len(frame)
     return sparse.csr_matrix((vals, (rows, cols)), shape=(n, n))
-
-
-def weighted_measure(parts: NDArray[np.float64], lead_share: ArrayLike, measure_index: int,
-                     left_right: ArrayLike | None = None) -> NDArray[np.float64]:
-    """P per measurement and region (n, 2) from the route parts (seed 001 eq. 2).
-
-    lead_share : (n,) share of distance the wheelset leads (P = p P_lead + (1 - p) P_trail)
-    left_right : optional (n, 2) weights multiplying the left and right curve parts
-    """
-    block = parts[:, measure_index]                      # (n, region, wheelset, part)
-    lw = np.ones((block.shape[0], 3))
-    if left_right is not None:
-        lw[:, 1:] = np.asarray(left_right, dtype=float)
-    per_ws = np.einsum("nrwp,np->nrw", block, lw)
-    p = np.asarray(lead_share, dtype=float)
-    return per_ws[:, :, 0] * p[:, None] + per_ws[:, :, 1] * (1.0 - p[:, None])
 
 
 def model_wear_curves(model: HybridModel, areas_mm2: ArrayLike) -> NDArray[np.float64]:

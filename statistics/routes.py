@@ -21,9 +21,10 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.vehicles import GRAVITY_M_S2
+from wearcast.physics.vocabulary import DIRECTIONS, RAILS, SIDES, Rail
+from wearcast.physics.vocabulary import rail_for as vocabulary_rail_for
 
 SHARE_TOLERANCE = 1e-3
-DIRECTIONS = ("left", "right")
 #: Speed rules of :func:`route_from_segments`: length-weighted mean of the segments' speeds, or
 #: the seed 003 §5.3 rule (speed from a non-compensated acceleration at the class's
 #: representative radius and cant, capped).
@@ -380,20 +381,20 @@ def route_from_segments(
 
 def route_share_by_rail(route: Route, side: str) -> dict[str, float]:
     """Share of a route on which a wheel on ``side`` runs on the high, low or tangent rail."""
-    if side not in DIRECTIONS:
+    if side not in SIDES:
         raise ValueError(f"side: must be 'left' or 'right', got {side!r}")
-    out = {"high": 0.0, "low": 0.0, "tangent": 0.0}
+    out: dict[str, float] = dict.fromkeys(RAILS, 0.0)
     for c in route.classes:
         out[rail_for(c, side)] += c.share
     return out
 
 
-def rail_for(route_class: RouteClass, side: str) -> str:
+def rail_for(route_class: RouteClass, side: str) -> Rail:
     """Rail a wheel on ``side`` runs on in this class: 'tangent', 'high' or 'low'.
 
-    docs/conventions.md "Sides and curves": in a left curve the right wheels run on the high (outer)
-    rail and the left wheels on the low rail; mirrored in a right curve.
+    The rail rule of :func:`wearcast.physics.vocabulary.rail_for` (docs/conventions.md "Sides
+    and curves": in a left curve the right wheels run on the high (outer) rail and the left
+    wheels on the low rail; mirrored in a right curve).
     """
-    if route_class.radius_m is None:
-        return "tangent"
-    return "low" if route_class.direction == side else "high"
+    direction = None if route_class.radius_m is None else route_class.direction
+    return vocabulary_rail_for(direction, side)  # type: ignore[arg-type]

@@ -29,8 +29,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import uniform_filter1d
 
-REGIONS = ("flange", "tread")
-
 
 def region_mask(grid_y_mm: ArrayLike, split_y_mm: float, region: str) -> NDArray[np.bool_]:
     """Grid points of a region: flange y < split, tread y >= split (docs/conventions.md)."""

@@ -14,21 +14,18 @@ once with :func:`compile_wear_table`; every function here accepts either form.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 
-TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
-WHEELSETS = ("leading", "trailing")
-RAILS = ("high", "low", "tangent")
-REGIONS = ("flange", "tread")
-MEASURES = ("tau_max", "t_gamma")
+from wearcast.physics.vocabulary import BOGIE_TYPES, RAILS, REGIONS, WEAR_MEASURES, WHEELSETS
 
-# relative slack on the table's smallest radius (rounding of uploaded radii)
-_RADIUS_RTOL = 1e-9
+TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
+#: Relative slack on the table's smallest radius (rounding of uploaded radii) [-].
+RADIUS_RTOL = 1e-9
 
 
 class RadiusOutOfTableError(ValueError):
@@ -71,7 +68,7 @@ def validate_wear_table(table: pd.DataFrame) -> pd.DataFrame:
         ("wheelset", WHEELSETS),
         ("rail", RAILS),
         ("region", REGIONS),
-        ("measure", MEASURES),
+        ("measure", WEAR_MEASURES),
     ):
         values = df[column].astype(str).str.strip().str.lower()
         bad = ~values.isin(allowed)
@@ -217,7 +214,7 @@ def table_value(
         raise ValueError(f"radius_m: must be > 0, got {radius}")
     curvature, values = wt.curves[key]
     k = 1.0 / radius
-    if k > curvature[-1] * (1.0 + _RADIUS_RTOL):
+    if k > curvature[-1] * (1.0 + RADIUS_RTOL):
         raise RadiusOutOfTableError(radius, 1.0 / curvature[-1], key)
     return float(np.interp(min(k, curvature[-1]), curvature, values))
 
@@ -230,3 +227,29 @@ def wear_table_to_records(table: pd.DataFrame | WearTable) -> list[dict[str, Any
         if isinstance(r["radius_m"], float) and math.isnan(r["radius_m"]):
             r["radius_m"] = None
     return records
+
+
+#: A wear measure as a function of (bogie_type, wheelset, rail, radius_m, region, measure);
+#: ``radius_m`` None on tangent track.
+MeasureFunction = Callable[[str, str, str, float | None, str, str], float]
+
+
+def sample_wear_table(measure_function: MeasureFunction, radii_m: Sequence[float],
+                      decimals: int = 5) -> pd.DataFrame:
+    """The long curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling an
+    analytic wear measure at ``radii_m`` [m] for both bogie types, wheelset positions,
+    measures and regions: one tangent row (unrounded) and one row per high/low rail and radius
+    (rounded to ``decimals``)."""
+    rows = []
+    for bogie in BOGIE_TYPES:
+        for ws in WHEELSETS:
+            for measure in WEAR_MEASURES:
+                for region in REGIONS:
+                    rows.append((bogie, ws, "tangent", np.nan, region, measure,
+                                 measure_function(bogie, ws, "tangent", None, region, measure)))
+                    for rail in ("high", "low"):
+                        for r in radii_m:
+                            value = measure_function(bogie, ws, rail, r, region, measure)
+                            rows.append((bogie, ws, rail, r, region, measure,
+                                         round(value, decimals)))
+    return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))

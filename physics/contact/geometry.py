@@ -91,6 +91,10 @@ class WheelsetTrack:
     rail_inclination : inclination slope (1/40, 1/20; 0 for a rail given already inclined)
     wheel_sample_mm : arc-length spacing of the wheel samples of the contact search [mm]; the
         gap minimum is refined by a parabola between samples
+    rail_gauge_point_mm : the rails' gauge point (y, z) in the upright rail frame [mm], when
+        it is known and the rail curve does not reach it (a measured head whose lip overhangs
+        the gauge face: the curve is what a wheel can touch, the gauge point lies under the
+        lip); None finds it on the curve, ``gauge_height_mm`` below the inclined top
     """
 
     wheel: ProfileCurve
@@ -104,6 +108,7 @@ class WheelsetTrack:
     gauge_height_mm: float = 14.0
     rail_inclination: float = 1.0 / 40.0
     wheel_sample_mm: float = 0.2
+    rail_gauge_point_mm: tuple[float, float] | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -142,13 +147,17 @@ class _Side:
 
 
 def _rail_envelope(rail: ProfileCurve, inclination: float, gauge_mm: float,
-                   gauge_height_mm: float, sign: float
+                   gauge_height_mm: float, sign: float,
+                   gauge_point_mm: tuple[float, float] | None = None
                    ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray, float]:
     s = rail.sample(0.05)
     y_r, z_r = rail.point(s)
     alpha = np.arctan(inclination)
     y_i = y_r * np.cos(alpha) - z_r * np.sin(alpha)
     z_i = y_r * np.sin(alpha) + z_r * np.cos(alpha)
+    if gauge_point_mm is not None:  # given (upright frame): turned with the rail
+        y_gauge = gauge_point_mm[0] * np.cos(alpha) - gauge_point_mm[1] * np.sin(alpha)
+        return _placed(y_i, z_i, s, float(gauge_mm / 2.0 - y_gauge), sign)
     # gauge point: innermost point gauge_height_mm below the top of the inclined rail
     z_gauge = z_i.max() - gauge_height_mm
     top = int(np.argmax(z_i))
@@ -159,7 +168,13 @@ def _rail_envelope(rail: ProfileCurve, inclination: float, gauge_mm: float,
     k = below[-1]
     frac = (z_gauge - z_i[k]) / (z_i[k + 1] - z_i[k])
     y_gauge = y_i[k] + frac * (y_i[k + 1] - y_i[k])
-    offset = gauge_mm / 2.0 - y_gauge
+    return _placed(y_i, z_i, s, float(gauge_mm / 2.0 - y_gauge), sign)
+
+
+def _placed(y_i: _FloatArray, z_i: _FloatArray, s: _FloatArray, offset: float, sign: float
+            ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray, float]:
+    """The inclined rail placed at ``offset`` from the track centre on side ``sign``: its
+    upper envelope in track y (ascending), heights, slopes, arc lengths and the offset."""
     y_t = sign * (offset + y_i)
     # upper envelope seen from above: keep points that advance in track y
     order = np.arange(y_t.size) if sign > 0 else np.arange(y_t.size)[::-1]
@@ -179,7 +194,8 @@ def _prepare(wt: WheelsetTrack) -> tuple[_Side, _Side]:
         s_w = wheel.sample(wt.wheel_sample_mm)
         y_w, z_w = wheel.point(s_w)
         ry, rz, rslope, rs, offset = _rail_envelope(rail, wt.rail_inclination, wt.gauge_mm,
-                                                    wt.gauge_height_mm, sign)
+                                                    wt.gauge_height_mm, sign,
+                                                    wt.rail_gauge_point_mm)
         sides.append(_Side(sign, wheel, rail, s_w,
                            sign * (wt.tape_circle_distance_mm / 2.0 + y_w),
                            -(wt.nominal_radius_mm + z_w), ry, rz, rslope, rs, offset,
@@ -284,22 +300,27 @@ def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray
     lo, hi = np.full(n, -0.1), np.full(n, 0.1)
     roll = np.zeros(n)
     gap = np.zeros(n)
+    active = np.arange(n)  # rows still iterating (a converged row is not evaluated again)
     for _ in range(max_iter):
-        g_left, d_left = _min_gap(sides[0], shift, roll, yaw, r0)
-        g_right, d_right = _min_gap(sides[1], shift, roll, yaw, r0)
+        sa, ra, ya = shift[active], roll[active], yaw[active]
+        g_left, d_left = _min_gap(sides[0], sa, ra, ya, r0)
+        g_right, d_right = _min_gap(sides[1], sa, ra, ya, r0)
         f = g_left - g_right
-        gap = 0.5 * (g_left + g_right)
+        gap[active] = 0.5 * (g_left + g_right)
         if not np.all(np.isfinite(f)):
             raise ValueError("a wheel is off its rail for some shift (no rail under the wheel)")
-        if np.all(np.abs(f) < tol_mm):
+        done = np.abs(f) < tol_mm
+        if np.all(done):
             break
-        hi = np.where(f > 0, roll, hi)
-        lo = np.where(f <= 0, roll, lo)
+        la = np.where(f <= 0, ra, lo[active])
+        ha = np.where(f > 0, ra, hi[active])
         df = d_left - d_right
         with np.errstate(divide="ignore", invalid="ignore"):
-            step = roll - f / df
-        bad = ~np.isfinite(step) | (step <= lo) | (step >= hi) | (df <= 0)
-        roll = np.where(np.abs(f) < tol_mm, roll, np.where(bad, 0.5 * (lo + hi), step))
+            step = ra - f / df
+        bad = ~np.isfinite(step) | (step <= la) | (step >= ha) | (df <= 0)
+        lo[active], hi[active] = la, ha
+        roll[active] = np.where(done, ra, np.where(bad, 0.5 * (la + ha), step))
+        active = active[~done]
     return roll, gap
 
 

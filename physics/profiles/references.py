@@ -56,8 +56,9 @@ S1002_FLANGE_THICKNESS_MM = 32.5
 S1002_FLANGE_THICKNESSES_MM = (32.5, 31.5, 30.5, 29.5, 28.5)
 #: Thinnest variant the construction accepts [mm].
 S1002_MIN_FLANGE_THICKNESS_MM = 28.5
-#: Lateral start of the translated zones (S1002 section C, the flange-root connection) [mm].
-_ROOT_Y_MM = -26.0
+#: Lateral start of the translated zones (S1002 section C, the flange-root connection), where
+#: the tread ends [mm].
+S1002_ROOT_Y_MM = -26.0
 #: The flange-back arc of S1002 (section H): z = A + sqrt(R^2 - (y + C)^2).
 _H_A, _H_R, _H_C = 9.519259302, 20.5, 49.5
 
@@ -123,16 +124,16 @@ def s1002_variant_height(flange_thickness_mm: float) -> HeightFunction:
     if e == S1002_FLANGE_THICKNESS_MM:
         return s1002_height_mm
     delta = S1002_FLANGE_THICKNESS_MM - e
-    root_z = float(s1002_height_mm(np.array([_ROOT_Y_MM]))[0])
+    root_z = float(s1002_height_mm(np.array([S1002_ROOT_Y_MM]))[0])
 
     def height(y_mm: ArrayLike) -> NDArray[np.float64]:
         y = np.asarray(y_mm, dtype=float)
         tread = s1002_height_mm(y)
-        moved = s1002_height_mm(np.minimum(y + delta, _ROOT_Y_MM - 1e-9))
+        moved = s1002_height_mm(np.minimum(y + delta, S1002_ROOT_Y_MM - 1e-9))
         back = np.where(y <= -_H_C, _flange_back_mm(y), np.inf)
         flange = np.minimum(moved, back)
-        z = np.where(y >= _ROOT_Y_MM, tread,
-                     np.where(y >= _ROOT_Y_MM - delta, root_z, flange))
+        z = np.where(y >= S1002_ROOT_Y_MM, tread,
+                     np.where(y >= S1002_ROOT_Y_MM - delta, root_z, flange))
         inside = (y >= S1002_Y_MIN_MM) & (y <= S1002_Y_MAX_MM)
         return np.where(inside, z, np.nan)
 

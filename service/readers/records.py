@@ -19,16 +19,13 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import date
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from wearcast.physics.vocabulary import RUNNING_MODES, BogieType, RunningMode, Side
 from wearcast.service.readers.errors import ImportFileError
-
-BogieType = Literal["motor", "trailer"]
-Side = Literal["left", "right"]
-RunningMode = Literal["lead", "mixed"]
 
 REQUIRED_META_COLUMNS: tuple[str, ...] = (
     "wheel_id", "vehicle_id", "bogie_type", "axle", "side", "mileage_km")
@@ -220,7 +217,7 @@ CONVERTERS: dict[str, Callable[[str], object]] = {
     "side": _spelled("side"),
     "measured_on": _iso_date,
     "route_id": _text,
-    "running_mode": _enum("lead", "mixed"),
+    "running_mode": _enum(*RUNNING_MODES),
     "instrument_id": _text,
     "load_t": _positive_float,
     "reference_profile": _text,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Path, Query, Request
+from fastapi import APIRouter, Path, Query, Request, Response
 from pydantic import BaseModel
 from sqlalchemy import select
 
@@ -14,6 +14,7 @@ from wearcast.service import job_store
 from wearcast.service import models_db as db
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import ApiError, NotFound
+from wearcast.service.json_response import json_response
 
 router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
@@ -52,20 +53,20 @@ def _out(row: Any) -> JobOut:
 @router.get("/jobs", response_model=list[JobOut])
 def list_jobs(session: SessionDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
               status: Literal["queued", "running", "done", "failed", "cancelled"] | None
-              = None) -> list[JobOut]:
+              = None) -> Response:
     """The newest jobs first, without their results."""
     query = select(db.Simulation).order_by(db.Simulation.id.desc()).limit(limit)
     if status is not None:
         query = query.where(db.Simulation.status == status)
-    return [_out(r) for r in session.scalars(query)]
+    return json_response([_out(r) for r in session.scalars(query)])
 
 
 @router.get("/jobs/{job_id}", response_model=JobOut)
-def get_job(job_id: JobId, session: SessionDep) -> JobOut:
+def get_job(job_id: JobId, session: SessionDep) -> Response:
     row = session.get(db.Simulation, job_id)
     if row is None:
         raise NotFound("job_id", f"no job with id {job_id}")
-    return _out(row)
+    return json_response(_out(row))
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=JobOut)

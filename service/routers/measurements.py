@@ -5,11 +5,12 @@ from __future__ import annotations
 import json
 from typing import Annotated, Any
 
-from fastapi import APIRouter, File, Header, Query, Request, UploadFile
+from fastapi import APIRouter, File, Header, Query, Request, Response, UploadFile
 
 from wearcast.service import importing, measurement_store
 from wearcast.service.deps import SessionDep, SettingsDep
 from wearcast.service.errors import Unprocessable
+from wearcast.service.json_response import json_response
 from wearcast.service.schemas import ImportOut, MeasurementIn, MeasurementOut, MeasurementPage
 
 router = APIRouter(tags=["measurements"])
@@ -69,12 +70,13 @@ def list_measurements(
     offset: Annotated[int, Query(ge=0)] = 0,
     filter: Annotated[str | None, Query(description="JSON object field -> value(s)")] = None,
     include_points: bool = False,
-) -> MeasurementPage:
+) -> Response:
     total, items = measurement_store.page(session, query_filter(request, filter), limit,
                                           offset, include_points)
-    return MeasurementPage(total=total, limit=limit, offset=offset, items=items)
+    return json_response(MeasurementPage(total=total, limit=limit, offset=offset,
+                                         items=items))
 
 
 @router.get("/measurements/{measurement_id}", response_model=MeasurementOut)
-def get_measurement(measurement_id: int, session: SessionDep) -> MeasurementOut:
-    return measurement_store.get(session, measurement_id)
+def get_measurement(measurement_id: int, session: SessionDep) -> Response:
+    return json_response(measurement_store.get(session, measurement_id))

@@ -10,7 +10,7 @@ return their answer serialised by orjson (see ``predict`` below).
 from __future__ import annotations
 
 import json
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import HTMLResponse
@@ -21,6 +21,7 @@ from wearcast.service import diagnosis_store, model_store, pictures
 from wearcast.service.db import Database
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Unprocessable, validation_items
+from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import ImageFormat
 from wearcast.service.schemas import (
     BogieType,
@@ -45,8 +46,8 @@ def create_model(body: ModelIn, session: SessionDep) -> ModelOut:
 
 
 @router.get("/models/{model_id}", response_model=ModelOut)
-def get_model(model_id: int, session: SessionDep) -> ModelOut:
-    return model_store.model_out(session, model_store.get_model_row(session, model_id))
+def get_model(model_id: int, session: SessionDep) -> Response:
+    return _json(model_store.model_out_cached(session, model_id))
 
 
 def _json(out: BaseModel) -> Response:
@@ -114,32 +115,37 @@ async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> R
     return _bytes(model_store.reprofiling_json(*cached, model_id, body, start))
 
 
+_IMAGE: dict[int | str, dict[str, Any]] = {
+    200: {"content": {"image/svg+xml": {}, "image/png": {}}}, **NOT_MODIFIED}
+
+
+# The pictures answer with a strong ETag of their inputs (304 to a matching If-None-Match)
+# and are drawn once per inputs (wearcast.service.picture_cache).
 @router.get("/models/{model_id}/pictures/wear-area", response_class=Response,
-            responses={200: {"content": {"image/svg+xml": {}, "image/png": {}}}})
-def wear_area_picture(model_id: int, session: SessionDep, route_id: str,
+            responses=_IMAGE)
+def wear_area_picture(model_id: int, session: SessionDep, request: Request, route_id: str,
                       bogie_type: BogieType, axle: QueryAxle, side: Side,
                       wheel_id: str | None = None,
                       max_mileage_km: Annotated[float | None, Query(gt=0, le=5e6)] = None,
                       format: ImageFormat = "svg") -> Response:
     """Wear area over mileage: prediction corridor and measured points (seed 001 Fig. 11)."""
-    image = pictures.wear_area_picture(session, model_id, route_id=route_id,
-                                       bogie_type=bogie_type, axle=axle, side=side,
-                                       wheel_id=wheel_id, max_mileage_km=max_mileage_km,
-                                       fmt=format)
-    return Response(content=image, media_type=pictures.MEDIA_TYPES[format])
+    job = pictures.wear_area_job(session, model_id, route_id=route_id,
+                                 bogie_type=bogie_type, axle=axle, side=side,
+                                 wheel_id=wheel_id, max_mileage_km=max_mileage_km, fmt=format)
+    return picture_response(request, job, pictures.MEDIA_TYPES[format])
 
 
 @router.get("/models/{model_id}/pictures/profile", response_class=Response,
-            responses={200: {"content": {"image/svg+xml": {}, "image/png": {}}}})
-def profile_picture(model_id: int, session: SessionDep, route_id: str,
+            responses=_IMAGE)
+def profile_picture(model_id: int, session: SessionDep, request: Request, route_id: str,
                     bogie_type: BogieType, axle: QueryAxle, side: Side,
                     mileage_km: Annotated[float, Query(ge=0, le=5e6)],
                     wheel_id: str | None = None, format: ImageFormat = "svg") -> Response:
     """Predicted worn profile vs reference and measured profiles (seed 001 Figs. 12–14)."""
-    image = pictures.profile_picture(session, model_id, route_id=route_id,
-                                     bogie_type=bogie_type, axle=axle, side=side,
-                                     mileage_km=mileage_km, wheel_id=wheel_id, fmt=format)
-    return Response(content=image, media_type=pictures.MEDIA_TYPES[format])
+    job = pictures.profile_job(session, model_id, route_id=route_id, bogie_type=bogie_type,
+                               axle=axle, side=side, mileage_km=mileage_km,
+                               wheel_id=wheel_id, fmt=format)
+    return picture_response(request, job, pictures.MEDIA_TYPES[format])
 
 
 @router.post("/models/{model_id}/diagnose", response_model=DiagnosisOut,

@@ -8,13 +8,14 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 import numpy as np
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Query, Request, Response
 from pydantic import Field, model_validator
 
 from wearcast.service import importing, reference_store, wheel_pictures
 from wearcast.service import models_db as db
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import NotFound
+from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
 from wearcast.service.schemas import Strict
 
@@ -77,28 +78,29 @@ def set_wheel_reference(wheel_id: str, body: WheelReferenceIn,
 
 
 _IMAGE: dict[int | str, dict[str, Any]] = {
-    200: {"content": {"image/svg+xml": {}, "image/png": {}}}}
+    200: {"content": {"image/svg+xml": {}, "image/png": {}}}, **NOT_MODIFIED}
 
 
+# The pictures answer with a strong ETag of their inputs (304 to a matching If-None-Match)
+# and are drawn once per inputs (wearcast.service.picture_cache).
 @router.get("/wheels/{wheel_id}/pictures/parameters", response_class=Response,
             responses=_IMAGE)
 def wheel_parameters_picture(
-        wheel_id: str, session: SessionDep, model_id: int, route_id: str,
+        wheel_id: str, session: SessionDep, request: Request, model_id: int, route_id: str,
         horizon_km: Annotated[float | None, Query(gt=0)] = None,
         format: ImageFormat = "svg") -> Response:
     """Sd, Sh, qR against mileage: measured points, predicted P10–P90 band, limits and the
     crossing."""
-    image = wheel_pictures.wheel_parameter_picture(
-        session, model_id, wheel_id=wheel_id,
-        route_id=route_id, horizon_km=horizon_km,
-        fmt=format)
-    return Response(content=image, media_type=MEDIA_TYPES[format])
+    job = wheel_pictures.wheel_parameter_job(session, model_id, wheel_id=wheel_id,
+                                             route_id=route_id, horizon_km=horizon_km,
+                                             fmt=format)
+    return picture_response(request, job, MEDIA_TYPES[format])
 
 
 @router.get("/measurements/{measurement_id}/pictures/profile", response_class=Response,
             responses=_IMAGE)
-def measurement_profile_picture(measurement_id: int, session: SessionDep,
+def measurement_profile_picture(measurement_id: int, session: SessionDep, request: Request,
                                 format: ImageFormat = "svg") -> Response:
     """The measured profile over its reference, the wear area shaded."""
-    image = wheel_pictures.measurement_profile_picture(session, measurement_id, fmt=format)
-    return Response(content=image, media_type=MEDIA_TYPES[format])
+    job = wheel_pictures.measurement_profile_job(session, measurement_id, fmt=format)
+    return picture_response(request, job, MEDIA_TYPES[format])

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Response
 
 from wearcast.service import route_store
 from wearcast.service.deps import SessionDep
+from wearcast.service.json_response import json_response
 from wearcast.service.schemas import RouteIn, RouteOut
 
 router = APIRouter(tags=["routes"])
@@ -17,10 +18,12 @@ def create_route(body: RouteIn, session: SessionDep) -> RouteOut:
 
 
 @router.get("/routes", response_model=list[RouteOut])
-def list_routes(session: SessionDep) -> list[RouteOut]:
-    return [route_store.route_out(row) for row in route_store.list_routes(session)]
+def list_routes(session: SessionDep) -> Response:
+    return json_response([route_store.route_out(row)
+                          for row in route_store.list_routes(session)])
 
 
 @router.get("/routes/{id_or_name}", response_model=RouteOut)
-def get_route(id_or_name: str, session: SessionDep) -> RouteOut:
-    return route_store.route_out(route_store.get_route(session, id_or_name, "id_or_name"))
+def get_route(id_or_name: str, session: SessionDep) -> Response:
+    return json_response(route_store.route_out(
+        route_store.get_route(session, id_or_name, "id_or_name")))

@@ -8,8 +8,8 @@ They exist to test the discrepancy finder on data it did not generate:
 - ``depot``: a depot's measurement campaign written from the physical description of every
   effect (calendar days, heavy-tailed heteroscedastic noise, random effects, dropped and
   repeated measurements, reprofiling mid-series, route changes, mixed instruments);
-- ``loop_depot``: the same depot campaign whose wear rates and wear-curve shapes per wheel
-  position come from the physics wear loop (``wearcast.physics.wear_loop``).
+- ``scenarios``: each generator's fleet with the model a user would calibrate on it, and
+  vehicle series measured from a whole-vehicle loop run, shared by the tests and benchmarks.
 
 None of them imports the finder's causes: each effect is written from its physical
 description.

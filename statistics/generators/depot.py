@@ -50,7 +50,7 @@ Effects (``DepotEffects``), each from its physical description
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -58,12 +58,14 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.processing import process_profile
+from wearcast.statistics.route_measure import analytic_wear_measure, curve_direction_shares
 from wearcast.statistics.routes import Route, RouteClass
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
+from wearcast.statistics.wear_tables import sample_wear_table
 
 Array = NDArray[np.float64]
-REGIONS = ("flange", "tread")
 SPLIT_Y_MM = -30.0
 TABLE_RADII_M = (200.0, 300.0, 450.0, 700.0, 1000.0, 2000.0)
 INSTRUMENTS = ("DP-A", "DP-B", "DP-C")
@@ -98,20 +100,7 @@ def depot_measure(bogie: str, wheelset: str, rail: str, radius_m: float | None, 
 def depot_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
     """The curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling
     ``depot_measure``."""
-    rows = []
-    for bogie in ("motor", "trailer"):
-        for ws in ("leading", "trailing"):
-            for measure in ("tau_max", "t_gamma"):
-                for region in REGIONS:
-                    rows.append((bogie, ws, "tangent", np.nan, region, measure,
-                                 depot_measure(bogie, ws, "tangent", None, region, measure)))
-                    for rail in ("high", "low"):
-                        for r in radii_m:
-                            rows.append((bogie, ws, rail, r, region, measure,
-                                         round(depot_measure(bogie, ws, rail, r, region,
-                                                             measure), 5)))
-    return pd.DataFrame(rows, columns=["bogie_type", "wheelset", "rail", "radius_m", "region",
-                                       "measure", "value"])
+    return sample_wear_table(depot_measure, radii_m)
 
 
 def _route(name: str, rows: tuple[tuple[float | None, float], ...]) -> Route:
@@ -230,32 +219,19 @@ class DepotFleet:
     table: pd.DataFrame
 
 
-def _rail(side: str, direction: str | None) -> str:
-    if direction is None:
-        return "tangent"
-    return "high" if side != direction else "low"   # left curve: right wheels on the high rail
-
-
 def _position_measures(route: Route, bogie: str, side: str, left_share: float | None,
                        blend: float, norm: dict[str, float]) -> Array:
     """(2 wheelsets, 2 regions) route measure of a wheel (leading row 0, trailing row 1)."""
-    curved = {d: sum(c.share for c in route.classes if c.direction == d) for d in
-              ("left", "right")}
-    total = curved["left"] + curved["right"]
+    shares = curve_direction_shares(route, left_share)
     out = np.zeros((2, 2))
-    for w, ws in enumerate(("leading", "trailing")):
-        for j, region in enumerate(REGIONS):
-            acc = 0.0
-            for c in route.classes:
-                share = c.share
-                if left_share is not None and c.direction is not None and total > 0:
-                    want = left_share if c.direction == "left" else 1.0 - left_share
-                    share = c.share * want * total / curved[c.direction]
-                rail = _rail(side, c.direction)
-                tau = depot_measure(bogie, ws, rail, c.radius_m, region, "tau_max")
-                gam = depot_measure(bogie, ws, rail, c.radius_m, region, "t_gamma")
-                acc += share * ((1.0 - blend) * tau + blend * gam * norm[region])
-            out[w, j] = acc
+    for j, region in enumerate(REGIONS):
+        def blended(ws: str, rail: str, radius_m: float | None, region: str = region) -> float:
+            tau = depot_measure(bogie, ws, rail, radius_m, region, "tau_max")
+            gam = depot_measure(bogie, ws, rail, radius_m, region, "t_gamma")
+            return (1.0 - blend) * tau + blend * gam * norm[region]
+
+        p = analytic_wear_measure(route, side, blended, shares)
+        out[:, j] = [p["leading"], p["trailing"]]
     return out
 
 
@@ -297,7 +273,7 @@ def generate_depot_fleet(config: DepotConfig | None = None) -> DepotFleet:
     doy = np.array([(d - d.astype("datetime64[Y]")).astype(int) for d in dates], dtype=float)
     season = 1.0 + fx.seasonal * np.cos(2 * np.pi * (doy - fx.season_peak_day) / 365.25)
     # the T_gamma blend is normalised on the fleet's mean tau_max / T_gamma ratio per region
-    norm = {}
+    norm: dict[str, float] = {}
     for j, region in enumerate(REGIONS):
         tau = [_position_measures(r, b, s, None, 0.0, {"flange": 1, "tread": 1})[0, j]
                for r in routes.values() for b in ("motor", "trailer") for s in ("left", "right")]
@@ -433,8 +409,3 @@ def _measured_profile(cfg: DepotConfig, rng: np.random.Generator, instrument: st
                          "instrument_id": instrument})
     return (float(p.areas.flange_mm2), float(p.areas.tread_mm2),
             np.nan_to_num(p.wear_mm, nan=0.0), prof)
-
-
-def with_effects(config: DepotConfig, **changes: Any) -> DepotConfig:
-    """A copy of ``config`` with some effects changed."""
-    return replace(config, effects=replace(config.effects, **changes))

@@ -47,12 +47,17 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import S1002_Y_MAX_MM, S1002_Y_MIN_MM, s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES, Region
+from wearcast.statistics.route_measure import weighted_wear_measure
+from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.wear_tables import TABLE_COLUMNS, compile_wear_table
 
 Array = NDArray[np.float64]
 
-REGIONS = ("tread", "flange")
-MEASURES = ("tau_max", "t_gamma")
-WEAR_TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value"]
+#: The twin draws its random numbers and writes its table rows region by region in this order
+#: (tread first); kept so that seeded fleets and the bundled example fleet stay the same.
+TWIN_REGION_ORDER: tuple[Region, ...] = REGIONS[::-1]
+WEAR_TABLE_COLUMNS = list(TABLE_COLUMNS)
 PROFILE_COLUMNS = [
     "wheel_id", "vehicle_id", "bogie_type", "axle", "side", "mileage_km", "y_mm", "z_mm",
     "measured_on", "route_id", "running_mode", "instrument_id", "load_t",
@@ -69,48 +74,21 @@ _FINE_Y_MM = np.linspace(S1002_Y_MIN_MM, S1002_Y_MAX_MM,
 # --------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class TwinCurveClass:
-    """One curve class of a route (the ``classes`` entries of ``POST /v1/routes``).
+class TwinRoute(Route):
+    """A route (curve classes with shares summing to 1) plus free attributes."""
 
-    radius_m : curve radius [m]; None for tangent track
-    direction : 'left' or 'right' (side of the vehicle the track bends towards); None on tangent
-    cant_mm : superelevation [mm]; speed_kmh : running speed [km/h]
-    share : fraction of the route's length in this class [-]
-    """
-
-    radius_m: float | None
-    direction: str | None
-    cant_mm: float
-    speed_kmh: float
-    share: float
-
-
-@dataclass(frozen=True)
-class TwinRoute:
-    """A route as curve classes with shares summing to 1, plus free attributes."""
-
-    name: str
-    classes: tuple[TwinCurveClass, ...]
     attributes: Mapping[str, object] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, object]:
         """The ``POST /v1/routes`` body for this route."""
-        return {
-            "name": self.name,
-            "classes": [
-                {"radius_m": c.radius_m, "direction": c.direction, "cant_mm": c.cant_mm,
-                 "speed_kmh": c.speed_kmh, "share": c.share}
-                for c in self.classes
-            ],
-            "attributes": dict(self.attributes),
-        }
+        return {**self.to_dict(), "attributes": dict(self.attributes)}
 
 
 def _split_directions(radius_m: float | None, cant_mm: float, speed_kmh: float,
-                      share: float) -> list[TwinCurveClass]:
+                      share: float) -> list[RouteClass]:
     if radius_m is None:
-        return [TwinCurveClass(None, None, 0.0, speed_kmh, share)]
-    return [TwinCurveClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
+        return [RouteClass(None, None, 0.0, speed_kmh, share)]
+    return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
 
 
 # Seed 003 (003_c55c21cb74d435ad), Table 3: Aosta – Pré-Saint-Didier line, statistical track
@@ -147,7 +125,7 @@ def aosta_route(name: str = "aosta") -> TwinRoute:
     99.99 % as printed).
     """
     total = sum(row[3] for row in AOSTA_TABLE3)
-    classes: list[TwinCurveClass] = []
+    classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share_pct in AOSTA_TABLE3:
         classes += _split_directions(radius_m, cant_mm, speed_kmh, share_pct / total)
     return TwinRoute(name, tuple(classes), {
@@ -164,7 +142,7 @@ def metro_route(name: str = "metro", max_cant_mm: float = 120.0) -> TwinRoute:
     11.8 V^2 / R [mm] (V km/h, R m, standard gauge), capped at ``max_cant_mm``. Curves are
     split into equal left and right halves (the lines are built of S-curves, seed 000 §V).
     """
-    classes: list[TwinCurveClass] = []
+    classes: list[RouteClass] = []
     for r_min, r_max, share_pct, speed_kmh in METRO_TABLE1:
         if math.isinf(r_max):
             classes += _split_directions(None, 0.0, speed_kmh, share_pct / 100.0)
@@ -180,7 +158,7 @@ def metro_route(name: str = "metro", max_cant_mm: float = 120.0) -> TwinRoute:
 
 def tangent_route(name: str = "tangent", speed_kmh: float = 100.0) -> TwinRoute:
     """100 % tangent track (the application example of seed 001 Fig. 15)."""
-    return TwinRoute(name, (TwinCurveClass(None, None, 0.0, speed_kmh, 1.0),),
+    return TwinRoute(name, (RouteClass(None, None, 0.0, speed_kmh, 1.0),),
                      {"source": "seed 001 Fig. 15 (100 % tangent track)", "line_type": "tangent"})
 
 
@@ -210,14 +188,14 @@ def synthetic_wear_table(radii_m: Sequence[float] = (150, 200, 250, 300, 400, 50
     kappa = 1.0 / np.asarray(radii_m, dtype=float)  # [1/m]
     for bogie in ("motor", "trailer"):
         for wheelset in ("leading", "trailing"):
-            for measure in MEASURES:
+            for measure in WEAR_MEASURES:
                 tangent = _synthetic_values(bogie, wheelset, "tangent", np.zeros(1), measure)
-                for region in REGIONS:
+                for region in TWIN_REGION_ORDER:
                     rows.append((bogie, wheelset, "tangent", np.nan, region, measure,
                                  float(tangent[region][0])))
                 for rail in ("high", "low"):
                     values = _synthetic_values(bogie, wheelset, rail, kappa, measure)
-                    for region in REGIONS:
+                    for region in TWIN_REGION_ORDER:
                         for r, v in zip(radii_m, values[region], strict=True):
                             rows.append((bogie, wheelset, rail, float(r), region, measure,
                                          round(float(v), 4)))
@@ -249,72 +227,6 @@ def _synthetic_values(bogie: str, wheelset: str, rail: str, kappa: Array,
         tread = tread * factor
         flange = flange * factor
     return {"tread": np.asarray(tread, dtype=float), "flange": np.asarray(flange, dtype=float)}
-
-
-def _rail_for(side: str, direction: str | None, radius_m: float | None) -> str:
-    if radius_m is None or direction is None:
-        return "tangent"
-    # In a left curve the right wheels run on the high (outer) rail (docs/conventions.md).
-    return "high" if side != direction else "low"
-
-
-class WearTableIndex:
-    """A curve-radius table indexed for fast look-ups (build once, query many times)."""
-
-    def __init__(self, table: pd.DataFrame) -> None:
-        self._tangent: dict[tuple[str, str, str, str], float] = {}
-        self._curves: dict[tuple[str, str, str, str, str], tuple[Array, Array]] = {}
-        for key, rows in table.groupby(["bogie_type", "wheelset", "rail", "region", "measure"]):
-            bogie, wheelset, rail, region, measure = (str(k) for k in key)
-            if rail == "tangent":
-                self._tangent[(bogie, wheelset, region, measure)] = float(rows["value"].iloc[0])
-            else:
-                rows = rows.sort_values("radius_m", ascending=False)
-                self._curves[(bogie, wheelset, rail, region, measure)] = (
-                    1.0 / rows["radius_m"].to_numpy(float), rows["value"].to_numpy(float))
-
-    def value(self, bogie_type: str, wheelset: str, rail: str, radius_m: float | None,
-              region: str, measure: str) -> float:
-        """Wear measure for one curve class.
-
-        Linear interpolation in curvature 1/R [1/m] between the table's radii; beyond the
-        widest radius towards the tangent value at 1/R = 0; below the tightest radius held
-        constant. A missing tangent row counts as 0.
-        """
-        tangent = self._tangent.get((bogie_type, wheelset, region, measure), 0.0)
-        if radius_m is None or rail == "tangent":
-            return tangent
-        key = (bogie_type, wheelset, rail, region, measure)
-        if key not in self._curves:
-            raise ValueError(f"wear table has no {'/'.join(key)} rows")
-        curvature, values = self._curves[key]
-        return float(np.interp(1.0 / radius_m, np.concatenate([[0.0], curvature]),
-                               np.concatenate([[tangent], values])))
-
-
-def weighted_wear_measure(table: pd.DataFrame | WearTableIndex, route: TwinRoute,
-                          bogie_type: str, axle: int, side: str, region: str,
-                          measure: str = "tau_max", running_mode: str = "mixed") -> float:
-    """Weighted wear measure P = sum_i c_i P_i of a route for one wheel (seed 001 eq. 2).
-
-    Axle 1 leads in ``lead`` mode and axle 2 trails; ``mixed`` averages leading and trailing.
-    Rail per class: tangent on straight track, else high when the wheel's side is opposite
-    the curve's direction (docs/conventions.md). Units are those of the table's measure.
-    """
-    index = table if isinstance(table, WearTableIndex) else WearTableIndex(table)
-    if running_mode == "lead":
-        positions = {("leading" if axle == 1 else "trailing"): 1.0}
-    elif running_mode == "mixed":
-        positions = {"leading": 0.5, "trailing": 0.5}
-    else:
-        raise ValueError(f"running_mode must be 'lead' or 'mixed', got {running_mode!r}")
-    total = 0.0
-    for c in route.classes:
-        rail = _rail_for(side, c.direction, c.radius_m)
-        for wheelset, weight in positions.items():
-            total += c.share * weight * index.value(bogie_type, wheelset, rail, c.radius_m,
-                                                    region, measure)
-    return total
 
 
 # --------------------------------------------------------------------------------------------
@@ -622,28 +534,39 @@ def arc_length_samples(n_points: int) -> Array:
     return np.interp(np.linspace(0.0, s[-1], n_points), s, _FINE_Y_MM)
 
 
-def _wheels(config: FleetConfig, table: pd.DataFrame,
-            rng: np.random.Generator) -> list[WheelSpec]:
-    index = WearTableIndex(table)
-    wheels: list[WheelSpec] = []
+def fleet_wheels(config: FleetConfig) -> Iterator[WheelSpec]:
+    """Every wheel of the fleet's layout, unit by unit, vehicle, bogie, axle, side (the order
+    the generators draw their random numbers in), with ``measure_p`` and ``rate_mm2_per_km``
+    not yet known (NaN). Wheel ids read ``<vehicle>-<M|T><axle><L|R>``."""
+    unknown: dict[str, float] = {r: math.nan for r in TWIN_REGION_ORDER}
     for unit in config.units:
         for v in range(1, unit.vehicles + 1):
             vehicle_id = f"{unit.unit_id}{v}"
             for bogie in config.bogies:
                 for axle in config.axles:
                     for side in config.sides:
-                        p = {r: weighted_wear_measure(index, unit.route, bogie, axle, side, r,
-                                                      config.measure, unit.running_mode)
-                             for r in REGIONS}
-                        factor = float(np.exp(rng.normal(0.0, config.rate_scatter)))
-                        rate = {r: config.calibration_factor[r] * p[r] * factor for r in REGIONS}
-                        wheels.append(WheelSpec(
+                        yield WheelSpec(
                             wheel_id=f"{vehicle_id}-{bogie[0].upper()}{axle}{side[0].upper()}",
                             vehicle_id=vehicle_id, unit_id=unit.unit_id, bogie_type=bogie,
                             axle=axle, side=side, route=unit.route,
                             running_mode=unit.running_mode, instrument_id=unit.instrument_id,
-                            load_t=unit.load_t, measure_p=p, rate_mm2_per_km=rate,
-                            covariates=dict(unit.covariates)))
+                            load_t=unit.load_t, measure_p=dict(unknown),
+                            rate_mm2_per_km=dict(unknown), covariates=dict(unit.covariates))
+
+
+def _wheels(config: FleetConfig, table: pd.DataFrame,
+            rng: np.random.Generator) -> list[WheelSpec]:
+    index = compile_wear_table(table)
+    wheels: list[WheelSpec] = []
+    for wheel in fleet_wheels(config):
+        p: dict[str, float] = {r: weighted_wear_measure(
+            wheel.route, index, bogie_type=wheel.bogie_type, axle=wheel.axle, side=wheel.side,
+            running_mode=wheel.running_mode, region=r, measure=config.measure)
+            for r in REGIONS}
+        factor = float(np.exp(rng.normal(0.0, config.rate_scatter)))
+        rate: dict[str, float] = {
+            r: config.calibration_factor[r] * p[r] * factor for r in REGIONS}
+        wheels.append(replace(wheel, measure_p=p, rate_mm2_per_km=rate))
     return wheels
 
 
@@ -658,7 +581,7 @@ def _history(config: FleetConfig, unit: UnitConfig, wheel: WheelSpec,
     s_ref = config.reference_mileage_km
     progression = s_ref * (mileage / s_ref) ** config.progression_exponent
     areas = {}
-    for region in REGIONS:
+    for region in TWIN_REGION_ORDER:
         noise = np.exp(rng.normal(0.0, config.area_scatter, mileage.size))
         areas[region] = wheel.rate_mm2_per_km[region] * progression * noise
     return WearHistory(mileage, measured_on, areas["tread"], areas["flange"])
@@ -694,15 +617,8 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
             y, z = measure_profile(config, y_nominal, z_true, rng)
             for profile_effect in config.profile_effects:
                 y, z = profile_effect(wheel, float(mileage), y, z)
-            frames.append(pd.DataFrame({
-                "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
-                "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-                "mileage_km": csv_number(mileage), "y_mm": np.round(y, config.decimals),
-                "z_mm": np.round(z, config.decimals),
-                "measured_on": str(history.measured_on[i]), "route_id": wheel.route.name,
-                "running_mode": wheel.running_mode, "instrument_id": wheel.instrument_id,
-                "load_t": wheel.load_t, **wheel.covariates,
-            }))
+            frames.append(profile_rows(config, wheel, float(mileage),
+                                       str(history.measured_on[i]), y, z))
             truth.append({
                 "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
                 "unit_id": wheel.unit_id, "bogie_type": wheel.bogie_type, "axle": wheel.axle,
@@ -717,6 +633,20 @@ def iter_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None
                 "rate_flange_mm2_per_km": wheel.rate_mm2_per_km["flange"],
             })
         yield wheel, pd.concat(frames, ignore_index=True), pd.DataFrame(truth)
+
+
+def profile_rows(config: FleetConfig, wheel: WheelSpec, mileage_km: float, measured_on: str,
+                 y_mm: Array, z_mm: Array) -> pd.DataFrame:
+    """The long-CSV rows (``PROFILE_COLUMNS`` + the unit's covariates) of one measured
+    profile, points rounded to ``config.decimals`` [mm]."""
+    return pd.DataFrame({
+        "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
+        "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
+        "mileage_km": csv_number(mileage_km), "y_mm": np.round(y_mm, config.decimals),
+        "z_mm": np.round(z_mm, config.decimals), "measured_on": measured_on,
+        "route_id": wheel.route.name, "running_mode": wheel.running_mode,
+        "instrument_id": wheel.instrument_id, "load_t": wheel.load_t, **wheel.covariates,
+    })
 
 
 def csv_number(value: float) -> float | int:
@@ -765,6 +695,17 @@ def generate_fleet(config: FleetConfig, wear_table: pd.DataFrame | None = None) 
         truths.append(truth)
     return FleetTwin(pd.concat(profiles, ignore_index=True),
                      pd.concat(truths, ignore_index=True), tuple(wheels))
+
+
+def metro_calibration_config(seed: int = 7) -> FleetConfig:
+    """A small fleet that calibrates a model on the metro line (seed 000 Table 1) exactly: one
+    car in ``lead`` mode, measured at 30,000, 80,000 and 130,000 km, no rate or area scatter,
+    0.005 mm noise, 300 points a profile."""
+    return FleetConfig(
+        units=(UnitConfig("B", metro_route(), vehicles=1, running_mode="lead"),),
+        mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
+        calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
+        area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=seed)
 
 
 def example_fleet_config(seed: int = 20240601, points_per_profile: int = 400) -> FleetConfig:

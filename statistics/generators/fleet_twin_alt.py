@@ -54,12 +54,13 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics.processing import process_profile
+from wearcast.statistics.route_measure import analytic_wear_measure, curve_direction_shares
 from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.wear_tables import sample_wear_table
 
 Array = NDArray[np.float64]
-REGIONS = ("flange", "tread")
-MEASURES = ("tau_max", "t_gamma")
 SPLIT_Y_MM = -30.0
 TABLE_RADII_M = (180.0, 250.0, 350.0, 500.0, 800.0, 1200.0, 2500.0)
 _FINE_Y = np.arange(-70.0, 60.0 + 1e-9, 0.05)
@@ -122,49 +123,21 @@ def alt_measure(bogie_type: str, wheelset: str, rail: str, radius_m: float | Non
 def alt_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame:
     """The curve-radius table (docs/conventions.md "Curve-radius table CSV") sampling
     ``alt_measure``, both measures."""
-    rows = []
-    for bogie in ("motor", "trailer"):
-        for ws in ("leading", "trailing"):
-            for measure in MEASURES:
-                for region in REGIONS:
-                    rows.append((bogie, ws, "tangent", np.nan, region, measure,
-                                 alt_measure(bogie, ws, "tangent", None, region, measure)))
-                    for rail in ("high", "low"):
-                        for r in radii_m:
-                            rows.append((bogie, ws, rail, r, region, measure,
-                                         round(alt_measure(bogie, ws, rail, r, region,
-                                                           measure), 5)))
-    return pd.DataFrame(rows, columns=["bogie_type", "wheelset", "rail", "radius_m", "region",
-                                       "measure", "value"])
-
-
-def _rail(side: str, direction: str | None) -> str:
-    if direction is None:
-        return "tangent"
-    return "high" if side != direction else "low"   # left curve: right wheels on the high rail
+    return sample_wear_table(alt_measure, radii_m)
 
 
 def _route_p(route: Route, bogie: str, axle: int, side: str, lead_share: float,
              left_share: float | None, measure: str) -> dict[str, float]:
     """Weighted measure per region with an axle-1 leading share and a true left share."""
-    curved = {d: sum(c.share for c in route.classes if c.direction == d)
-              for d in ("left", "right")}
-    total = curved["left"] + curved["right"]
     p_lead = lead_share if axle == 1 else 1.0 - lead_share
-    out = {}
+    shares = curve_direction_shares(route, left_share)
+    out: dict[str, float] = {}
     for region in REGIONS:
-        acc = 0.0
-        for c in route.classes:
-            share = c.share
-            if left_share is not None and c.direction is not None and total > 0:
-                want = left_share if c.direction == "left" else 1.0 - left_share
-                share = c.share * want * total / curved[c.direction]
-            rail = _rail(side, c.direction)
-            acc += share * (p_lead * alt_measure(bogie, "leading", rail, c.radius_m, region,
-                                                 measure)
-                            + (1 - p_lead) * alt_measure(bogie, "trailing", rail, c.radius_m,
-                                                         region, measure))
-        out[region] = acc
+        def value(ws: str, rail: str, radius_m: float | None, region: str = region) -> float:
+            return alt_measure(bogie, ws, rail, radius_m, region, measure)
+
+        p = analytic_wear_measure(route, side, value, shares)
+        out[region] = p_lead * p["leading"] + (1 - p_lead) * p["trailing"]
     return out
 
 
@@ -274,7 +247,7 @@ def generate_alt_fleet(config: AltConfig | None = None) -> AltFleet:
     rng = np.random.default_rng(cfg.seed)
     routes, attrs = alt_routes()
     table = alt_wear_table()
-    midx = MEASURES.index(cfg.measure)
+    midx = WEAR_MEASURES.index(cfg.measure)
     wheels: list[dict[str, Any]] = []
     for unit in cfg.units:
         for v, (car, route_name) in enumerate(zip(unit.cars, unit.routes, strict=True), 1):

@@ -30,8 +30,8 @@ Pure: numpy/pandas in and out, deterministic for a given seed.
 from __future__ import annotations
 
 from collections.abc import Mapping, MutableMapping
-from dataclasses import dataclass, field, replace
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
+from wearcast.physics.vocabulary import Direction
 from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_loop import LoopClass, WearSimulation, WearSteps, simulate_wear
 from wearcast.statistics.generators.fleet_twin import (
@@ -49,8 +50,9 @@ from wearcast.statistics.generators.fleet_twin import (
     WearHistory,
     WheelSpec,
     arc_length_samples,
-    csv_number,
+    fleet_wheels,
     measure_profile,
+    profile_rows,
 )
 
 Array = NDArray[np.float64]
@@ -89,7 +91,8 @@ class LoopFleetTwin:
 
 
 def _loop_classes(route: TwinRoute) -> list[LoopClass]:
-    return [LoopClass(c.radius_m, c.cant_mm, c.speed_kmh, c.direction or "left", c.share)
+    return [LoopClass(c.radius_m, c.cant_mm, c.speed_kmh, cast(Direction, c.direction or "left"),
+                      c.share)
             for c in route.classes]
 
 
@@ -149,29 +152,18 @@ def generate_loop_fleet(config: FleetConfig, truth: LoopTruth = LoopTruth(),
 
     y_nominal = arc_length_samples(config.points_per_profile)
     profiles, truths, wheels = [], [], []
-    for unit in config.units:
-        for v in range(1, unit.vehicles + 1):
-            vehicle_id = f"{unit.unit_id}{v}"
-            for bogie in config.bogies:
-                for axle in config.axles:
-                    for side in config.sides:
-                        axles = (1, 2) if unit.running_mode == "mixed" else (axle,)
-                        loop = [run(unit.route, bogie, a, side) for a in axles]
-                        factor = float(np.clip(np.exp(rng.normal(0.0, config.rate_scatter)),
-                                               0.0, max_rate_factor))
-                        wheel = WheelSpec(
-                            wheel_id=f"{vehicle_id}-{bogie[0].upper()}{axle}{side[0].upper()}",
-                            vehicle_id=vehicle_id, unit_id=unit.unit_id, bogie_type=bogie,
-                            axle=axle, side=side, route=unit.route,
-                            running_mode=unit.running_mode, instrument_id=unit.instrument_id,
-                            load_t=unit.load_t, measure_p={"tread": np.nan, "flange": np.nan},
-                            rate_mm2_per_km={"tread": np.nan, "flange": np.nan},
-                            covariates=dict(unit.covariates))
-                        rows, truth_rows = _wheel_rows(config, truth, wheel, unit, loop, factor,
-                                                       y_nominal, rng)
-                        wheels.append(wheel)
-                        profiles.append(rows)
-                        truths.append(truth_rows)
+    units = {u.unit_id: u for u in config.units}
+    for wheel in fleet_wheels(config):
+        unit = units[wheel.unit_id]
+        axles = (1, 2) if unit.running_mode == "mixed" else (wheel.axle,)
+        loop = [run(unit.route, wheel.bogie_type, a, wheel.side) for a in axles]
+        factor = float(np.clip(np.exp(rng.normal(0.0, config.rate_scatter)),
+                               0.0, max_rate_factor))
+        rows, truth_rows = _wheel_rows(config, truth, wheel, unit, loop, factor,
+                                       y_nominal, rng)
+        wheels.append(wheel)
+        profiles.append(rows)
+        truths.append(truth_rows)
     fleet = FleetTwin(pd.concat(profiles, ignore_index=True),
                       pd.concat(truths, ignore_index=True), tuple(wheels))
     return LoopFleetTwin(fleet=fleet, simulations=sims)
@@ -206,13 +198,7 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
         y, z = measure_profile(config, y_nominal, z_true, rng)
         for profile_effect in config.profile_effects:
             y, z = profile_effect(wheel, float(km), y, z)
-        frames.append(pd.DataFrame({
-            "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
-            "bogie_type": wheel.bogie_type, "axle": wheel.axle, "side": wheel.side,
-            "mileage_km": csv_number(km), "y_mm": np.round(y, config.decimals),
-            "z_mm": np.round(z, config.decimals), "measured_on": str(history.measured_on[i]),
-            "route_id": wheel.route.name, "running_mode": wheel.running_mode,
-            "instrument_id": wheel.instrument_id, "load_t": wheel.load_t, **wheel.covariates}))
+        frames.append(profile_rows(config, wheel, float(km), str(history.measured_on[i]), y, z))
         a_tread, a_flange = _region_areas(y_loop, w, config.split_y_mm)
         rows.append({
             "wheel_id": wheel.wheel_id, "vehicle_id": wheel.vehicle_id,
@@ -224,8 +210,3 @@ def _wheel_rows(config: FleetConfig, truth: LoopTruth, wheel: WheelSpec, unit: A
             "max_depth_mm": float(w.max()), "sd_mm": params.sd_mm, "sh_mm": params.sh_mm,
             "qr_mm": params.qr_mm})
     return pd.concat(frames, ignore_index=True), pd.DataFrame(rows)
-
-
-def with_truth(truth: LoopTruth, **changes: Any) -> LoopTruth:
-    """A copy of ``truth`` with some fields changed."""
-    return replace(truth, **changes)

@@ -23,19 +23,20 @@ areas: ``processing.process_profile``) into the measurement frame and wear curve
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.processing import process_profile
-from wearcast.statistics.routes import Route, RouteClass
+from wearcast.statistics.route_measure import curve_direction_shares, weighted_wear_measure
+from wearcast.statistics.routes import Route
+from wearcast.statistics.wear_tables import compile_wear_table
 
 Array = NDArray[np.float64]
-_REGIONS = ("tread", "flange")
 
 
 def traction(tread_multiplier: float) -> ft.WearEffect:
@@ -78,7 +79,7 @@ def seasonal_friction(amplitude: float, peak_day_of_year: int = 15) -> ft.WearEf
 def _rescale_by_measure(wheel: ft.WheelSpec, history: ft.WearHistory,
                         new_p: dict[str, float]) -> ft.WearHistory:
     f = {r: (new_p[r] / wheel.measure_p[r]) if wheel.measure_p[r] > 0 else 1.0
-         for r in _REGIONS}
+         for r in REGIONS}
     return replace(history, tread_area_mm2=history.tread_area_mm2 * f["tread"],
                    flange_area_mm2=history.flange_area_mm2 * f["flange"])
 
@@ -86,46 +87,42 @@ def _rescale_by_measure(wheel: ft.WheelSpec, history: ft.WearHistory,
 def running_direction(table: pd.DataFrame, leading_share: float, *, mode: str = "mixed",
                       measure: str = "tau_max") -> ft.WearEffect:
     """In units running in ``mode``, axle 1 leads ``leading_share`` of the distance."""
-    index = ft.WearTableIndex(table)
+    index = compile_wear_table(table)
 
     def effect(wheel: ft.WheelSpec, history: ft.WearHistory) -> ft.WearHistory:
         if wheel.running_mode != mode:
             return history
         p = leading_share if wheel.axle == 1 else 1.0 - leading_share
-        new = {}
-        for r in _REGIONS:
-            lead = ft.weighted_wear_measure(index, wheel.route, wheel.bogie_type, 1, wheel.side,
-                                            r, measure, "lead")
-            trail = ft.weighted_wear_measure(index, wheel.route, wheel.bogie_type, 2,
-                                             wheel.side, r, measure, "lead")
+        new: dict[str, float] = {}
+        for r in REGIONS:
+            lead, trail = (weighted_wear_measure(
+                wheel.route, index, bogie_type=wheel.bogie_type, axle=axle, side=wheel.side,
+                running_mode="lead", region=r, measure=measure) for axle in (1, 2))
             new[r] = p * lead + (1.0 - p) * trail
         return _rescale_by_measure(wheel, history, new)
     return effect
 
 
 def asymmetric_route(route: ft.TwinRoute, left_share: float) -> ft.TwinRoute:
-    """The route with a share ``left_share`` of its curved length bending left."""
-    left = sum(c.share for c in route.classes if c.direction == "left")
-    right = sum(c.share for c in route.classes if c.direction == "right")
-    total = left + right
-    classes = tuple(
-        replace(c, share=c.share * (left_share * total / left if c.direction == "left"
-                                    else (1 - left_share) * total / right
-                                    if c.direction == "right" else 1.0))
-        for c in route.classes)
-    return replace(route, classes=classes)
+    """The route with a share ``left_share`` of its curved length bending left
+    (:func:`wearcast.statistics.route_measure.curve_direction_shares`)."""
+    shares = curve_direction_shares(route, left_share)
+    return replace(route, classes=tuple(replace(c, share=share)
+                                        for c, share in zip(route.classes, shares, strict=True)))
 
 
 def curve_asymmetry(table: pd.DataFrame, left_share: float, *,
                     measure: str = "tau_max") -> ft.WearEffect:
     """Wheels wear as if a share ``left_share`` of each route's curves bent left."""
-    index = ft.WearTableIndex(table)
+    index = compile_wear_table(table)
 
     def effect(wheel: ft.WheelSpec, history: ft.WearHistory) -> ft.WearHistory:
         route = asymmetric_route(wheel.route, left_share)
-        new = {r: ft.weighted_wear_measure(index, route, wheel.bogie_type, wheel.axle,
-                                           wheel.side, r, measure, wheel.running_mode)
-               for r in _REGIONS}
+        new: dict[str, float] = {r: weighted_wear_measure(route, index, bogie_type=wheel.bogie_type,
+                                        axle=wheel.axle, side=wheel.side,
+                                        running_mode=wheel.running_mode, region=r,
+                                        measure=measure)
+               for r in REGIONS}
         return _rescale_by_measure(wheel, history, new)
     return effect
 
@@ -138,17 +135,21 @@ def wear_measure(table: pd.DataFrame, true_measure: str = "t_gamma", *,
     Normalised per region by the ratio for a trailer axle-1 left wheel on ``reference``
     (default the Aosta route, mixed mode) so the fleet's wear magnitude stays similar.
     """
-    index = ft.WearTableIndex(table)
+    index = compile_wear_table(table)
     ref = reference or ft.aosta_route()
-    norm = {r: ft.weighted_wear_measure(index, ref, "trailer", 1, "left", r, model_measure)
-            / ft.weighted_wear_measure(index, ref, "trailer", 1, "left", r, true_measure)
-            for r in _REGIONS}
+    def reference_p(region: str, measure: str) -> float:
+        return weighted_wear_measure(ref, index, bogie_type="trailer", axle=1, side="left",
+                                     running_mode="mixed", region=region, measure=measure)
+
+    norm = {r: reference_p(r, model_measure) / reference_p(r, true_measure) for r in REGIONS}
 
     def effect(wheel: ft.WheelSpec, history: ft.WearHistory) -> ft.WearHistory:
-        new = {r: norm[r] * ft.weighted_wear_measure(index, wheel.route, wheel.bogie_type,
-                                                     wheel.axle, wheel.side, r, true_measure,
-                                                     wheel.running_mode)
-               for r in _REGIONS}
+        new: dict[str, float] = {r: norm[r] * weighted_wear_measure(wheel.route, index,
+                                                  bogie_type=wheel.bogie_type, axle=wheel.axle,
+                                                  side=wheel.side,
+                                                  running_mode=wheel.running_mode, region=r,
+                                                  measure=true_measure)
+               for r in REGIONS}
         return _rescale_by_measure(wheel, history, new)
     return effect
 
@@ -171,11 +172,7 @@ def flange_tread_offset(instrument_id: str, offset_mm: float, split_y_mm: float 
 
 def to_route(route: ft.TwinRoute) -> Route:
     """The statistics ``Route`` of a twin route (attributes are returned separately)."""
-    return Route(route.name, tuple(RouteClass(c.radius_m, c.direction, c.cant_mm, c.speed_kmh,
-                                              c.share) for c in route.classes))
-
-
-EffectFactory = Callable[..., ft.WearEffect]
+    return Route(route.name, route.classes)
 
 
 def twin_measurements(twin: ft.FleetTwin) -> tuple[pd.DataFrame, Array]:

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from wearcast.statistics.profile_parameters import WheelLimits
+from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 
 #: The flange-parameter limits in the order of :data:`LIMIT_DIRECTIONS`.
 FLANGE_LIMITS = ("sd", "sh", "qr")
@@ -27,11 +27,12 @@ LIMIT_DIRECTIONS = {"sd": 1.0, "sh": -1.0, "qr": 1.0, "diameter": 1.0}
 
 @dataclass(frozen=True)
 class FleetLimits:
-    """Limits of one fleet [mm]; any field may be overridden."""
+    """Limits of one fleet [mm]; any field may be overridden. The flange-parameter defaults
+    are :data:`wearcast.statistics.profile_parameters.DEFAULT_LIMITS`."""
 
-    sd_min_mm: float = 22.0
-    sh_max_mm: float = 36.0
-    qr_min_mm: float = 6.5
+    sd_min_mm: float = DEFAULT_LIMITS.sd_min_mm
+    sh_max_mm: float = DEFAULT_LIMITS.sh_max_mm
+    qr_min_mm: float = DEFAULT_LIMITS.qr_min_mm
     scrap_diameter_mm: float = 840.0
     new_diameter_mm: float = 920.0
     axle_diameter_difference_mm: float = 1.0

@@ -20,11 +20,11 @@ from typing import Any
 
 import numpy as np
 
+from wearcast.physics.profiles.references import S1002_FLANGE_THICKNESS_MM
 from wearcast.statistics.maintenance.fleet_state import FleetState, WheelState
 from wearcast.statistics.maintenance.lathe_plan import PlanWheel
 from wearcast.statistics.maintenance.limits import FLANGE_LIMITS
 from wearcast.statistics.maintenance.turning import (
-    S1002_SD_MM,
     TargetProfile,
     projected_profile,
     turning_options,
@@ -59,8 +59,8 @@ def wear_km(wheel: WheelState, rates: Mapping[str, float], profile_mileage_km: f
     """Kilometres of wear behind the profile measured at ``profile_mileage_km`` (module
     docstring), at least 1 km."""
     gone = wheel.mileage_km - profile_mileage_km
-    if wheel.sd_mm is not None and rates["sd"] > 0 and wheel.sd_mm < S1002_SD_MM:
-        return max((S1002_SD_MM - wheel.sd_mm) / rates["sd"] - gone, 1.0)
+    if wheel.sd_mm is not None and rates["sd"] > 0 and wheel.sd_mm < S1002_FLANGE_THICKNESS_MM:
+        return max((S1002_FLANGE_THICKNESS_MM - wheel.sd_mm) / rates["sd"] - gone, 1.0)
     start = wheel.turned_at_km if wheel.turned_at_km is not None else 0.0
     return max(profile_mileage_km - start, 1.0)
 

@@ -3,8 +3,8 @@
 Every wheel of ``n_vehicles`` vehicles (motor and trailer bogie, axles 1 and 2, both sides)
 was last turned to S1002 at a known mileage and wears since then in a known way: its flange
 face and root retreat laterally towards the back face by r = a_f s (the flange back stays,
-the tip is trimmed where the two meet, the step to the tread is bridged straight: the shape
-of :func:`turning.thinner_flange_variant` with Δ = r), and its tread loses a layer
+the tip is trimmed where it meets the unworn S1002, the step to the tread is bridged straight
+from the flange root at ``S1002_ROOT_Y_MM``), and its tread loses a layer
 a_t s exp(-((y - y_t) / b_t)²) (s [km] since turning; a_f, a_t [mm/km] drawn per wheel),
 so its true profile, Sd, Sh, qR and the mileage at which each limit is crossed are known.
 Measured profiles are the true ones in the instrument's frame (heights from the worn tape
@@ -24,9 +24,9 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.profiles.parameters import flange_parameters
+from wearcast.physics.profiles.references import S1002_ROOT_Y_MM
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.maintenance.limits import FleetLimits
-from wearcast.statistics.maintenance.turning import ROOT_START_Y_MM
 
 Y_TREAD_MM, B_TREAD_MM = 4.0, 14.0
 
@@ -51,7 +51,7 @@ class SyntheticWheel:
     def profile(self, y: np.ndarray, km_since: float) -> np.ndarray:
         """True heights [mm] over the worn tape circle."""
         r = self.flange_rate * km_since
-        y_a = ROOT_START_Y_MM
+        y_a = S1002_ROOT_Y_MM
         ref = s1002_height_mm(y)
         face = np.fmin(ref, s1002_height_mm(np.minimum(y + r, 60.0)))
         z_a = float(s1002_height_mm(np.array([y_a]))[0])

@@ -27,8 +27,11 @@ sampling moves it by tenths of a millimetre); the flange face of S1002 (70°, sl
 is checked. A cut below zero (the worn wheel has
 more material than the target everywhere, never the case after wear) is reported as is.
 
-**Targets.** S1002 (EN 13715) and its thinner-flange variants, built by
-:func:`thinner_flange_variant` unless the caller gives its own heights (a catalogue).
+**Targets.** S1002 (EN 13715) and its thinner-flange variants from the reference catalogue
+(:func:`wearcast.physics.profiles.references.s1002_variant_height`), unless the caller gives
+its own heights. A variant's flange is translated towards the back face with its tip, so on a
+wheel whose flange back is unworn the tip of a thin variant stands up to about 0.5 mm over the
+old flange back and the cut there can bind.
 
 **Economic choice.** For each target that restores every limit, the kilometres until the
 first limit is reached again (the restored margins over the wheel's wear rates) per
@@ -50,16 +53,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.parameters import flange_parameters
+from wearcast.physics.profiles.references import (
+    S1002_FLANGE_THICKNESS_MM,
+    S1002_FLANGE_THICKNESSES_MM,
+    s1002_variant_height,
+)
 from wearcast.physics.profiles.s1002 import S1002_Y_MAX_MM, S1002_Y_MIN_MM, s1002_height_mm
 from wearcast.statistics.maintenance.limits import FLANGE_LIMITS, FleetLimits
 
 Heights = Callable[[ArrayLike], NDArray[np.float64]]
-#: Flange thickness of a new S1002 [mm] and the EN 13715 thinner-flange range.
-S1002_SD_MM = 32.5
-VARIANT_SD_MM = (32.5, 31.5, 30.5, 29.5, 28.5)
-#: Where the tread ends and the flange-root (connection) zone begins in S1002 [mm]: the
-#: boundary of the tread's polynomial section in the Netter/DLR piecewise form.
-ROOT_START_Y_MM = -26.0
 #: The worn profile must cover this lateral range [mm] (flange tip to the outer tread).
 REQUIRED_COVERAGE_MM = (-60.0, 25.0)
 GRID_STEP_MM = 0.05
@@ -68,38 +70,6 @@ MAX_CHECK_SLOPE = 3.0
 #: Where the cut is checked [mm]: from the inner end of the S1002 flange-tip arc to the end
 #: of its tread (the section boundaries of the Netter/DLR piecewise form).
 CHECK_RANGE_Y_MM = (-62.764705882, 32.15796)
-
-
-def thinner_flange_variant(flange_thickness_mm: float, reference: Heights = s1002_height_mm
-                           ) -> Heights:
-    """Heights of the thinner-flange variant of ``reference`` with flange thickness Sd [mm].
-
-    Construction (EN 13715 as publicly summarised: the flange-face and connection zones are
-    translated towards the back face by Δ = 32.5 - Sd, the tread keeps its position and the
-    step is bridged by a straight line): left of ``ROOT_START_Y_MM`` - Δ the variant is the
-    lower of the reference and the reference translated by Δ towards the back face (the
-    flange back keeps its place, the face and root move by Δ, the tip is trimmed where the
-    two meet, a few tenths of a millimetre of flange height for Δ = 4 mm); right of
-    ``ROOT_START_Y_MM`` it is the reference; in between the straight bridge. This is a
-    stand-in for the standard's own drawing, behind this one function, so a catalogue of
-    reference profiles can replace it.
-    """
-    delta = S1002_SD_MM - float(flange_thickness_mm)
-    if not 0.0 <= delta <= 6.0:
-        raise ValueError(f"flange_thickness_mm: {flange_thickness_mm!r} is outside 26.5-32.5")
-    if delta == 0.0:
-        return reference
-    y_a = ROOT_START_Y_MM
-    z_a = float(reference(np.array([y_a]))[0])
-
-    def heights(y_mm: ArrayLike) -> NDArray[np.float64]:
-        y = np.asarray(y_mm, dtype=float)
-        shifted = reference(np.minimum(y + delta, S1002_Y_MAX_MM))
-        base = reference(y)
-        flange = np.fmin(base, shifted)
-        return np.where(y >= y_a, base, np.where(y <= y_a - delta, flange, z_a))
-
-    return heights
 
 
 @dataclass(frozen=True)
@@ -121,12 +91,15 @@ def _target(name: str, heights: Heights) -> TargetProfile:
     return TargetProfile(name, heights, p.sd_mm, p.sh_mm, p.qr_mm)
 
 
-def s1002_targets(thicknesses_mm: Sequence[float] = VARIANT_SD_MM) -> list[TargetProfile]:
-    """S1002 and its thinner-flange variants (names ``S1002`` and ``S1002/e<Sd>``)."""
+def s1002_targets(thicknesses_mm: Sequence[float] = S1002_FLANGE_THICKNESSES_MM
+                  ) -> list[TargetProfile]:
+    """S1002 and its EN 13715 thinner-flange variants from the reference catalogue (names
+    ``S1002`` and ``S1002/e<Sd>``); raises ValueError "flange_thickness_mm: ..." outside
+    28.5 to 32.5 mm."""
     out = []
     for e in thicknesses_mm:
-        name = "S1002" if e == S1002_SD_MM else f"S1002/e{e:g}"
-        out.append(_target(name, thinner_flange_variant(e)))
+        name = "S1002" if e == S1002_FLANGE_THICKNESS_MM else f"S1002/e{e:g}"
+        out.append(_target(name, s1002_variant_height(float(e))))
     return out
 
 

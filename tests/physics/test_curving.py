@@ -221,11 +221,11 @@ def test_scipy_polish_survives_non_finite_probes():
         out = table[np.clip(idx, 0, 20)] * 0.0 + np.arctan(q - p)
         return np.where(np.abs(q) > 5.0, np.nan, out)
 
-    q, norm, ok = cv._scipy_polish(fun, np.array([0.2, -0.2]), np.array([0.5, -0.25]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([0.2, -0.2]), np.array([0.5, -0.25]), 1e-9)
     assert ok and np.allclose(q, [0.5, -0.25])
-    q, norm, ok = cv._scipy_polish(fun, np.array([np.nan, 0.0]), np.array([0.5, 0.0]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([np.nan, 0.0]), np.array([0.5, 0.0]), 1e-9)
     assert not ok and norm == np.inf
-    q, norm, ok = cv._scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
+    q, norm, ok = cv.scipy_polish(fun, np.array([3.0, -3.0]), np.array([0.5, -0.25]), 1e-9)
     assert np.all(np.isfinite(q)) and ok == (norm < 1e-9)
 
 
@@ -267,7 +267,7 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
     cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0, 1200.0)]
     ok = cv.solve_curving_cases_or_none(trailer, cases)
     assert all(r is not None for r in ok)
-    real = cv._continuation_batch
+    real = cv.continuation_batch
 
     def fail_second(fun, q0, p_start, p_end, tol, **kw):
         q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
@@ -275,7 +275,7 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
         conv[1] = False
         return q, norm, conv
 
-    monkeypatch.setattr(cv, "_continuation_batch", fail_second)
+    monkeypatch.setattr(cv, "continuation_batch", fail_second)
     skipped = cv.solve_curving_cases_or_none(trailer, cases)
     assert skipped[1] is None
     for got, want in zip((skipped[0], skipped[2]), (ok[0], ok[2]), strict=True):
@@ -294,3 +294,37 @@ def test_initial_states_restart_newton_at_the_solution(trailer):
                                           initial_states=[cold[0].state, None])
     assert np.allclose(warm[0].state, cold[0].state, atol=1e-9)
     assert np.array_equal(warm[1].state, cold[1].state)
+
+
+def test_tau_max_in_full_slip_is_mu_p0_with_the_elliptic_bound():
+    # full slip (creepage 50x the characteristic one): the traction equals mu p everywhere, so
+    # tau_max = mu p0 for the Hertz (elliptic) pressure; the parabolic bound would give 4/3 of it
+    a, b, fn, mu = 6.0, 4.0, 80_000.0, 0.3
+    out = cv.contact_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
+    p0 = 1.5 * fn / (np.pi * a * b)
+    # the grid's element centres miss the patch centre by half an element: (1 - rho^2)^0.5 there
+    assert float(out["tau_max_mpa"]) == pytest.approx(mu * p0, rel=2e-3)
+    from wearcast.physics.contact.fastsim import fastsim
+    parabolic = fastsim(0.05, 0.0, 0.0, a, b, fn, mu, cv.SHEAR_MODULUS_MPA, n_x=40, n_y=40)
+    assert float(np.max(parabolic.shear_traction_mpa)) == pytest.approx(4 / 3 * mu * p0,
+                                                                         rel=2e-3)
+
+
+@pytest.mark.parametrize("wheel", ["s1002", "worn"])
+def test_compiled_candidates_equal_the_numpy_reference(wheel):
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+    if wheel == "s1002":
+        table = cv.build_contact_table(None, "60E1", 1 / 40, 0.46)
+    else:  # a hollow-worn tread and a thinner flange: more minima, merged patches
+        def worn(y):
+            y = np.asarray(y, dtype=float)
+            return s1002_height_mm(y) + 0.4 * np.exp(-((y - 5.0) / 12.0) ** 2) \
+                + 0.3 * np.exp(-((y + 38.0) / 4.0) ** 2)
+        table = cv.build_contact_table(worn, "60E1", 1 / 20, 0.46)
+    shifts = np.random.default_rng(3).uniform(-16.0, 16.0, 400)
+    ref = table._candidate_slots_numpy(shifts)
+    cols = table.candidates(shifts)
+    for name, r in zip(("wheel_y_mm", "gap_mm", None, "weight"), ref, strict=True):
+        if name is None:
+            continue
+        assert np.allclose(cols[name], r, rtol=1e-9, atol=1e-9), name

@@ -183,7 +183,7 @@ def test_a_point_failing_from_centred_wheelsets_is_retried_from_its_last_state(m
     # the loop retries it from the equilibrium of the previous profile instead of falling back.
     from wearcast.physics import curving as cv
 
-    real = cv._continuation_batch
+    real = cv.continuation_batch
     calls = {"n": 0}
 
     def cold_fails_after_first(fun, q0, p_start, p_end, tol, **kw):
@@ -195,6 +195,6 @@ def test_a_point_failing_from_centred_wheelsets_is_retried_from_its_last_state(m
             ok = ok & ~(cold & tight)
         return q, norm, ok
 
-    monkeypatch.setattr(cv, "_continuation_batch", cold_fails_after_first)
+    monkeypatch.setattr(cv, "continuation_batch", cold_fails_after_first)
     sim = simulate_wear("metro_b", CLASSES, steps=WearSteps(n_steps=2, depth_per_step_mm=0.05))
     assert sim.contact_updates == 2 and sim.contact_fallbacks == 0

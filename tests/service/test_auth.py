@@ -25,7 +25,7 @@ with warnings.catch_warnings():
 from wearcast.service.app import create_app
 from wearcast.service.models_access import ApiKey
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 ROUTE = {"name": "line", "classes": [
     {"radius_m": None, "speed_kmh": 80, "share": 0.7},
@@ -219,6 +219,31 @@ def test_the_first_start_creates_an_admin_key_and_prints_it_once(
     create_app(Settings(data_dir=tmp_path))
     assert "wc_" not in capsys.readouterr().err  # only once
     assert _with_key(app, key).post("/v1/routes", json=ROUTE).status_code == 201
+    assert _anonymous(app).post("/v1/routes", json=ROUTE).status_code == 401
+
+
+def test_an_empty_api_key_variable_counts_as_unset(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """``WEARCAST_API_KEY=`` (set but empty, as a compose file or ``make run`` may pass it)
+    starts the service like an unset variable: the first start creates and prints a key.
+    The other optional settings set empty keep their defaults too."""
+    monkeypatch.setenv("WEARCAST_API_KEY", "")
+    for name in ("DATABASE_URL", "CORS_ORIGINS", "MAX_BODY_BYTES", "JOB_QUEUE",
+                 "RATE_LIMIT_BURST", "BROKER_URL"):
+        monkeypatch.setenv(f"WEARCAST_{name}", "")
+    settings = Settings(data_dir=tmp_path)
+    assert settings.api_key is None and settings.database_url is None
+    defaults = Settings.model_fields
+    assert settings.cors_origins == []
+    assert settings.max_body_bytes == defaults["max_body_bytes"].default
+    assert settings.rate_limit_burst == defaults["rate_limit_burst"].default
+    assert settings.job_queue == "embedded" and settings.broker_url.startswith("redis://")
+    assert Settings(data_dir=tmp_path, api_key="  ").api_key is None  # blank given directly
+    app = create_app(settings)
+    key = re.search(r"(wc_[A-Za-z0-9_-]{40,})", capsys.readouterr().err)
+    assert key is not None
+    assert _with_key(app, key.group(1)).post("/v1/routes", json=ROUTE).status_code == 201
     assert _anonymous(app).post("/v1/routes", json=ROUTE).status_code == 401
 
 

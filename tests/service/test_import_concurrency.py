@@ -17,7 +17,7 @@ from wearcast.service import importing
 from wearcast.service import models_db as db
 from wearcast.service.db import Database
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 
 @pytest.fixture(scope="module")

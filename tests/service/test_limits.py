@@ -19,7 +19,7 @@ with warnings.catch_warnings():
 from wearcast.service import idempotency
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 HEADER = b"wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,y_mm,z_mm\n"
 

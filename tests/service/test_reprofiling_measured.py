@@ -13,7 +13,7 @@ import pytest
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
-from wearcast.statistics import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin as ft
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -29,12 +29,7 @@ def setup(tmp_path_factory: pytest.TempPathFactory) -> dict:
     if not REFERENCE_DIR.is_dir():
         pytest.skip(f"reference data not found at {REFERENCE_DIR}")
     client = TestClient(create_app(Settings(data_dir=tmp_path_factory.mktemp("reprof"))))
-    config = ft.FleetConfig(
-        units=(ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead"),),
-        mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
-        calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
-        area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=7)
-    fleet = ft.generate_fleet(config)
+    fleet = ft.generate_fleet(ft.metro_calibration_config())
     assert client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")}).status_code == 200
     assert client.post("/v1/routes", json=ft.metro_route().to_json()).status_code == 201

@@ -6,9 +6,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import Diagnosis, diagnose
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import scenarios
 from wearcast.statistics.generators import twin_effects as te
 
 TABLE = ft.synthetic_wear_table()
@@ -29,19 +29,12 @@ EFFECTS = {
 
 
 def run_scenario(wear_effects=(), profile_effects=(), seed=0, **kwargs):
-    """Generate the test fleet, calibrate on unit A's motor bogies as a user would, diagnose."""
-    cfg = te.scenario_config(seed=seed, wear_effects=wear_effects,
-                             profile_effects=profile_effects)
-    twin = ft.generate_fleet(cfg, TABLE)
-    df, curves = te.twin_measurements(twin)
-    routes, attrs = te.scenario_routes(cfg)
-    cal = (df["vehicle_id"].str.startswith("A") & (df["bogie_type"] == "motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], routes, TABLE, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    diagnosis = diagnose(model, df, curves, routes, TABLE,
-                         calibration_wheel_ids=set(df["wheel_id"][cal]),
-                         route_attributes=attrs, **kwargs)
-    return model, df, curves, routes, diagnosis
+    """Generate the test fleet, calibrate on unit A's motor bogies as a user would, diagnose
+    (:func:`wearcast.statistics.generators.scenarios.twin_scenario`)."""
+    s = scenarios.twin_scenario(wear_effects, profile_effects, seed=seed, table=TABLE)
+    args, finder_kwargs = s.finder_arguments()
+    diagnosis = diagnose(*args, **finder_kwargs, **kwargs)
+    return s.model, s.measurements, s.wear_curves_mm, s.routes, diagnosis
 
 
 @lru_cache(maxsize=16)

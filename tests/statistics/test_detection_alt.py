@@ -19,21 +19,15 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import apply_extension, diagnose
 from wearcast.statistics.generators import fleet_twin_alt as fa
+from wearcast.statistics.generators import scenarios
 
 
 def run_alt(effects: fa.AltEffects, seed: int = 0, n_boot: int = 400):
-    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effects, seed=seed))
-    df, curves = fleet.measurements, fleet.wear_curves
-    cal = (df["unit"].eq("U1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table, wear_curves_mm=curves[cal],
-                             measure="tau_max", running_mode="mixed")
-    diagnosis = diagnose(model, df, curves, fleet.routes, fleet.table,
-                         calibration_wheel_ids=set(df["wheel_id"][cal]),
-                         route_attributes=fleet.route_attributes, n_boot=n_boot)
-    return fleet, model, diagnosis
+    s = scenarios.alt_scenario(effects, seed)
+    args, kwargs = s.finder_arguments()
+    return s.fleet, s.model, diagnose(*args, **kwargs, n_boot=n_boot)
 
 
 @lru_cache(maxsize=16)

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from wearcast.statistics import causes as cz
-from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import build_data, diagnose
 from wearcast.statistics.generators import depot as dp
+from wearcast.statistics.generators import scenarios
 
 MODERATE = {
     "traction": dp.DepotEffects(traction=1.3),
@@ -32,14 +32,8 @@ MODERATE = {
 
 
 def case(effects: dp.DepotEffects, seed: int = 0):
-    fleet = dp.generate_depot_fleet(dp.DepotConfig(
-        effects=effects, seed=seed, profiles=effects.instrument_scale is not None))
-    df = fleet.measurements
-    cal = (df["unit"].eq("N1") & df["bogie_type"].eq("motor")).to_numpy()
-    model = hybrid.calibrate(df[cal], fleet.routes, fleet.table,
-                             wear_curves_mm=fleet.wear_curves[cal], measure="tau_max",
-                             running_mode="mixed")
-    return fleet, df, cal, model
+    s = scenarios.depot_scenario(effects, seed)
+    return s.fleet, s.measurements, s.calibration, s.model
 
 
 @lru_cache(maxsize=8)

@@ -26,6 +26,7 @@ from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.routes import RouteClass
 
 pytestmark = pytest.mark.slow
 
@@ -37,12 +38,12 @@ CACHE: dict[Any, Any] = {}
 
 
 def route(name: str, lubricated: bool) -> ft.TwinRoute:
-    classes: list[ft.TwinCurveClass] = []
+    classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share in CLASSES:
         if radius_m is None:
-            classes.append(ft.TwinCurveClass(None, None, 0.0, speed_kmh, share))
+            classes.append(RouteClass(None, None, 0.0, speed_kmh, share))
         else:
-            classes += [ft.TwinCurveClass(radius_m, d, cant_mm, speed_kmh, share / 2.0)
+            classes += [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0)
                         for d in ("left", "right")]
     return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
 

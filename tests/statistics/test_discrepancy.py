@@ -12,12 +12,8 @@ import pytest
 
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import hybrid
-from wearcast.statistics.discrepancy import (
-    ExtendedModel,
-    apply_extension,
-    diagnosis_figures,
-    report_html,
-)
+from wearcast.statistics.discrepancy import ExtendedModel, apply_extension
+from wearcast.statistics.discrepancy_report import diagnosis_figures, report_html
 from wearcast.statistics.generators import twin_effects as te
 
 _spec = importlib.util.spec_from_file_location(

@@ -13,7 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES, rail_for
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.route_measure import weighted_wear_measure
+from wearcast.statistics.routes import RouteClass
+from wearcast.statistics.wear_tables import compile_wear_table, table_value
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE_DIR = REPO / "service" / "example_fleet"
@@ -89,24 +93,28 @@ def test_synthetic_wear_table_follows_seed001_fig10_qualitatively():
     table = ft.synthetic_wear_table()
     wear_tables = pytest.importorskip("wearcast.statistics.wear_tables")
     wear_tables.validate_wear_table(table)
-    index = ft.WearTableIndex(table)
+    compiled = compile_wear_table(table)
+
+    def value(*key):
+        return table_value(compiled, *key)
+
     radii = [150, 200, 300, 500, 700, 1000, 1500, 3000]
     for bogie in ("motor", "trailer"):
-        for measure in ft.MEASURES:
-            flange = [index.value(bogie, "leading", "high", r, "flange", measure) for r in radii]
+        for measure in WEAR_MEASURES:
+            flange = [value(bogie, "leading", "high", r, "flange", measure) for r in radii]
             assert np.all(np.diff(flange) <= 0) and flange[0] > 0  # grows as R falls
             assert flange[-1] == 0.0  # none in wide curves
-            assert index.value(bogie, "leading", "tangent", None, "flange", measure) == 0.0
-            assert index.value(bogie, "leading", "tangent", None, "tread", measure) > 0.0
+            assert value(bogie, "leading", "tangent", None, "flange", measure) == 0.0
+            assert value(bogie, "leading", "tangent", None, "tread", measure) > 0.0
             for r in radii:
-                assert index.value(bogie, "leading", "low", r, "flange", measure) == 0.0
+                assert value(bogie, "leading", "low", r, "flange", measure) == 0.0
                 # the trailing wheelset flanges less than the leading one
-                assert (index.value(bogie, "trailing", "high", r, "flange", measure)
-                        <= index.value(bogie, "leading", "high", r, "flange", measure))
+                assert (value(bogie, "trailing", "high", r, "flange", measure)
+                        <= value(bogie, "leading", "high", r, "flange", measure))
     for r in (300, 500, 700):
-        tg = [index.value(b, "leading", "high", r, "tread", "t_gamma")
+        tg = [value(b, "leading", "high", r, "tread", "t_gamma")
               for b in ("motor", "trailer")]
-        tau = [index.value(b, "leading", "high", r, "tread", "tau_max")
+        tau = [value(b, "leading", "high", r, "tread", "tau_max")
                for b in ("motor", "trailer")]
         assert tg[0] / tg[1] == pytest.approx(1.8)  # motor T_gamma well above trailer
         assert tau[0] / tau[1] == pytest.approx(1.05)  # tau_max similar
@@ -117,12 +125,13 @@ def test_weighted_measure_agrees_with_statistics_core_lookup():
     table = ft.synthetic_wear_table()
     compiled = wear_tables.compile_wear_table(table)
     route = ft.metro_route()
-    for region in ft.REGIONS:
-        ours = ft.weighted_wear_measure(table, route, "motor", 1, "left", region, "tau_max",
-                                        "lead")
+    for region in REGIONS:
+        ours = weighted_wear_measure(route, table, bogie_type="motor", axle=1, side="left",
+                                     running_mode="lead", region=region, measure="tau_max")
         theirs = sum(
             c.share * wear_tables.table_value(
-                compiled, "motor", "leading", ft._rail_for("left", c.direction, c.radius_m),
+                compiled, "motor", "leading",
+                rail_for(None if c.radius_m is None else c.direction, "left"),
                 c.radius_m, region, "tau_max")
             for c in route.classes)
         assert ours == pytest.approx(theirs, rel=1e-12)
@@ -133,32 +142,32 @@ def test_weighted_measure_agrees_with_statistics_core_lookup():
        mode=st.sampled_from(["lead", "mixed"]), axle=st.sampled_from([1, 2]))
 def test_weighted_measure_mirror_symmetry(radius, share, mode, axle):
     # A left curve seen by the right wheel is a right curve seen by the left wheel.
-    table = ft.WearTableIndex(ft.synthetic_wear_table())
+    table = compile_wear_table(ft.synthetic_wear_table())
 
     def route(direction):
-        return ft.TwinRoute("r", (ft.TwinCurveClass(radius, direction, 50.0, 60.0, share),
-                                  ft.TwinCurveClass(None, None, 0.0, 80.0, 1.0 - share)))
+        return ft.TwinRoute("r", (RouteClass(radius, direction, 50.0, 60.0, share),
+                                  RouteClass(None, None, 0.0, 80.0, 1.0 - share)))
 
-    for region in ft.REGIONS:
-        a = ft.weighted_wear_measure(table, route("left"), "motor", axle, "right", region,
-                                     running_mode=mode)
-        b = ft.weighted_wear_measure(table, route("right"), "motor", axle, "left", region,
-                                     running_mode=mode)
+    def p(r, axle, side, region, mode):
+        return weighted_wear_measure(r, table, bogie_type="motor", axle=axle, side=side,
+                                     running_mode=mode, region=region, measure="tau_max")
+
+    for region in REGIONS:
+        a = p(route("left"), axle, "right", region, mode)
+        b = p(route("right"), axle, "left", region, mode)
         assert a == pytest.approx(b, rel=1e-12)
     # mixed mode is the mean of the leading and trailing wheelsets
-    lead1 = ft.weighted_wear_measure(table, route("left"), "motor", 1, "right", "flange",
-                                     running_mode="lead")
-    lead2 = ft.weighted_wear_measure(table, route("left"), "motor", 2, "right", "flange",
-                                     running_mode="lead")
-    mixed = ft.weighted_wear_measure(table, route("left"), "motor", 1, "right", "flange",
-                                     running_mode="mixed")
+    lead1 = p(route("left"), 1, "right", "flange", "lead")
+    lead2 = p(route("left"), 2, "right", "flange", "lead")
+    mixed = p(route("left"), 1, "right", "flange", "mixed")
     assert mixed == pytest.approx(0.5 * (lead1 + lead2), rel=1e-12, abs=1e-12)
 
 
 def test_weighted_measure_refuses_unknown_running_mode():
     with pytest.raises(ValueError, match="running_mode"):
-        ft.weighted_wear_measure(ft.synthetic_wear_table(), ft.tangent_route(), "motor", 1,
-                                 "left", "tread", running_mode="reverse")
+        weighted_wear_measure(ft.tangent_route(), ft.synthetic_wear_table(), bogie_type="motor",
+                              axle=1, side="left", running_mode="reverse", region="tread",
+                              measure="tau_max")
 
 
 # ------------------------------------------------------------------------- shapes
@@ -247,10 +256,11 @@ def test_wear_areas_follow_the_configured_rates_without_noise():
         rows = twin.profiles[twin.profiles["wheel_id"] == wheel.wheel_id]
         areas = [ft.wear_areas_mm2(g["y_mm"], g["z_mm"]) for _, g in rows.groupby("mileage_km")]
         mileage = sorted(rows["mileage_km"].unique())
-        for i, region in enumerate(ft.REGIONS):
-            expected = config.calibration_factor[region] * ft.weighted_wear_measure(
-                table, wheel.route, wheel.bogie_type, wheel.axle, wheel.side, region,
-                config.measure, wheel.running_mode)
+        for i, region in enumerate(ft.TWIN_REGION_ORDER):  # wear_areas_mm2: (tread, flange)
+            expected = config.calibration_factor[region] * weighted_wear_measure(
+                wheel.route, table, bogie_type=wheel.bogie_type, axle=wheel.axle,
+                side=wheel.side, running_mode=wheel.running_mode, region=region,
+                measure=config.measure)
             slope = _slope_through_origin(mileage, [a[i] for a in areas])
             assert slope == pytest.approx(expected, rel=0.01, abs=2e-6)
 
@@ -271,7 +281,7 @@ def test_processing_recovers_the_rate_from_noisy_misaligned_profiles():
     assert np.abs(merged["tread"] - merged["tread_area_mm2"]).max() < 2.0
     assert np.abs(merged["flange"] - merged["flange_area_mm2"]).max() < 2.0
     aosta = merged[merged["route_id"] == "aosta"]
-    for region in ft.REGIONS:
+    for region in REGIONS:
         measured = _slope_through_origin(aosta["mileage_km"], aosta[region])
         true = np.mean(aosta[f"rate_{region}_mm2_per_km"])
         assert measured == pytest.approx(true, rel=0.03)

@@ -5,16 +5,16 @@ import pytest
 
 from wearcast.statistics.generators.fleet_twin import (
     FleetConfig,
-    TwinCurveClass,
     TwinRoute,
     UnitConfig,
 )
 from wearcast.statistics.generators.fleet_twin_loop import LoopTruth, generate_loop_fleet
 from wearcast.statistics.processing import process_profile
+from wearcast.statistics.routes import RouteClass
 
-ROUTE = TwinRoute("loop-line", (TwinCurveClass(None, None, 0.0, 70.0, 0.6),
-                                TwinCurveClass(500.0, "left", 60.0, 60.0, 0.2),
-                                TwinCurveClass(500.0, "right", 60.0, 60.0, 0.2)))
+ROUTE = TwinRoute("loop-line", (RouteClass(None, None, 0.0, 70.0, 0.6),
+                                RouteClass(500.0, "left", 60.0, 60.0, 0.2),
+                                RouteClass(500.0, "right", 60.0, 60.0, 0.2)))
 
 
 @pytest.fixture(scope="module")

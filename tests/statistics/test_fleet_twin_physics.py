@@ -12,10 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.physics.wear_tables import wear_table_for_route
 from wearcast.statistics import hybrid
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.route_measure import weighted_wear_measure
 
 
 @pytest.fixture(scope="module")
@@ -29,10 +31,11 @@ def test_twin_follows_a_physics_table_and_calibration_recovers_cs(physics_table)
     route = ft.aosta_route()
     # Choose c_s so that unit A's motor wheels wear ~0.35 (tread) and ~0.5 (flange) mm^2 per
     # 1000 km on average, whatever the physics table's scale: realistic areas at 150,000 km.
-    p = {region: np.mean([ft.weighted_wear_measure(physics_table, route, "motor", axle, side,
-                                                   region, "tau_max", "mixed")
+    p = {region: np.mean([weighted_wear_measure(route, physics_table, bogie_type="motor",
+                                                axle=axle, side=side, running_mode="mixed",
+                                                region=region, measure="tau_max")
                           for axle in (1, 2) for side in ("left", "right")])
-         for region in ft.REGIONS}
+         for region in REGIONS}
     assert p["flange"] > 0 and p["tread"] > 0
     c_s = {"tread": 3.5e-4 / p["tread"], "flange": 5e-4 / p["flange"]}
     config = ft.FleetConfig(
@@ -47,5 +50,5 @@ def test_twin_follows_a_physics_table_and_calibration_recovers_cs(physics_table)
                              measure="tau_max", running_mode="mixed")
     # 8 motor wheels with 10 % per-wheel rate scatter: the mean of 8 log-normal factors has a
     # standard error of ~3.5 %, so 10 % is a 3-sigma bound; processing errors are < 1 %.
-    for region in ft.REGIONS:
+    for region in REGIONS:
         assert model.region(region).c_s == pytest.approx(c_s[region], rel=0.10), region

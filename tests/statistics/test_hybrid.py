@@ -6,13 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wearcast.statistics.hybrid import (
-    HybridModel,
-    UnknownBogieTypeError,
-    calibrate,
-    predict,
-    weighted_wear_measure,
-)
+from wearcast.statistics.hybrid import HybridModel, calibrate, predict
+from wearcast.statistics.route_measure import UnknownBogieTypeError, weighted_wear_measure
 from wearcast.statistics.routes import Route, RouteClass
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 from wearcast.statistics.wear_states import region_area_mm2

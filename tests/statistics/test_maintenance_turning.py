@@ -13,7 +13,6 @@ from wearcast.statistics.maintenance.turning import (
     economic_choice,
     projected_profile,
     s1002_targets,
-    thinner_flange_variant,
     turning_cut,
     turning_options,
     wheel_life,
@@ -63,17 +62,21 @@ def test_known_uniform_layer_restored_by_that_layer():
     assert turning_cut(y, z, TARGETS[0]).radial_mm == pytest.approx(1.3, abs=2e-4)
 
 
-def test_thinner_flange_needs_less_diameter_and_is_nested():
+def test_thinner_flange_needs_less_diameter_and_cuts_only_the_tip_overhang():
     y, z = _worn(lambda y: 2.5 * np.exp(-((y + 42) / 4) ** 2))
-    losses = [turning_cut(y, z, t).diameter_loss_mm for t in TARGETS]
-    assert losses == sorted(losses, reverse=True)
-    assert losses[0] > losses[-1] + 1.0
-    # each variant lies inside the reference: turning a new S1002 to it needs no cut
+    losses = {t.name: turning_cut(y, z, t).diameter_loss_mm for t in TARGETS}
+    assert all(losses["S1002"] > loss + 1.0 for name, loss in losses.items() if name != "S1002")
+    # A variant's flange is translated towards the back face with its tip (EN 13715, the
+    # catalogue of physics.profiles.references), so its tip stands over the old flange back:
+    # turning a new S1002 to it cuts exactly that overhang (0.32 to 0.48 mm), found here on a
+    # 0.01 mm grid; the cut's own 0.1 mm sampling of the tip adds a chord sagitta < 2e-3 mm.
     yy = np.arange(-70, 60, 0.1)
+    fine = np.arange(-70, 60, 0.01)
     for t in TARGETS:
-        assert np.all(t.heights(yy) <= s1002_height_mm(yy) + 1e-12)
-        # (chord sagitta of the 0.1 mm sampling on the flange tip: h^2 / 8R < 2e-3 mm)
-        assert turning_cut(yy, s1002_height_mm(yy), t).radial_mm == pytest.approx(0, abs=2e-3)
+        overhang = max(0.0, float(np.nanmax(t.heights(fine) - s1002_height_mm(fine))))
+        assert overhang < 0.5
+        cut = turning_cut(yy, s1002_height_mm(yy), t).radial_mm
+        assert cut == pytest.approx(overhang, abs=2e-3)
 
 
 def test_variant_flange_thickness():
@@ -82,7 +85,7 @@ def test_variant_flange_thickness():
                                         else 32.5, abs=0.01)
         assert 27.7 < t.sh_mm <= 28.0 + 1e-6
     with pytest.raises(ValueError, match="flange_thickness_mm"):
-        thinner_flange_variant(33.0)
+        s1002_targets((33.0,))
 
 
 def test_profile_must_cover_flange_and_tread():

@@ -8,24 +8,21 @@ crossing to within max(0.1 % of the mileage, 50 km) (``MILEAGE_RTOL``/``MILEAGE_
 
 from __future__ import annotations
 
+import importlib.util
 import itertools
+from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
 from wearcast.statistics import hybrid, reprofiling
 from wearcast.statistics.hybrid import (
-    HybridModel,
-    RegionCalibration,
-    _weighted_measure_vectorised,
     parameters_at_areas,
     predict,
     profile_at_areas,
     region_rates,
-    wheelset_weights,
 )
 from wearcast.statistics.profile_parameters import WheelLimits, flange_parameters
 from wearcast.statistics.reprofiling import (
@@ -34,56 +31,26 @@ from wearcast.statistics.reprofiling import (
     _margins,
     reprofiling_mileage,
 )
+from wearcast.statistics.route_measure import weighted_wear_measure, wheelset_weights
 from wearcast.statistics.routes import Route, RouteClass, rail_for
-from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
-from wearcast.statistics.wear_rates import WearRate
 from wearcast.statistics.wear_states import (
-    build_wear_states,
     join_regions,
-    region_area_mm2,
     wear_curve_at_area,
     wear_curves_at_areas,
 )
-from wearcast.statistics.wear_tables import TABLE_COLUMNS, compile_wear_table, table_value
+from wearcast.statistics.wear_tables import (
+    RadiusOutOfTableError,
+    compile_wear_table,
+    table_value,
+)
 
 KW = {"bogie_type": "motor", "axle": 1}
-Y = np.asarray(DEFAULT_GRID_Y_MM)
-SPLIT = -30.0
-ROUTE = Route("r", (RouteClass(None, None, 0.0, 100.0, 0.6),
-                    RouteClass(300.0, "left", 90.0, 60.0, 0.4)))
-TANGENT = Route("t", (RouteClass(None, None, 0.0, 100.0, 1.0),))
-
-
-def _table():
-    """Curve-radius table of one motor bogie (the same as test_reprofiling's)."""
-    rows = []
-    for ws in ("leading", "trailing"):
-        rows += [("motor", ws, "tangent", np.nan, "flange", "tau_max", 0.0),
-                 ("motor", ws, "tangent", np.nan, "tread", "tau_max", 50.0),
-                 ("motor", ws, "high", 250.0, "flange", "tau_max", 120.0),
-                 ("motor", ws, "low", 250.0, "flange", "tau_max", 1.0),
-                 ("motor", ws, "high", 250.0, "tread", "tau_max", 90.0),
-                 ("motor", ws, "low", 250.0, "tread", "tau_max", 70.0)]
-    return pd.DataFrame(rows, columns=TABLE_COLUMNS)
-
-
-def _model(c_flange=2e-5, c_tread=5e-6, rel=0.1):
-    """Hand-built model: Gaussian flange-face and tread wear shapes, six states a region."""
-    flange = np.exp(-0.5 * ((Y + 39.0) / 3.0) ** 2)
-    tread = np.exp(-0.5 * (Y / 14.0) ** 2)
-    flange /= region_area_mm2(Y, flange, SPLIT, "flange")
-    tread /= region_area_mm2(Y, tread, SPLIT, "tread")
-    a_f, a_t = np.linspace(1, 60, 30), np.linspace(2, 200, 30)
-    curves = a_f[:, None] * flange + a_t[:, None] * tread
-    states = build_wear_states(Y, curves, a_f, a_t, split_y_mm=SPLIT, n_states=6)
-    rate = WearRate(1e-3, 1e-5, 1e-4, 30)
-
-    def cal(c):
-        return RegionCalibration(c_s=c, c_s_rel_std_error=0.01, c_s_rel_spread=rel, p_m=1.0,
-                                 rate=rate)
-
-    return HybridModel(measure="tau_max", running_mode="lead", states=states,
-                       flange=cal(c_flange), tread=cal(c_tread), bogie_types=("motor",))
+_spec = importlib.util.spec_from_file_location(
+    "_reprofiling_helpers", Path(__file__).with_name("_reprofiling_helpers.py"))
+fixtures = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(fixtures)
+Y, SPLIT, ROUTE, TANGENT = fixtures.Y, fixtures.SPLIT, fixtures.ROUTE, fixtures.TANGENT
+_table, _model = fixtures.table, fixtures.model
 
 
 def _brentq_reference(model, route, table, limits, start, *, side):
@@ -225,14 +192,15 @@ def test_vectorised_weighted_measure_is_the_class_by_class_sum(table):
         route = Route("random", classes)
         for axle, side, mode, region in itertools.product(
                 (1, 2), ("left", "right"), ("lead", "mixed"), ("flange", "tread")):
-            fast = _weighted_measure_vectorised(route, table, "motor",
-                                                wheelset_weights(axle, mode), side, region,
-                                                "tau_max")
+            fast = weighted_wear_measure(route, table, bogie_type="motor", axle=axle,
+                                         side=side, running_mode=mode, region=region,
+                                         measure="tau_max")
             assert fast == _loop_measure(route, table, axle=axle, side=side, running_mode=mode,
                                          region=region, measure="tau_max")
     tight = Route("tight", (RouteClass(100.0, "left", 0.0, 40.0, 1.0),))
-    assert _weighted_measure_vectorised(tight, table, "motor", {"leading": 1.0}, "left",
-                                        "flange", "tau_max") is None  # the loop raises
+    with pytest.raises(RadiusOutOfTableError, match="radius_m"):  # as the class-by-class sum
+        weighted_wear_measure(tight, table, bogie_type="motor", axle=1, side="left",
+                              running_mode="lead", region="flange", measure="tau_max")
 
 
 def test_given_weighted_measures_give_the_same_prediction(table):

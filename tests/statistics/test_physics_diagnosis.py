@@ -88,38 +88,24 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
     # 0.5), a wear scale of 1.2, 0.02 mm noise and irregular mileages on 5 vehicles; the
     # diagnosis runs the same loop for its extensions. Measured when written: friction named
     # at 0.50 with scale 1.208 and a held-out gain of 0.96 (interval from 0.945).
-    from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
     from wearcast.physics.wear_loop import LoopClass
+    from wearcast.statistics.generators.scenarios import (
+        cached_vehicle_simulator,
+        measured_vehicle_series,
+    )
     from wearcast.statistics.physics_diagnosis import PhysicsCause
 
     route = [LoopClass(250.0, 100.0, None, "left", 0.15),
              LoopClass(250.0, 100.0, None, "right", 0.15), LoopClass(None, share=0.7)]
-    cache = {}
-
-    def simulate(params):
-        key = tuple(sorted(params.items()))
-        if key not in cache:
-            cache[key] = simulate_vehicle_wear("metro_b", route, law="usfd", mileage_km=3000.0,
-                                               depth_per_step_mm=1.0,
-                                               options=VehicleWearOptions(**params))
-        return cache[key]
-
-    truth = simulate(hidden)
-    rng = np.random.default_rng(7)
-    rows = []
-    for v in range(5):
-        km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
-        ft = np.interp(1.2 * km, truth.mileage_km, truth.mean("sd_mm"))
-        qr = np.interp(1.2 * km, truth.mileage_km, truth.mean("qr_mm"))
-        rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
-                 for k, a, b in zip(km, ft + rng.normal(0, 0.02, km.size),
-                                    qr + rng.normal(0, 0.02, km.size), strict=True)]
+    simulate = cached_vehicle_simulator(route, "metro_b", law="usfd", mileage_km=3000.0,
+                                        depth_per_step_mm=1.0)
+    measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02)
     catalogue = (PhysicsCause("flange_lubrication", "flange", "flange_wear_factor",
                               (0.25, 0.5, 1.0), 1.0),
                  PhysicsCause("friction_level", "friction", "friction", (0.3, 0.4, 0.5), 0.4),
                  PhysicsCause("patch_model", "patch", "patch_width", ("hertz", "kik_piotrowski"),
                               "hertz"))
-    d = diagnose_physics(simulate, pd.DataFrame(rows), catalogue=catalogue, n_bootstrap=500)
+    d = diagnose_physics(simulate, measured, catalogue=catalogue, n_bootstrap=500)
     assert d.verdict == expected, d.to_dict()
     if expected != "none":
         f = d.finding(expected)

@@ -1,56 +1,20 @@
 import dataclasses
+import importlib.util
 import json
+from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
-from wearcast.statistics.hybrid import HybridModel, RegionCalibration
 from wearcast.statistics.profile_parameters import WheelLimits
 from wearcast.statistics.reprofiling import reprofiling_mileage
-from wearcast.statistics.routes import Route, RouteClass
-from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
-from wearcast.statistics.wear_rates import WearRate
-from wearcast.statistics.wear_states import build_wear_states, region_area_mm2
-from wearcast.statistics.wear_tables import TABLE_COLUMNS
 
-Y = np.asarray(DEFAULT_GRID_Y_MM)
-SPLIT = -30.0
-ROUTE = Route("r", (RouteClass(None, None, 0.0, 100.0, 0.6),
-                    RouteClass(300.0, "left", 90.0, 60.0, 0.4)))
-TANGENT = Route("t", (RouteClass(None, None, 0.0, 100.0, 1.0),))
-
-
-def _table(tread_tangent=50.0):
-    rows = []
-    for ws in ("leading", "trailing"):
-        rows += [("motor", ws, "tangent", np.nan, "flange", "tau_max", 0.0),
-                 ("motor", ws, "tangent", np.nan, "tread", "tau_max", tread_tangent),
-                 ("motor", ws, "high", 250.0, "flange", "tau_max", 120.0),
-                 ("motor", ws, "low", 250.0, "flange", "tau_max", 1.0),
-                 ("motor", ws, "high", 250.0, "tread", "tau_max", 90.0),
-                 ("motor", ws, "low", 250.0, "tread", "tau_max", 70.0)]
-    return pd.DataFrame(rows, columns=TABLE_COLUMNS)
-
-
-def _model(c_flange=2e-5, c_tread=5e-6, rel=0.1):
-    """Hand-built model: flange-flank and tread wear shapes, states up to large areas."""
-    flange = np.exp(-0.5 * ((Y + 39.0) / 3.0) ** 2)
-    tread = np.exp(-0.5 * (Y / 14.0) ** 2)
-    flange /= region_area_mm2(Y, flange, SPLIT, "flange")
-    tread /= region_area_mm2(Y, tread, SPLIT, "tread")
-    a_f = np.linspace(1, 60, 30)
-    a_t = np.linspace(2, 200, 30)
-    curves = a_f[:, None] * flange + a_t[:, None] * tread
-    states = build_wear_states(Y, curves, a_f, a_t, split_y_mm=SPLIT, n_states=6)
-    rate = WearRate(1e-3, 1e-5, 1e-4, 30)
-
-    def cal(c):
-        return RegionCalibration(c_s=c, c_s_rel_std_error=0.01, c_s_rel_spread=rel, p_m=1.0,
-                                 rate=rate)
-
-    return HybridModel(measure="tau_max", running_mode="lead", states=states,
-                       flange=cal(c_flange), tread=cal(c_tread), bogie_types=("motor",))
+_spec = importlib.util.spec_from_file_location(
+    "_reprofiling_helpers", Path(__file__).with_name("_reprofiling_helpers.py"))
+fixtures = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(fixtures)
+Y, SPLIT, ROUTE, TANGENT = fixtures.Y, fixtures.SPLIT, fixtures.ROUTE, fixtures.TANGENT
+_table, _model = fixtures.table, fixtures.model
 
 
 KW = {"bogie_type": "motor", "axle": 1, "side": "right"}

@@ -9,13 +9,8 @@ import pytest
 from wearcast.statistics import hybrid
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
-from wearcast.statistics.residuals import (
-    geometric_basis,
-    leading_share,
-    log_residual,
-    model_residuals,
-    route_parts,
-)
+from wearcast.statistics.residuals import geometric_basis, log_residual, model_residuals
+from wearcast.statistics.route_measure import leading_shares, route_parts, weighted_wear_measure
 from wearcast.statistics.wear_tables import compile_wear_table
 
 TABLE = ft.synthetic_wear_table()
@@ -27,7 +22,7 @@ def _exact_frame(model, mileage=(20_000.0, 80_000.0, 150_000.0)):
     for bogie in ("motor", "trailer"):
         for axle in (1, 2):
             for side in ("left", "right"):
-                p = {r: hybrid.weighted_wear_measure(
+                p = {r: weighted_wear_measure(
                     ROUTE, TABLE, bogie_type=bogie, axle=axle, side=side,
                     running_mode="mixed", region=r, measure="tau_max")
                     for r in ("flange", "tread")}
@@ -74,7 +69,7 @@ def test_route_parts_sum_to_the_weighted_measure():
         parts = route_parts(ROUTE, wt, bogie_type="motor", side=side, region="flange",
                             measure="tau_max")
         for axle, row in ((1, 0), (2, 1)):
-            p = hybrid.weighted_wear_measure(ROUTE, wt, bogie_type="motor", axle=axle,
+            p = weighted_wear_measure(ROUTE, wt, bogie_type="motor", axle=axle,
                                              side=side, running_mode="lead", region="flange",
                                              measure="tau_max")
             assert parts[row].sum() == pytest.approx(p, rel=1e-12)
@@ -91,8 +86,8 @@ def test_mirror_symmetry_of_a_symmetric_route():
     assert left[:, 1] == pytest.approx(right[:, 2])
 
 
-def test_leading_share_and_log_residual_limits():
-    assert leading_share([1, 2, 1, 2], ["lead", "lead", "mixed", "mixed"]).tolist() == \
+def test_leading_shares_and_log_residual_limits():
+    assert leading_shares([1, 2, 1, 2], ["lead", "lead", "mixed", "mixed"]).tolist() == \
         [1.0, 0.0, 0.5, 0.5]
     e = log_residual([[10.0, 0.0]], [[5.0, 0.0]], [1.0, 1.0])
     assert e[0, 0] == pytest.approx(np.log(11 / 6))

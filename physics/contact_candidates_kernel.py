@@ -1,0 +1,151 @@
+"""Contact candidates of the curving model's gap table as a compiled kernel.
+
+``candidate_slots(gap, gap2, smoothing, grid0, step, wheel_y, shifts, n_slots, prominence,
+separation, share, no_contact)`` does per query shift what ``curving.ContactTable.candidates``
+describes: the gap row interpolated linearly between the two table rows around the shift, its
+local minima (the ``n_slots`` deepest, ties to the lower index), each refined by a parabola,
+with the smoothing correction -g'' sigma^2 / 2; their gaps above the best one; their weights
+(maturity from the prominence over the adjacent maxima, soft sharing with the candidates they
+are merged with); the slots ordered field side first (largest wheel y; missing candidates
+last). Returns wheel y [mm], gap [mm], g'' [1/mm] and weight, each (N, n_slots).
+
+The numpy implementation (``curving._candidate_slots_numpy``) is the reference: the two agree
+to rounding (``tests/physics/test_curving.py``); the kernel avoids building (N, n_y) arrays
+for every query, which was 56-59 % of a curve-radius table's time
+(``benchmarks/bench_wear_tables.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+
+@njit(cache=True, inline="always")
+def _smoothstep(x: float) -> float:
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    return x * x * (3.0 - 2.0 * x)
+
+
+@njit(cache=True)
+def candidate_slots(gap: NDArray[np.float64], gap2: NDArray[np.float64],
+                    smoothing: NDArray[np.float64], grid0: float, step: float,
+                    wheel_y: NDArray[np.float64], shifts: NDArray[np.float64], n_slots: int,
+                    prominence_mm: float, separation_mm: float, share_mm: float,
+                    no_contact_mm: float
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                               NDArray[np.float64]]:
+    n_rows, n_y = gap.shape
+    dy = wheel_y[1] - wheel_y[0]
+    n = shifts.shape[0]
+    out_y = np.empty((n, n_slots))
+    out_gap = np.empty((n, n_slots))
+    out_g2 = np.empty((n, n_slots))
+    out_w = np.empty((n, n_slots))
+    g = np.empty(n_y)
+    idx = np.empty(n_slots, dtype=np.int64)
+    found = np.empty(n_slots, dtype=np.bool_)
+    yc = np.empty(n_slots)
+    gc = np.empty(n_slots)
+    g0 = np.empty(n_slots)
+    g2v = np.empty(n_slots)
+    mat = np.empty(n_slots)
+    gapv = np.empty(n_slots)
+    weight = np.empty(n_slots)
+    merged = np.zeros((n_slots, n_slots))
+    for q in range(n):
+        pos = (shifts[q] - grid0) / step
+        if pos < 0.0:
+            pos = 0.0
+        hi_pos = n_rows - 1.000001
+        if pos > hi_pos:
+            pos = hi_pos
+        k = int(np.floor(pos))
+        w = pos - k
+        for j in range(n_y):
+            g[j] = (1.0 - w) * gap[k, j] + w * gap[k + 1, j]
+        # the n_slots deepest interior minima, ties to the lower index (repeated argmin)
+        for s in range(n_slots):
+            best = np.inf
+            best_j = 0
+            for j in range(1, n_y - 1):
+                if g[j] < g[j - 1] and g[j] <= g[j + 1] and g[j] < best:
+                    taken = False
+                    for t in range(s):
+                        if idx[t] == j:
+                            taken = True
+                    if not taken:
+                        best = g[j]
+                        best_j = j
+            found[s] = best < np.inf
+            idx[s] = best_j if found[s] else 1
+        best_gc = np.inf
+        for s in range(n_slots):
+            i = idx[s]
+            gm, gz, gp = g[i - 1], g[i], g[i + 1]
+            den = gm - 2.0 * gz + gp
+            frac = 0.5 * (gm - gp) / den if den > 0 else 0.0
+            if frac < -0.5:
+                frac = -0.5
+            elif frac > 0.5:
+                frac = 0.5
+            yc[s] = wheel_y[i] + frac * dy
+            jj = i + 1 if frac >= 0.0 else i - 1
+            f = abs(frac)
+            r_i = (1.0 - w) * gap2[k, i] + w * gap2[k + 1, i]
+            r_j = (1.0 - w) * gap2[k, jj] + w * gap2[k + 1, jj]
+            g2v[s] = (1.0 - f) * r_i + f * r_j
+            g0[s] = gz
+            gc[s] = gz - 0.25 * (gm - gp) * frac - 0.5 * g2v[s] * smoothing[i] ** 2
+            if not found[s]:
+                gc[s] = np.inf
+            if gc[s] < best_gc:
+                best_gc = gc[s]
+        for s in range(n_slots):
+            gapv[s] = gc[s] - best_gc if found[s] else no_contact_mm
+            # prominence: rise to the lower of the two adjacent maxima (ends count as maxima)
+            i = idx[s]
+            left = i
+            while left > 0 and not (g[left] >= g[left - 1] and g[left] > g[left + 1]):
+                left -= 1
+            right = i
+            while right < n_y - 1 and not (g[right] >= g[right - 1] and g[right] > g[right + 1]):
+                right += 1
+            prom = min(g[left], g[right]) - g0[s]
+            mat[s] = _smoothstep(prom / prominence_mm) if found[s] else 0.0
+        for p in range(n_slots):
+            merged[p, p] = 0.0
+            for r in range(p + 1, n_slots):
+                lo = min(idx[p], idx[r])
+                hi = max(idx[p], idx[r])
+                barrier = -np.inf
+                for j in range(lo, hi + 1):
+                    if g[j] > barrier:
+                        barrier = g[j]
+                m = 1.0 - _smoothstep((barrier - max(g0[p], g0[r])) / separation_mm)
+                merged[p, r] = m
+                merged[r, p] = m
+        for s in range(n_slots):
+            if not found[s]:
+                weight[s] = 0.0
+                continue
+            others = 0.0
+            for r in range(n_slots):
+                diff = gapv[r] - gapv[s]
+                if diff < -50.0 * share_mm:
+                    diff = -50.0 * share_mm
+                others += merged[s, r] * mat[r] * np.exp(-diff / share_mm)
+            weight[s] = mat[s] / (1e-9 + mat[s] + others)
+        # field side first (largest y), missing candidates last, stable
+        order = np.argsort(-np.where(found, yc, -np.inf), kind="mergesort")
+        for t in range(n_slots):
+            s = order[t]
+            out_y[q, t] = yc[s]
+            out_gap[q, t] = gapv[s]
+            out_g2[q, t] = g2v[s]
+            out_w[q, t] = weight[s]
+    return out_y, out_gap, out_g2, out_w

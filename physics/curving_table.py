@@ -1,0 +1,472 @@
+"""The curving model's contact table: the wheel-rail gap of one wheel over the wheelset's shift.
+
+The gap is the vertical distance between the wheel and its rail at each wheel point, taken from
+the rigid multi-point geometry (``contact.geometry``, roll solved) at each shift and smoothed at
+the scale of a contact patch; contact candidates are its local minima (``ContactTable.candidates``,
+compiled in ``contact_candidates_kernel``), with Hertz constants from the smoothed curvature.
+Used by ``curving`` (the bogie's equilibrium) and the wear loop (a table per worn profile).
+Frames and signs: docs/conventions.md and ``contact.geometry``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import gaussian_filter1d
+
+from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
+from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
+from wearcast.physics.contact_candidates_kernel import candidate_slots
+from wearcast.physics.profiles.measured import ProfileCurve
+from wearcast.physics.profiles.measured_rail import NOMINAL_GAUGE_POINT_Y_MM
+from wearcast.physics.profiles.measured_wheel import MeasuredWheel
+from wearcast.physics.profiles.rails import RailShape, rail_profile
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vehicles import BogieVehicle
+
+#: Track gauge measured 14 mm below the rail top [mm] (standard gauge).
+GAUGE_MM = 1435.0
+#: Lateral distance of the tape circles from the wheelset centre [mm] (flange back 1360 mm).
+TAPE_CIRCLE_HALF_SPACING_MM = 750.0
+#: Bounds of the lateral relative curvature B used for Hertz [1/mm] (relative radius 1 m
+#: ... 5 mm).
+MIN_CURVATURE_B_PER_MM = 5e-4
+MAX_CURVATURE_B_PER_MM = 0.1
+#: Rise of the gap between two minima above which they are separate patches [mm].
+SEPARATION_MM = 0.1
+#: Rise over which a newly formed gap minimum matures into a contact candidate [mm].
+PROMINENCE_MM = 0.005
+#: Gap scale of the soft minimum that shares a merged patch between two minima [mm].
+SHARE_GAP_MM = 0.01
+#: Gap assigned to a slot without a contact candidate [mm].
+_NO_CONTACT_GAP_MM = 50.0
+
+#: Wheel y [mm] below which the gap is smoothed at the flange scale, and above which at the
+#: tread scale (``build_contact_table``), blended linearly between.
+FLANK_SMOOTHING_Y_MM = (-25.0, -15.0)
+
+
+@dataclass(frozen=True)
+class ContactTable:
+    """Vertical gap between one wheel and its rail, tabulated over the wheelset's shift.
+
+    ``shift_mm`` (n_s,) is the wheelset's lateral displacement towards THIS wheel's field side
+    (the left wheel's +y, the right wheel's -y; both wheels alike by mirror symmetry).
+    ``gap_mm`` (n_s, n_y) is the vertical distance between wheel and rail surfaces at the wheel
+    points ``wheel_y_mm`` (n_y,) (wheel frame of docs/conventions.md), the wheelset at its nominal
+    height
+    and without roll, smoothed with a Gaussian of standard deviation ``smoothing_mm`` (n_y,)
+    (the scale of a contact patch, 2 mm by default on tread and flange; S1002 on a rail crown
+    is nearly conformal and the raw gap has shallow double minima);
+    ``gap2_per_mm`` is its second derivative, the relative lateral curvature at the patch
+    scale (Gaussian smoothing keeps the curvature of a parabola and raises its minimum by
+    g'' sigma^2 / 2, which is subtracted again).
+
+    Contact candidates are the local minima of the gap row interpolated linearly in shift
+    (:meth:`candidates`). Keeping the whole gap function instead of contact points keeps the
+    candidates continuous in the shift through the tread-flange transition and two-point
+    contact; minima separated by less than ``SEPARATION_MM`` of rise share one patch.
+
+    ``rigid_rise_mm`` (n_s,): how far the wheel rises at rigid contact relative to the centred
+    wheelset [mm] (minimum of the unsmoothed gap), for the wheelset roll.
+    Wheel columns on ``wheel_y_mm``: height z [mm] and slope dz/dy. ``rail_offset_mm`` maps
+    wheel y to rail y (y_rail = y_wheel + offset + shift). Hertz constants under 1 N for
+    log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
+    ``hertz_b1`` [mm].
+    """
+
+    shift_mm: NDArray[np.float64]
+    wheel_y_mm: NDArray[np.float64]
+    gap_mm: NDArray[np.float64]
+    gap2_per_mm: NDArray[np.float64]
+    wheel_z_mm: NDArray[np.float64]
+    wheel_slope: NDArray[np.float64]
+    rigid_rise_mm: NDArray[np.float64]
+    rail_offset_mm: float
+    nominal_radius_m: float
+    smoothing_mm: NDArray[np.float64]
+    hertz_log_ratio: NDArray[np.float64]
+    hertz_approach1: NDArray[np.float64]
+    hertz_a1: NDArray[np.float64]
+    hertz_b1: NDArray[np.float64]
+
+    def rigid_rise(self, shift_mm: ArrayLike) -> NDArray[np.float64]:
+        """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
+        return np.interp(np.asarray(shift_mm, dtype=float), self.shift_mm, self.rigid_rise_mm)
+
+    def candidates(self, shift_mm: ArrayLike, n_slots: int = 3) -> dict[str, NDArray]:
+        """Up to ``n_slots`` contact candidates per wheel at arbitrary shifts.
+
+        Returns arrays of shape shift.shape + (n_slots,), slot 0 the field-most candidate:
+        ``gap_mm`` above the best candidate (a missing candidate gets a large gap),
+        ``weight`` in [0, 1] (1 for a separate patch, see ``_candidate_slots_numpy``),
+        ``angle_rad`` contact angle (> 0 pushes the wheel towards the track centre),
+        ``wheel_y_mm``, ``rail_y_mm``, ``lateral_mm`` (distance from the track centre line),
+        ``radius_m`` rolling radius, ``curv_a``, ``curv_b`` [1/mm], ``approach1_mm``,
+        ``a1_mm``, ``b1_mm`` Hertz constants under 1 N. The slots come from the compiled kernel
+        (``contact_candidates_kernel``); ``_candidate_slots_numpy`` is its reference.
+        """
+        s = np.asarray(shift_mm, dtype=float)
+        flat = np.ascontiguousarray(s.reshape(-1))
+        slots = candidate_slots(self.gap_mm, self.gap2_per_mm, self.smoothing_mm,
+                                float(self.shift_mm[0]),
+                                float(self.shift_mm[1] - self.shift_mm[0]), self.wheel_y_mm,
+                                flat, n_slots, PROMINENCE_MM, SEPARATION_MM, SHARE_GAP_MM,
+                                _NO_CONTACT_GAP_MM)
+        yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
+        return self._candidate_columns(s, yc, gap, g2, weight)
+
+    def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = 3
+                               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Reference implementation of the candidate slots (wheel y, gap, g'', weight), each
+        shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel``."""
+        s = np.asarray(shift_mm, dtype=float)
+        grid = self.shift_mm
+        step = grid[1] - grid[0]
+        pos = np.clip((s - grid[0]) / step, 0.0, len(grid) - 1.000001)
+        k = np.floor(pos).astype(int)
+        w = (pos - k)[..., None]
+        g = (1.0 - w) * self.gap_mm[k] + w * self.gap_mm[k + 1]  # (..., n_y)
+        inner = g[..., 1:-1]
+        is_min = (inner < g[..., :-2]) & (inner <= g[..., 2:])
+        score = np.where(is_min, inner, np.inf)
+        picks = []
+        for _ in range(n_slots):  # best minima, by repeated argmin
+            j = np.argmin(score, axis=-1)[..., None]
+            picks.append(j)
+            np.put_along_axis(score, j, np.inf, axis=-1)
+        idx = np.concatenate(picks, axis=-1)
+        score = np.where(is_min, inner, np.inf)
+        found = np.isfinite(np.take_along_axis(score, idx, axis=-1))
+        i = idx + 1
+        gm = np.take_along_axis(g, i - 1, axis=-1)
+        g0 = np.take_along_axis(g, i, axis=-1)
+        gp = np.take_along_axis(g, i + 1, axis=-1)
+        den = gm - 2.0 * g0 + gp
+        frac = np.clip(np.where(den > 0, 0.5 * (gm - gp) / np.where(den > 0, den, 1.0), 0.0),
+                       -0.5, 0.5)
+        dy = self.wheel_y_mm[1] - self.wheel_y_mm[0]
+        yc = self.wheel_y_mm[i] + frac * dy
+        # second derivative at the refined position (linear in y between grid points)
+        j = np.where(frac >= 0.0, i + 1, i - 1)
+        f = np.abs(frac)
+        g2_rows = (1.0 - w) * self.gap2_per_mm[k] + w * self.gap2_per_mm[k + 1]
+        g2 = ((1.0 - f) * np.take_along_axis(g2_rows, i, axis=-1)
+              + f * np.take_along_axis(g2_rows, j, axis=-1))
+        gc = g0 - 0.25 * (gm - gp) * frac - 0.5 * g2 * self.smoothing_mm[i] ** 2
+        gc = np.where(found, gc, np.inf)
+        best = np.min(gc, axis=-1, keepdims=True)
+        gap = np.where(found, gc - best, _NO_CONTACT_GAP_MM)
+        # weights (continuity of the forces when minima are born, die or exchange their order on
+        # a flat gap): each candidate k has a maturity m_k = ramp(prominence_k / PROMINENCE_MM),
+        # its rise above the lower of its two adjacent maxima of the gap (0 at birth and death);
+        # candidates j whose gap between them rises less than SEPARATION_MM above the shallower
+        # one belong to one conformal patch (c_kj -> 1) and share it by a soft minimum of their
+        # gaps (temperature SHARE_GAP_MM):
+        #     w_k = m_k / (eps + m_k + sum_j c_kj m_j exp(-(g_j - g_k) / SHARE_GAP_MM)).
+        # An isolated mature candidate has weight 1.
+        n_y = g.shape[-1]
+        cols = np.arange(n_y)
+        is_max = np.zeros(g.shape, dtype=bool)
+        is_max[..., 1:-1] = (inner >= g[..., :-2]) & (inner > g[..., 2:])
+        is_max[..., 0] = True
+        is_max[..., -1] = True
+        left_max = np.maximum.accumulate(np.where(is_max, cols, 0), axis=-1)
+        right_max = np.flip(np.minimum.accumulate(np.flip(np.where(is_max, cols, n_y - 1),
+                                                          axis=-1), axis=-1), axis=-1)
+        g_left = np.take_along_axis(g, np.take_along_axis(left_max, i, axis=-1), axis=-1)
+        g_right = np.take_along_axis(g, np.take_along_axis(right_max, i, axis=-1), axis=-1)
+        prominence = np.minimum(g_left, g_right) - g0
+        maturity = np.where(found, _smoothstep(prominence / PROMINENCE_MM), 0.0)
+        pairs = [(p, q) for p in range(n_slots) for q in range(p + 1, n_slots)]
+        ip = i[..., [p for p, _ in pairs]]
+        iq = i[..., [q for _, q in pairs]]
+        lo = np.minimum(ip, iq)
+        hi = np.maximum(ip, iq)
+        between = (cols >= lo[..., None]) & (cols <= hi[..., None])  # (..., pairs, n_y)
+        barrier_pairs = np.max(np.where(between, g[..., None, :], -np.inf), axis=-1)
+        g0p = g0[..., [p for p, _ in pairs]]
+        g0q = g0[..., [q for _, q in pairs]]
+        merged_pairs = 1.0 - _smoothstep((barrier_pairs - np.maximum(g0p, g0q)) / SEPARATION_MM)
+        merged = np.zeros(g.shape[:-1] + (n_slots, n_slots))
+        for m, (p, q) in enumerate(pairs):
+            merged[..., p, q] = merged_pairs[..., m]
+            merged[..., q, p] = merged_pairs[..., m]
+        gap_f = np.where(found, gap, _NO_CONTACT_GAP_MM)
+        rel = np.exp(-np.clip(gap_f[..., None, :] - gap_f[..., :, None], -50 * SHARE_GAP_MM,
+                              None) / SHARE_GAP_MM)  # [k, j]: exp(-(g_j - g_k)/tau)
+        others = np.sum(merged * maturity[..., None, :] * rel, axis=-1)
+        weight = np.where(found, maturity / (1e-9 + maturity + others), 0.0)
+        # order slots field side first
+        order = np.argsort(-np.where(found, yc, -np.inf), axis=-1)
+        yc = np.take_along_axis(yc, order, axis=-1)
+        gap = np.take_along_axis(gap, order, axis=-1)
+        g2 = np.take_along_axis(g2, order, axis=-1)
+        weight = np.take_along_axis(weight, order, axis=-1)
+        return yc, gap, g2, weight
+
+    def _candidate_columns(self, s: NDArray, yc: NDArray, gap: NDArray, g2: NDArray,
+                           weight: NDArray) -> dict[str, NDArray]:
+        """The candidate columns of ``candidates`` from the slots."""
+        wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
+        slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
+        rail_y = yc + self.rail_offset_mm + s[..., None]
+        angle = np.arctan(-slope)
+        cos = np.cos(angle)
+        radius = self.nominal_radius_m + wz / 1000.0
+        curv_a = cos / (2.0 * radius * 1000.0)
+        # the smoothed gap's curvature, bounded below (nearly conformal patches cannot grow
+        # beyond the profile features; Hertz would make them arbitrarily stiff) and above by
+        # the sharpest real pair (S1002 flange tip R12 on a gauge corner R13: B = 0.08/mm)
+        curv_b = np.clip(0.5 * g2 * cos**3, MIN_CURVATURE_B_PER_MM, MAX_CURVATURE_B_PER_MM)
+        lr = np.clip(np.log(curv_b / curv_a), self.hertz_log_ratio[0], self.hertz_log_ratio[-1])
+        scale = np.cbrt(curv_a)
+        return {
+            "gap_mm": gap, "weight": weight, "angle_rad": angle, "wheel_y_mm": yc,
+            "rail_y_mm": rail_y,
+            "lateral_mm": TAPE_CIRCLE_HALF_SPACING_MM + s[..., None] + yc, "radius_m": radius,
+            "curv_a": curv_a, "curv_b": curv_b,
+            "approach1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_approach1) * scale,
+            "a1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_a1) / scale,
+            "b1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_b1) / scale,
+        }
+
+
+def _smoothstep(x: NDArray) -> NDArray:
+    """C1 ramp from 0 (x <= 0) to 1 (x >= 1)."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def conical_wheel(conicity: float) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """A conical wheel z(y) = -conicity * y (wheel frame, no flange) for linear-theory tests.
+
+    Parameters
+    ----------
+    conicity : cone slope lambda [-]
+    """
+    def height_mm(y_mm: NDArray[np.float64]) -> NDArray[np.float64]:
+        return -conicity * np.asarray(y_mm, dtype=float)
+    return height_mm
+
+
+def _rail_envelope(rail: str | RailShape, inclination: float) -> tuple[NDArray, NDArray, float]:
+    """Upper envelope z(y) of the inclined rail (top at 0) and the distance of the rail-frame
+    origin from the track centre [mm] that puts the gauge point (14 mm below the top, innermost)
+    at GAUGE_MM / 2."""
+    y, z = rail_profile(rail, step_mm=0.05, inclination=inclination)
+    keep = np.concatenate([[True], y[1:] > np.maximum.accumulate(y)[:-1]])
+    y, z = y[keep], z[keep]
+    z = z - np.max(z)
+    gauge_side = y < y[np.argmax(z)]
+    yg, zg = y[gauge_side], z[gauge_side]
+    order = np.argsort(zg)
+    y_gauge = float(np.interp(-14.0, zg[order], yg[order]))
+    return y, z, GAUGE_MM / 2.0 - y_gauge
+
+
+#: Kik & Piotrowski (1996): the patch is where the undeformed interpenetration exceeds
+#: (1 - epsilon) of the approach, i.e. where the gap is below epsilon * approach; epsilon = 0.55.
+KIK_PIOTROWSKI_EPSILON = 0.55
+
+
+def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLike,
+                            rail: str | RailShape,
+                            inclination: float, wheel_y_mm: ArrayLike, rail_y_mm: ArrayLike,
+                            normal_n: ArrayLike, a_mm: ArrayLike, b_mm: ArrayLike,
+                            search_mm: float = 12.0) -> NDArray[np.float64]:
+    """Lateral half-width of a patch from the UNSMOOTHED gap (Kik-Piotrowski's virtual
+    penetration), along the profile arc [mm], never below the Hertz ``b_mm``.
+
+    The curving model's Hertz patches take the curvature of a gap smoothed over 2 mm, which
+    turns a conformal pair (the S1002 flange root, concave R13, on the 60E1 gauge corner, convex
+    R13: relative curvature ~0) into a narrow ellipse (b < 1 mm, p0 of several GPa). Seed 002
+    §2.1 (Simpack) finds the patch by Kik-Piotrowski and replaces it by an equivalent ellipse;
+    so do we, for the patch width only: with the approach delta = 3 N / (4 E* sqrt(a b)) of the
+    Hertz patch (its circular equivalent, Johnson §4.2), the patch spans the connected range
+    around the contact point where the raw gap is within epsilon * delta of its minimum
+    (epsilon = 0.55, Kik & Piotrowski 1996). For a Hertzian pair this is about b; for a
+    conformal one it is the extent of the conformal arcs.
+
+    Parameters
+    ----------
+    wheel_y_grid_mm, wheel_z_grid_mm : the wheel profile z(y) in the wheel frame [mm]
+    rail, inclination : rail profile and inclination (as the vehicle's)
+    wheel_y_mm, rail_y_mm : contact points on the wheel and in the rail frame of the contact
+        table (``CurvingResult.wheel_y_mm`` / ``rail_y_mm``), shape S [mm]
+    normal_n, a_mm, b_mm : normal force [N] and Hertz semi-axes [mm], shape S
+    search_mm : half-range searched around the contact point [mm]
+
+    Returns
+    -------
+    half-width along the profile arc [mm], shape S (b_mm where not loaded)
+    """
+    yg = np.asarray(wheel_y_grid_mm, dtype=float)
+    zg = np.asarray(wheel_z_grid_mm, dtype=float)
+    yw, yr, n, a, b = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        wheel_y_mm, rail_y_mm, normal_n, a_mm, b_mm)))
+    ry, rz, _ = _rail_envelope(rail, inclination)
+    e_star = effective_modulus_mpa()
+    out = b.copy()
+    step = 0.05
+    local = np.arange(-search_mm, search_mm + 1e-9, step)
+    for idx in zip(*np.nonzero((n > 1.0) & (a > 0) & (b > 0)), strict=True):
+        y = yw[idx] + local
+        # rail_y is the rail-envelope coordinate of the contact (ContactTable.candidates:
+        # rail_y = y + offset + shift, the coordinate build_contact_table samples the rail at)
+        y_rail = y + (yr[idx] - yw[idx])
+        gap = -np.interp(y, yg, zg) - np.interp(y_rail, ry, rz, left=np.nan, right=np.nan)
+        gap = np.where(np.isfinite(gap), gap, np.inf)
+        centre = int(np.argmin(np.abs(local)))
+        lo_win = max(0, centre - int(round(1.0 / step)))
+        hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
+        g_min = float(np.min(gap[lo_win:hi_win]))
+        delta = 3.0 * n[idx] / (4.0 * e_star * np.sqrt(a[idx] * b[idx]))
+        inside = gap <= g_min + KIK_PIOTROWSKI_EPSILON * delta
+        # connected run through the contact point
+        j0 = lo_win + int(np.argmin(gap[lo_win:hi_win]))
+        left = j0
+        while left > 0 and inside[left - 1]:
+            left -= 1
+        right = j0
+        while right < local.size - 1 and inside[right + 1]:
+            right += 1
+        width_y = (right - left + 1) * step
+        slope = np.interp(yw[idx], yg, np.gradient(zg, yg))
+        half_arc = 0.5 * width_y * np.sqrt(1.0 + slope * slope)
+        out[idx] = max(b[idx], half_arc)
+    return out
+
+
+@lru_cache(maxsize=1)
+def _hertz_unit_table() -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Hertz approach and semi-axes under 1 N for A = 1/mm over log(B/A) (``contact.hertz``);
+    other A follow by scaling (a ~ A^(-1/3), approach ~ A^(1/3))."""
+    log_ratio = np.linspace(np.log(1e-4), np.log(1e4), 801)
+    patch = hertz_contact(1.0, 1.0, np.exp(log_ratio))
+    return log_ratio, patch.approach_mm, patch.a_mm, patch.b_mm
+
+
+def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray[np.float64]]
+                        | None = None, rail: str | RailShape = "60E1",
+                        inclination: float = 1.0 / 40.0,
+                        wheel_radius_m: float = 0.46, max_shift_mm: float = 15.0,
+                        shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
+                        wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
+                        smoothing_mm: tuple[float, float] = (2.0, 2.0)) -> ContactTable:
+    """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
+
+    The gap comes from the rigid multi-point geometry (``contact.geometry``, the module checked
+    against the Manchester benchmark): for each shift of the wheelset centre the roll that puts
+    both wheels on their rails is solved, and the vertical gap of every wheel point over the
+    rail is taken in that pose. The table's shift is the shift at rail level (contact frame),
+    centre shift plus r0 times the rigid roll, on a uniform grid.
+
+    Parameters
+    ----------
+    wheel_height_mm : wheel profile z(y) in the wheel frame [mm]; default S1002
+        (``profiles.s1002``)
+    rail : ``60E1`` or ``60E2`` (``profiles.rails``) or a measured rail shape
+    inclination : rail inclination slope (1/40, 1/20)
+    wheel_radius_m : nominal rolling radius at the tape circle [m]
+    max_shift_mm, shift_step_mm : table range +-max_shift and step of the shift [mm]
+    wheel_step_mm : spacing of the wheel points [mm]
+    wheel_y_range_mm : part of the wheel profile searched for contact [mm]
+    smoothing_mm : standard deviations of the Gaussian smoothing of the gap along y on the
+        tread (y > -15 mm) and on the flange (y < -25 mm), blended linearly between [mm]. The
+        tread's 2 mm is the scale of a tread patch (S1002 on a rail crown is nearly conformal
+        and the raw gap has shallow double minima); the flange's 0.3 mm keeps the flank contact
+        where the rigid geometry has it (a 2 mm smoothing moved it 6-8 mm down to the flange
+        root, at a contact angle of 27 deg instead of 66 deg).
+
+    Returns
+    -------
+    ContactTable. Geometry: tape circles 1500 mm apart (flange back 1360 mm), rails inclined and
+    placed with the gauge 1435 mm measured 14 mm below the top; gaps are vertical distances
+    (valid while contact angles stay below ~75 deg; the S1002 flank is at 70 deg).
+    """
+    wheel = s1002_height_mm if wheel_height_mm is None else wheel_height_mm
+    r0_mm = 1000.0 * wheel_radius_m
+    y_w = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, wheel_step_mm)
+    z_w = wheel(y_w)
+    h = 0.2
+    slope = (wheel(y_w + h) - wheel(y_w - h)) / (2 * h)
+    # the rigid geometry on a curve through the wheel's points (0.05 mm) and the rail's
+    y_fine = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, 0.05)
+    y_rail, z_rail = rail_profile(rail, step_mm=0.1, inclination=0.0)
+    # a measured head comes in the nominal rail frame with its gauge point at 60E1's
+    # (``MeasuredRail.contact_points``), which may lie under a lip its contact curve omits
+    gauge_point = None if isinstance(rail, str) else (NOMINAL_GAUGE_POINT_Y_MM, -14.0)
+    track = WheelsetTrack(wheel=ProfileCurve.from_points(y_fine, wheel(y_fine)),
+                          rail=ProfileCurve.from_points(y_rail, z_rail),
+                          nominal_radius_mm=r0_mm, rail_inclination=inclination,
+                          wheel_sample_mm=0.2, rail_gauge_point_mm=gauge_point)
+    # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
+    centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
+    y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
+    contact_level = centre + r0_mm * roll
+    shifts = np.arange(-max_shift_mm, max_shift_mm + 1e-9, shift_step_mm)
+    order = np.argsort(y_geo)
+    y_geo, raw_geo = y_geo[order], raw_geo[:, order]
+    raw_geo = np.where(np.isfinite(raw_geo), raw_geo, 100.0)
+    # rows: linear in the contact-level shift; columns: onto the uniform wheel grid
+    pos = np.interp(shifts, contact_level, np.arange(centre.size))
+    k = np.clip(np.floor(pos).astype(int), 0, centre.size - 2)
+    w = (pos - k)[:, None]
+    rows = (1.0 - w) * raw_geo[k] + w * raw_geo[k + 1]
+    raw = np.stack([np.interp(y_w, y_geo, row, left=100.0, right=100.0) for row in rows])
+    # the wheel's rigid rise so that the roll of the pair is (rise(y) - rise(-y)) / 1500 mm
+    rigid_roll = np.interp(shifts, contact_level, roll)
+    rigid_rise = TAPE_CIRCLE_HALF_SPACING_MM * rigid_roll
+    _, _, rail_origin = _rail_envelope(rail, inclination)
+    offset = TAPE_CIRCLE_HALF_SPACING_MM - rail_origin  # rail y of wheel y = 0 at zero shift
+    lo, hi = FLANK_SMOOTHING_Y_MM
+    blend = np.clip((y_w - lo) / (hi - lo), 0.0, 1.0)  # 1 on the tread, 0 on the flank
+    sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
+    gap = np.zeros_like(raw)
+    gap2 = np.zeros_like(raw)
+    for weight, sd in ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])):
+        gap += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, mode="nearest")
+        gap2 += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, order=2,
+                                           mode="nearest") / wheel_step_mm**2
+    log_ratio, app1, a1, b1 = _hertz_unit_table()
+    return ContactTable(shift_mm=shifts, wheel_y_mm=y_w, gap_mm=gap, gap2_per_mm=gap2,
+                         wheel_z_mm=z_w, wheel_slope=slope, rigid_rise_mm=rigid_rise,
+                         rail_offset_mm=offset,
+                         nominal_radius_m=wheel_radius_m, smoothing_mm=sigma,
+                         hertz_log_ratio=log_ratio,
+                         hertz_approach1=app1, hertz_a1=a1, hertz_b1=b1)
+
+
+@lru_cache(maxsize=16)
+def contact_table_for(wheel_profile: str, rail: str, inclination: float,
+                      wheel_radius_m: float) -> ContactTable:
+    """Cached :func:`build_contact_table` for a named wheel profile (``S1002``)."""
+    if wheel_profile.upper() != "S1002":
+        raise ValueError(f"unknown wheel profile {wheel_profile!r}; known: S1002")
+    return build_contact_table(None, rail, inclination, wheel_radius_m)
+
+
+@lru_cache(maxsize=16)
+def measured_wheel_table_for(wheel: MeasuredWheel, rail: str, inclination: float,
+                             wheel_radius_m: float) -> ContactTable:
+    """Cached :func:`build_contact_table` for a measured wheel (over the part of the contact
+    search range its points cover)."""
+    return build_contact_table(wheel.height_mm, rail, inclination, wheel_radius_m,
+                               wheel_y_range_mm=wheel.search_range_mm)
+
+
+def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
+    """The (cached) contact table of a vehicle's profile pair."""
+    rail: Any = vehicle.rail_profile  # a name or a hashable measured-rail shape
+    if isinstance(vehicle.wheel_profile, MeasuredWheel):
+        return measured_wheel_table_for(vehicle.wheel_profile, rail,
+                                        float(vehicle.rail_inclination),
+                                        float(vehicle.wheel_radius_m))
+    return contact_table_for(vehicle.wheel_profile, rail,
+                             float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))

@@ -1,0 +1,126 @@
+"""Batched solvers of the curving equilibrium: damped Newton with forward-difference Jacobians,
+MINPACK's Powell hybrid as a fallback, and continuation in the load parameters.
+
+Generic in the residual: ``fun(q (N, n), params (N, p)) -> residual (N, n)``, many independent
+equilibria solved at once (``curving.solve_curving_cases_or_none``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import root
+
+
+def _jacobian(fun, q, h=1e-6):
+    """Forward-difference Jacobian of a batched residual, one vectorised call."""
+    steps = h * np.maximum(1.0, np.abs(q))
+    batch = q[None, :] + np.diag(steps)
+    r_all = fun(np.vstack([q[None, :], batch]))
+    return ((r_all[1:] - r_all[0]) / steps[:, None]).T
+
+
+_LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.1, 0.03])
+
+
+def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
+    """Damped Newton for many independent equilibria at once.
+
+    fun(q (N, n), params (N, p)) -> residual (N, n). Each iteration evaluates the
+    forward-difference Jacobians of all rows in one call and a backtracking line search in a
+    second call. Returns (q, residual norms, converged mask).
+    """
+    q = np.array(q0, dtype=float)
+    nb, n = q.shape
+    norm = np.linalg.norm(fun(q, params), axis=-1)
+    active = ~(norm < tol)
+    eye = np.eye(n)
+    for _ in range(max_iter):
+        if not np.any(active):
+            break
+        idx = np.nonzero(active)[0]
+        qa, pa = q[idx], params[idx]
+        steps = h * np.maximum(1.0, np.abs(qa))  # (na, n)
+        states = np.concatenate([qa[:, None, :], qa[:, None, :] + steps[:, :, None] * eye],
+                                axis=1)  # (na, n+1, n)
+        res = fun(states.reshape(-1, n), np.repeat(pa, n + 1, axis=0)).reshape(len(idx), n + 1,
+                                                                              n)
+        r0 = res[:, 0]
+        jac = np.swapaxes((res[:, 1:] - r0[:, None, :]) / steps[:, :, None], 1, 2)
+        try:
+            dx = np.linalg.solve(jac, -r0[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            dx = np.stack([np.linalg.lstsq(j, -r, rcond=None)[0] for j, r in zip(jac, r0,
+                                                                                  strict=True)])
+        n0 = np.linalg.norm(r0, axis=-1)
+        trial = qa[:, None, :] + _LINE_SEARCH[None, :, None] * dx[:, None, :]
+        nt = np.linalg.norm(fun(trial.reshape(-1, n), np.repeat(pa, len(_LINE_SEARCH), axis=0)),
+                            axis=-1).reshape(len(idx), len(_LINE_SEARCH))
+        good = nt < (1.0 - 1e-4 * _LINE_SEARCH[None, :]) * n0[:, None]
+        pick = np.where(np.any(good, axis=1), np.argmax(good, axis=1), np.argmin(nt, axis=1))
+        improved = np.take_along_axis(nt, pick[:, None], axis=1)[:, 0] < n0
+        new_q = trial[np.arange(len(idx)), pick]
+        q[idx] = np.where(improved[:, None], new_q, qa)
+        norm[idx] = np.where(improved, np.take_along_axis(nt, pick[:, None], axis=1)[:, 0], n0)
+        stalled = ~improved
+        active[idx] = ~(norm[idx] < tol) & ~stalled
+    return q, norm, norm < tol
+
+
+def scipy_polish(fun, q0, param, tol):
+    """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton."""
+    # MINPACK may probe non-finite states on a badly worn profile; answer those (and any
+    # non-finite residual) with a large finite residual so it backs off instead of indexing the
+    # contact table with NaN.
+    big = np.full(np.shape(q0), 1e12)
+
+    def f(z):
+        if not np.all(np.isfinite(z)):
+            return big
+        r = fun(z[None, :], param[None, :])[0]
+        return np.where(np.isfinite(r), r, 1e12)
+
+    def jac(z):
+        if not np.all(np.isfinite(z)):
+            return np.eye(len(z))
+        j = _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+        return np.where(np.isfinite(j), j, 0.0)
+
+    sol = root(f, q0, jac=jac, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
+    if not np.all(np.isfinite(sol.x)):
+        return np.asarray(q0, dtype=float), float("inf"), False
+    norm = float(np.linalg.norm(f(sol.x)))
+    return sol.x, norm, norm < tol
+
+
+def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
+    """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
+    p_end, each row with its own step (doubled on success, halved on failure). Returns
+    (q, norms, converged)."""
+    nb = len(q_start)
+    q = np.array(q_start, dtype=float)
+    t = np.zeros(nb)
+    step = np.ones(nb)
+    halvings = np.zeros(nb, dtype=int)
+    norm = np.zeros(nb)
+    failed = np.zeros(nb, dtype=bool)
+    while True:
+        todo = (t < 1.0 - 1e-12) & ~failed
+        if not np.any(todo):
+            break
+        idx = np.nonzero(todo)[0]
+        t_try = np.minimum(t[idx] + step[idx], 1.0)
+        params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
+        q_new, n_new, ok = newton_batch(fun, q[idx], params, tol)
+        for k in np.nonzero(~ok)[0]:
+            if halvings[idx[k]] >= max_halvings // 2:  # small steps: let scipy try as well
+                q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol)
+                if ok_s:
+                    q_new[k], n_new[k], ok[k] = q_s, n_s, True
+        q[idx[ok]] = q_new[ok]
+        t[idx[ok]] = t_try[ok]
+        step[idx[ok]] = np.minimum(step[idx[ok]] * 2.0, 1.0)
+        step[idx[~ok]] /= 2.0
+        halvings[idx[~ok]] += 1
+        norm[idx] = n_new
+        failed[idx[~ok]] = halvings[idx[~ok]] > max_halvings
+    return q, norm, ~failed

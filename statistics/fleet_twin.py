@@ -1,7 +1,0 @@
-"""Moved to :mod:`wearcast.statistics.generators.fleet_twin`; this name is an alias."""
-
-import sys
-
-from wearcast.statistics.generators import fleet_twin as _moved
-
-sys.modules[__name__] = _moved

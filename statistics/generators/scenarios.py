@@ -1,0 +1,170 @@
+"""Calibrated scenarios on the synthetic generators, shared by the tests and the benchmarks.
+
+A scenario is what a user of the discrepancy finder would have: a generated fleet's
+measurements and wear curves, its routes and their attributes, the curve-radius table, and a
+hybrid model calibrated on one unit's motor bogies (``tau_max``, ``mixed``) as a user would.
+The finder itself (:func:`wearcast.statistics.discrepancy.diagnose`) is not imported here:
+callers pass :meth:`Scenario.finder_arguments` to it.
+
+* :func:`twin_scenario`: the fleet twin (:mod:`.fleet_twin` with :mod:`.twin_effects`),
+  calibrated on unit A's motor bogies;
+* :func:`alt_scenario`: :mod:`.fleet_twin_alt`, calibrated on unit U1's motor cars;
+* :func:`depot_scenario`: :mod:`.depot`, calibrated on unit N1's motor bogies;
+* :func:`measured_vehicle_series` and :func:`cached_vehicle_simulator`: vehicle-averaged FT/qR
+  series "measured" from a whole-vehicle wear-loop run, for the physics diagnosis.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from wearcast.physics.vehicle_wear_simulation import (
+    VehicleWearOptions,
+    VehicleWearSimulation,
+    simulate_vehicle_wear,
+)
+from wearcast.physics.wear_loop import LoopClass
+from wearcast.statistics import hybrid
+from wearcast.statistics.generators import depot as dp
+from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import fleet_twin_alt as fa
+from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.routes import Route
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A generated fleet and the model a user would calibrate on it.
+
+    measurements : one row per (wheel, mileage) in the form ``hybrid.calibrate`` reads
+    wear_curves_mm : (n, g) wear curves [mm] of those rows
+    routes, route_attributes : route per name and its attributes (e.g. flange lubrication)
+    table : the curve-radius table the model uses
+    calibration : (n,) rows the model was calibrated on
+    model : the calibrated hybrid model (``tau_max``, ``mixed``)
+    fleet : the generator's own result (twin, alt or depot fleet)
+    """
+
+    measurements: pd.DataFrame
+    wear_curves_mm: NDArray[np.float64]
+    routes: Mapping[str, Route]
+    route_attributes: Mapping[str, Mapping[str, Any]]
+    table: pd.DataFrame
+    calibration: NDArray[np.bool_]
+    model: hybrid.HybridModel
+    fleet: Any
+
+    @property
+    def calibration_wheel_ids(self) -> set[Any]:
+        return set(self.measurements["wheel_id"][self.calibration])
+
+    def finder_arguments(self) -> tuple[tuple[Any, ...], dict[str, Any]]:
+        """Positional and keyword arguments of ``discrepancy.diagnose`` for this scenario."""
+        return ((self.model, self.measurements, self.wear_curves_mm, self.routes, self.table),
+                {"calibration_wheel_ids": self.calibration_wheel_ids,
+                 "route_attributes": self.route_attributes})
+
+
+def calibrated(measurements: pd.DataFrame, wear_curves_mm: NDArray[np.float64],
+               routes: Mapping[str, Route], route_attributes: Mapping[str, Mapping[str, Any]],
+               table: pd.DataFrame, calibration: NDArray[np.bool_], fleet: Any) -> Scenario:
+    """The scenario with a model calibrated on the ``calibration`` rows (tau_max, mixed)."""
+    model = hybrid.calibrate(measurements[calibration], routes, table,
+                             wear_curves_mm=wear_curves_mm[calibration], measure="tau_max",
+                             running_mode="mixed")
+    return Scenario(measurements, wear_curves_mm, routes, route_attributes, table, calibration,
+                    model, fleet)
+
+
+def twin_scenario(wear_effects: Sequence[ft.WearEffect] = (),
+                  profile_effects: Sequence[ft.ProfileEffect] = (), *, seed: int = 0,
+                  table: pd.DataFrame | None = None, max_wheels: int | None = None,
+                  **config: Any) -> Scenario:
+    """The four-unit twin of ``twin_effects.scenario_config`` (``config`` passed on), its
+    profiles processed, calibrated on unit A's motor bogies; ``max_wheels`` keeps the first
+    wheels by id."""
+    table = ft.synthetic_wear_table() if table is None else table
+    cfg = te.scenario_config(seed=seed, wear_effects=tuple(wear_effects),
+                             profile_effects=tuple(profile_effects), **config)
+    twin = ft.generate_fleet(cfg, table)
+    df, curves = te.twin_measurements(twin)
+    if max_wheels is not None:
+        keep = df["wheel_id"].isin(sorted(df["wheel_id"].unique())[:max_wheels]).to_numpy()
+        df, curves = df[keep].reset_index(drop=True), curves[keep]
+    routes, attrs = te.scenario_routes(cfg)
+    cal = (df["vehicle_id"].str.startswith("A") & (df["bogie_type"] == "motor")).to_numpy()
+    return calibrated(df, curves, routes, attrs, table, cal, twin)
+
+
+def alt_scenario(effects: fa.AltEffects, seed: int = 0) -> Scenario:
+    """:mod:`.fleet_twin_alt` with ``effects``, calibrated on unit U1's motor cars."""
+    fleet = fa.generate_alt_fleet(fa.AltConfig(effects=effects, seed=seed))
+    df = fleet.measurements
+    cal = (df["unit"].eq("U1") & df["bogie_type"].eq("motor")).to_numpy()
+    return calibrated(df, fleet.wear_curves, fleet.routes, fleet.route_attributes, fleet.table,
+                      cal, fleet)
+
+
+def depot_scenario(effects: dp.DepotEffects, seed: int = 0) -> Scenario:
+    """:mod:`.depot` with ``effects`` (profiles only for an instrument scale), calibrated on
+    unit N1's motor bogies."""
+    fleet = dp.generate_depot_fleet(dp.DepotConfig(
+        effects=effects, seed=seed, profiles=effects.instrument_scale is not None))
+    df = fleet.measurements
+    cal = (df["unit"].eq("N1") & df["bogie_type"].eq("motor")).to_numpy()
+    return calibrated(df, fleet.wear_curves, fleet.routes, fleet.route_attributes, fleet.table,
+                      cal, fleet)
+
+
+def cached_vehicle_simulator(route: Sequence[LoopClass], vehicle: str = "metro_b", *,
+                             law: str = "usfd", mileage_km: float = 3000.0,
+                             depth_per_step_mm: float = 1.0,
+                             on_run: Callable[[Mapping[str, Any], float], None] | None = None,
+                             ) -> Callable[[Mapping[str, Any]], VehicleWearSimulation]:
+    """``simulate(parameters)`` for the physics diagnosis: one whole-vehicle loop run per
+    parameter set (``VehicleWearOptions`` fields), cached; ``on_run`` is told of each new run
+    and its wall time [s].
+    """
+    cache: dict[tuple[tuple[str, Any], ...], VehicleWearSimulation] = {}
+
+    def simulate(params: Mapping[str, Any]) -> VehicleWearSimulation:
+        key = tuple(sorted(params.items()))
+        if key not in cache:
+            start = time.perf_counter()
+            cache[key] = simulate_vehicle_wear(vehicle, route, law=law,
+                                               mileage_km=mileage_km,
+                                               depth_per_step_mm=depth_per_step_mm,
+                                               options=VehicleWearOptions(**params))
+            if on_run is not None:
+                on_run(params, time.perf_counter() - start)
+        return cache[key]
+
+    return simulate
+
+
+def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5,
+                            wear_scale: float = 1.2, noise_mm: float = 0.02,
+                            seed: int = 7) -> pd.DataFrame:
+    """Vehicle-averaged flange thickness and qR [mm] "measured" from a loop run.
+
+    Per vehicle: 0 km and four mileages uniform in 200–1500 km; the truth is the run's mean
+    Sd and qR at ``wear_scale`` times the mileage, plus Gaussian noise of ``noise_mm``.
+    Columns ``vehicle, distance_km, FT_mm, QR_mm`` (what ``diagnose_physics`` reads).
+    """
+    rng = np.random.default_rng(seed)
+    rows = []
+    for v in range(n_vehicles):
+        km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
+        ft_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("sd_mm"))
+        qr_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("qr_mm"))
+        rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
+                 for k, a, b in zip(km, ft_mm + rng.normal(0, noise_mm, km.size),
+                                    qr_mm + rng.normal(0, noise_mm, km.size), strict=True)]
+    return pd.DataFrame(rows)
