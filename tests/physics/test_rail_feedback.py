@@ -177,3 +177,26 @@ def test_a_vehicle_on_a_worn_rail_and_bad_options():
         simulate_rail_steps("metro_b", CURVES, rail_step_depth_mm=0.0)
     with pytest.raises(ValueError, match="all wheels"):
         simulate_rail_steps("metro_b", CURVES, rail_from_all_wheels=False)
+
+
+def test_the_whole_vehicle_runs_on_a_given_rail(rail_steps):
+    from wearcast.physics.vehicle_wear_simulation import (
+        VehicleWearOptions,
+        simulate_vehicle_wear,
+        vehicle_bogies,
+    )
+
+    rail = rail_steps.rails[1]
+    kwargs = {"law": "usfd", "mileage_km": 100.0, "depth_per_step_mm": 1.0}
+    new = simulate_vehicle_wear("metro_b", CURVES[:2], **kwargs)
+    worn = simulate_vehicle_wear("metro_b", CURVES[:2], options=VehicleWearOptions(rail=rail),
+                                 **kwargs)
+    # The option puts the rail under every bogie, as bogies built on that rail do.
+    direct = simulate_vehicle_wear(
+        [(replace(b, rail_profile=rail), n) for b, n in vehicle_bogies("metro_b")],
+        CURVES[:2], **kwargs)
+    assert np.array_equal(worn.profiles_mm, direct.profiles_mm)
+    assert np.max(np.abs(worn.profiles_mm - new.profiles_mm)) > 1e-3
+    with pytest.raises(ValueError, match="rail_profile"):
+        simulate_vehicle_wear("metro_b", CURVES[:2], mileage_km=10.0,
+                              options=VehicleWearOptions(rail="UIC54"))
