@@ -200,3 +200,42 @@ def test_the_whole_vehicle_runs_on_a_given_rail(rail_steps):
     with pytest.raises(ValueError, match="rail_profile"):
         simulate_vehicle_wear("metro_b", CURVES[:2], mileage_km=10.0,
                               options=VehicleWearOptions(rail="UIC54"))
+
+
+#: Tolerance on km_tot^j / km_tot^0 against seed 003 Tables 5/8 [-]: the spread of the seed's
+#: own descriptions of the same line at rail steps 1-2 (complete line and n_class = 4, 6, 8, 10:
+#: 1.027-1.051 at step 1, 1.115-1.154 at step 2), rounded up. The ratio, not km_tot itself:
+#: the loop tracks the leading outer wheel, the seed the mean wheel of the whole vehicle, and
+#: the absolute rate is what the Aosta comparison shows off by -65 %.
+SEED_RATIO_TOLERANCE = 0.05
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1 "
+    "(587 -> 553 km, ratio 0.94 against the seed's 1.04). On the worn rail the flange "
+    "patches are more conformal (route mean area 6.0 -> 7.4 mm^2) and their frictional power "
+    "T gamma falls 3 %, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) makes "
+    "the worn volume of a patch proportional to its AREA there, and the tread's T gamma rises "
+    "3 %: the wheel's worn volume per metre rises 0.036 -> 0.038 mm^3/m on the flange"))
+def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference_dir):
+    import pandas as pd
+
+    table = pd.read_csv(reference_dir / "published" / "aosta_statistical_track_nclass7.csv",
+                        comment="#")
+    classes = []
+    for r in table.itertuples():
+        if not np.isfinite(r.R_c_m):
+            classes.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
+            continue
+        for direction in ("left", "right"):
+            classes.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
+                                     r.p_k_pct / 200.0))
+    ref = pd.read_csv(reference_dir / "published" / "aosta_full_vs_statistical_mileage.csv",
+                      comment="#")
+    seed = ref[ref.description == "complete"].sort_values("rail_step").km_tot.to_numpy(float)
+    rs = simulate_rail_steps("minuetto", classes, n_rail_steps=2, law="usfd",
+                             steps=WearSteps(n_steps=20, depth_per_step_mm=0.2),
+                             unbalanced_acceleration_m_s2=0.8)
+    assert rs.km_tot[1] / rs.km_tot[0] == pytest.approx(seed[1] / seed[0],
+                                                         abs=SEED_RATIO_TOLERANCE)
