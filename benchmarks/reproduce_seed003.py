@@ -64,6 +64,14 @@ N_step, tonnage and W1/W2/W3 of the mean, high and low rail. Tracked wheel: the 
 outer wheel (the loop's default), not seed 003's mean wheel of the whole vehicle, so the
 absolute km_tot are not comparable; the ratios are.
 
+Result of the first rail-step run (649 s at load 5-7 on 2 shared vCPUs): km_tot 587.0, 552.9,
+568.0, 588.2, 607.2 km (ratios 1, 0.942, 0.968, 1.002, 1.034 against the seed's 1, 1.038,
+1.154, 1.238, 1.339): NOT reproduced, the mileage falls at rail step 1. The worn rail does make
+the flange patches more conformal (route mean area 6.0 -> 7.4 mm^2, frictional power -3 %),
+but under USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) a patch's worn volume is
+proportional to its area: the wheel's worn volume per km rises 68.7 -> 71.4 mm^3/km. N_tot
+262,572 vehicles, 15.3 Mt for 5 x 0.8 mm (seed: 2,957,850 vehicles, 310 Mt).
+
 Result of the first run (Minuetto preset, 20 steps; complete line 78.5 km in ~850 s, the
 descriptions 5-90 s): errors -5.6, -3.1, +4.8, +1.2, -1.1, +1.8, +2.9, -0.6, -1.1, +0.9 % for
 n_class = 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, the two speed rules within 0.4 % of each other. The
