@@ -2,6 +2,7 @@
 
 Run: .venv/bin/python benchmarks/reproduce_seed003.py [--steps 20] [--nclass 2 3 4 ...]
      [--vehicle minuetto]
+     .venv/bin/python benchmarks/reproduce_seed003.py --rail-steps [--rail-route table3|nclass10]
 
 Seed 003 (Tables 5, 8) replaces the Aosta - Pre Saint Didier line (about 31 km) by N_c curve
 classes: n_class radius intervals equally spaced in curvature x n_class cant subclasses;
@@ -50,6 +51,27 @@ Both then run ``physics.wear_loop.simulate_wear`` (adaptive steps of 0.2 mm, Arc
 global application, right wheel of the leading axle). The output is a table of mileage after
 the steps, error against the complete line and time, and docs/img/wear_loop_seed003.png.
 
+Rail steps (``--rail-steps``; seed 003 §6.1 item 2, Tables 4, 5 and 8): the worn rail fed back
+into the contact (``physics.wear_loop.simulate_rail_steps``). For each rail step j the wheel
+evolves from new over 20 steps of D_step^w = 0.2 mm on rail r_j, the contact table rebuilt with
+r_j; the mean rail's depth per vehicle, averaged over the wheel steps, is scaled to D_step^r =
+0.8 mm (eq. 4) and removed along the rail's normal: r_{j+1}. Law: seed 003's USFD; route: seed
+003's own statistical description (Table 3, n_class = 7, both directions, a_nc = 0.8 m/s^2),
+or ``--rail-route nclass10``: the synthetic line binned with n_class = 10 by the seed's speed
+rule. Printed per rail step: km_tot^j and km_tot^j / km_tot^0 beside the seed's (complete line
+and n_class = 10), FH/FT/qR at the end beside seed Table 4, the wheel's worn volume per km,
+N_step, tonnage and W1/W2/W3 of the mean, high and low rail. Tracked wheel: the leading
+outer wheel (the loop's default), not seed 003's mean wheel of the whole vehicle, so the
+absolute km_tot are not comparable; the ratios are.
+
+Result of the first rail-step run (649 s at load 5-7 on 2 shared vCPUs): km_tot 587.0, 552.9,
+568.0, 588.2, 607.2 km (ratios 1, 0.942, 0.968, 1.002, 1.034 against the seed's 1, 1.038,
+1.154, 1.238, 1.339): NOT reproduced, the mileage falls at rail step 1. The worn rail does make
+the flange patches more conformal (route mean area 6.0 -> 7.4 mm^2, frictional power -3 %),
+but under USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) a patch's worn volume is
+proportional to its area: the wheel's worn volume per km rises 68.7 -> 71.4 mm^3/km. N_tot
+262,572 vehicles, 15.3 Mt for 5 x 0.8 mm (seed: 2,957,850 vehicles, 310 Mt).
+
 Result of the first run (Minuetto preset, 20 steps; complete line 78.5 km in ~850 s, the
 descriptions 5-90 s): errors -5.6, -3.1, +4.8, +1.2, -1.1, +1.8, +2.9, -0.6, -1.1, +0.9 % for
 n_class = 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, the two speed rules within 0.4 % of each other. The
@@ -75,7 +97,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from wearcast.physics.wear_loop import LoopClass, WearSimulation, WearSteps, simulate_wear  # noqa: E402
+from wearcast.physics.wear_loop import (  # noqa: E402
+    LoopClass,
+    WearSimulation,
+    WearSteps,
+    simulate_rail_steps,
+    simulate_wear,
+)
 from wearcast.statistics.routes import (  # noqa: E402
     route_from_segments,
     speed_from_unbalanced_acceleration_kmh,
@@ -286,6 +314,70 @@ def report(complete: Run, runs: list[Run], steps: WearSteps, vehicle: str) -> No
     plt.close(fig)
 
 
+#: Seed 003 Table 4 (complete line): FH, FT, QR at the end of each rail step's wheel evolution.
+SEED_TABLE4 = {"FH": (27.57, 27.73, 27.89, 28.07, 28.33), "FT": (28.30, 28.36, 28.44, 28.52, 28.63),
+               "QR": (8.38, 8.35, 8.37, 8.43, 8.57)}
+
+
+def table3_classes() -> list[LoopClass]:
+    """Seed 003 Table 3 (n_class = 7) as loop classes, each curve in both directions."""
+    table = pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv", comment="#")
+    out = []
+    for r in table.itertuples():
+        if not np.isfinite(r.R_c_m):
+            out.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
+            continue
+        for direction in ("left", "right"):
+            out.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
+                                 r.p_k_pct / 200.0))
+    return out
+
+
+def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int) -> None:
+    """Seed 003 Tables 4, 5, 8: wheel evolutions on the rail of each rail step."""
+    if route == "table3":
+        classes = table3_classes()
+    else:
+        n = int(route.removeprefix("nclass"))
+        classes = list(route_from_segments(
+            synthetic_line(), name=route, n_class=n, tangent_min_radius_m=TANGENT_MIN_RADIUS_M,
+            speed_rule="a_nc", max_speed_kmh=CURVE_LINE_SPEED_KMH,
+            unbalanced_acceleration_m_s2=A_NC_M_S2).classes)
+    ref = pd.read_csv(REFERENCE / "aosta_full_vs_statistical_mileage.csv", comment="#")
+    seed = {d: g.sort_values("rail_step").km_tot.to_numpy(float)
+            for d, g in ref.groupby("description")}
+    t0 = time.perf_counter()
+    print(f"rail steps: {vehicle}, route {route} ({len(classes)} classes), USFD, "
+          f"{n_rail_steps} rail steps of 0.8 mm x {wheel_steps} wheel steps of 0.2 mm", flush=True)
+    rs = simulate_rail_steps(
+        vehicle, classes, n_rail_steps=n_rail_steps, law="usfd",
+        steps=WearSteps(n_steps=wheel_steps, depth_per_step_mm=0.2),
+        unbalanced_acceleration_m_s2=A_NC_M_S2,
+        progress=lambda j, n, km: print(f"  rail step {j - 1}: km_tot {km:.1f} "
+                                        f"({time.perf_counter() - t0:.0f} s)", flush=True))
+    print(f"total {rs.elapsed_s:.1f} s")
+    ratio = rs.km_tot / rs.km_tot[0]
+    print("j | km_tot | ratio | seed complete ratio | seed n10 ratio | FH    | FT    | qR   | "
+          "seed FH/FT/QR     | vol mm3/km | fallbacks | N_step   | Mt cum | rail after "
+          "(mean W1/W3, high W3, low W1) mm")
+    for j, run in enumerate(rs.wheel_runs):
+        sc = seed["complete"] / seed["complete"][0]
+        s10 = seed["nclass10"] / seed["nclass10"][0]
+        vol = run.worn_volume_mm3[-1] / run.mileage_km[-1]
+        mean, high, low = (rs.head_wear(j + 1, w) for w in ("mean", "high", "low"))
+        assert mean is not None and high is not None and low is not None
+        seed4 = (f"{SEED_TABLE4['FH'][j]:.2f}/{SEED_TABLE4['FT'][j]:.2f}/"
+                 f"{SEED_TABLE4['QR'][j]:.2f}" if j < 5 else "-")
+        print(f"{j} | {rs.km_tot[j]:6.1f} | {ratio[j]:.3f} | "
+              f"{sc[j] if j < sc.size else float('nan'):.3f}               | "
+              f"{s10[j] if j < s10.size else float('nan'):.3f}          | "
+              f"{run.sh_mm[-1]:.2f} | {run.sd_mm[-1]:.2f} | {run.qr_mm[-1]:.2f} | {seed4} | "
+              f"{vol:10.2f} | {run.contact_fallbacks:9d} | {rs.vehicles_per_step[j]:8.0f} | "
+              f"{rs.tonnage_mt[j]:6.2f} | {mean.vertical.value_mm:.2f}/"
+              f"{mean.corner_45.value_mm:.2f}, {high.corner_45.value_mm:.2f}, "
+              f"{low.vertical.value_mm:.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -293,7 +385,18 @@ def main() -> None:
     parser.add_argument("--nclass", type=int, nargs="+",
                         default=[2, 3, 4, 5, 6, 7, 8, 10, 12, 14])
     parser.add_argument("--vehicle", default="minuetto")
+    parser.add_argument("--rail-steps", action="store_true",
+                        help="seed 003 Tables 4/5/8: wheel evolutions on each rail step's rail")
+    parser.add_argument("--rail-route", default="table3",
+                        help="table3 (seed 003 Table 3, n_class = 7) or nclass<N>")
+    parser.add_argument("--n-rail-steps", type=int, default=5)
     args = parser.parse_args()
+    if not REFERENCE.exists():
+        print(f"skipped: {REFERENCE} not found (needs ../shared/reference beside the repo)")
+        return
+    if args.rail_steps:
+        rail_steps(args.vehicle, args.rail_route, args.n_rail_steps, args.steps)
+        return
     steps = WearSteps(n_steps=args.steps, depth_per_step_mm=0.2)
     complete, runs = sweep(args.vehicle, args.nclass, steps)
     report(complete, runs, steps, args.vehicle)

@@ -24,10 +24,16 @@ follow common rail-profile practice (e.g. the MiniProf W1/W2/W3 fields) and are 
 answer. A measurement that does not fit its reference (field flank off the reference shape,
 gauge face well outside the reference, top above it) is flagged, never reported silently as
 negative wear.
+
+A head worn by the wear loop (:class:`WornRail`, :func:`wear_rail`): the normal depth the loop
+computes on the inclined rail frame is removed along the head's normal (seed 003 §4.3) and
+the head kept in the frame of the new rail (its foot does not move); it enters the contact
+table like a rail name and is measured here against the head it was worn from.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -40,7 +46,9 @@ from wearcast.physics.profiles.measured_rail import (
     crossings_at_height,
     heights_at_y,
     shape_facts,
+    upper_envelope,
 )
+from wearcast.physics.profiles.rails import incline, rail_profile, resample_by_arc_length
 
 #: A lateral datum offset up to this is accepted unfitted [mm].
 DATUM_TOLERANCE_MM = 1.0
@@ -336,3 +344,138 @@ def rail_head_wear(y_mm: ArrayLike, z_mm: ArrayLike, reference: RailReference | 
                         reference_fits=fits, mismatch=mismatch,
                         reference_head_width_mm=ref_facts.head_width_mm,
                         measured_head_width_mm=width)
+
+
+# --------------------------------------------------------------------------------------------
+# A rail head worn by the wear loop (fed back into the contact, seed 003 §4.3)
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class WornRail:
+    """A rail head worn by the wear loop, as points [mm] in the UPRIGHT rail frame of
+    ``profiles.rails`` (gauge side at y < 0, the new head's top at (0, 0)), ordered from the
+    gauge side.
+
+    Unlike a measured rail (``profiles.measured_rail.MeasuredRail``, placed by its own top
+    and gauge point), a worn rail keeps the frame of the head it was worn from: the rail's
+    foot does not move when its head wears, so its points are never shifted. It is a
+    ``profiles.rails.RailShape``: :meth:`contact_points` gives the contact model its inclined
+    upper envelope (``build_contact_table(wheel, rail, ...)`` accepts it like a rail name).
+    ``base`` is the reference head it was worn from (``60E1``/``UIC60``/``60E2``), against
+    which :meth:`head_wear` measures W1/W2/W3 (:func:`rail_head_wear`, placement exact: same
+    frame). Equality and hashing go by content (``digest``), so it keys contact-table caches.
+    """
+
+    name: str
+    y_mm: NDArray[np.float64] = field(repr=False)
+    z_mm: NDArray[np.float64] = field(repr=False)
+    base: str = "60E1"
+
+    def __post_init__(self) -> None:
+        y = np.asarray(self.y_mm, float)
+        z = np.asarray(self.z_mm, float)
+        if y.shape != z.shape or y.ndim != 1 or y.size < 10:
+            raise ValueError("a worn rail needs at least 10 (y, z) points of equal count")
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+            raise ValueError("worn rail points must be finite")
+        if self.base.strip().upper() not in REFERENCE_NAMES:
+            raise ValueError(f"base: unknown rail profile {self.base!r}")
+        object.__setattr__(self, "y_mm", y)
+        object.__setattr__(self, "z_mm", z)
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the points and the base head (content identity)."""
+        h = hashlib.sha256()
+        h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
+        h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
+        h.update(self.base.encode())
+        return h.hexdigest()
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, WornRail) and other.digest == self.digest
+
+    def __hash__(self) -> int:
+        return hash(self.digest)
+
+    def __str__(self) -> str:
+        return f"worn rail {self.name} ({self.base})"
+
+    def contact_points(self, step_mm: float = 0.2, inclination: float = 0.0
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The head as the contact model takes a rail (``profiles.rails.rail_profile``): turned
+        by the inclination about the new head's top, reduced to its upper envelope (what a
+        wheel can touch) and resampled by arc length; (y, z) [mm], gauge side first."""
+        y, z = incline(self.y_mm, self.z_mm, inclination)
+        y, z = upper_envelope(y, z)
+        return resample_by_arc_length(y, z, step_mm)
+
+    def head_wear(self) -> RailHeadWear:
+        """W1/W2/W3 of this head against its base (:func:`rail_head_wear`) [mm]."""
+        return rail_head_wear(self.y_mm, self.z_mm, self.base)
+
+    def area_loss_mm2(self) -> float:
+        """Cross-section area lost against the new ``base`` head [mm^2] (vertical integral of
+        the height difference over the head)."""
+        y0, z0 = rail_profile(self.base, step_mm=0.05, inclination=0.0)
+        return head_area_between_mm2(y0, z0, self.y_mm, self.z_mm)
+
+
+def head_area_between_mm2(y_new_mm: ArrayLike, z_new_mm: ArrayLike, y_worn_mm: ArrayLike,
+                          z_worn_mm: ArrayLike) -> float:
+    """Area between two heads given as outlines in the same frame [mm^2]: the integral over
+    height of the width lost, i.e. the area of the new head above the worn outline. Both
+    outlines are reduced to their upper envelopes and compared as z(y) on a 0.01 mm grid over
+    the new head's span (the worn head beyond its own points counts as absent)."""
+    y0, z0 = upper_envelope(np.asarray(y_new_mm, float), np.asarray(z_new_mm, float))
+    y1, z1 = upper_envelope(np.asarray(y_worn_mm, float), np.asarray(z_worn_mm, float))
+    grid = np.arange(y0[0], y0[-1], 0.01)
+    top0 = np.interp(grid, y0, z0)
+    bottom = float(min(z0.min(), z1.min()))
+    top1 = np.interp(grid, y1, z1, left=bottom, right=bottom)
+    return float(np.trapezoid(np.clip(top0 - np.maximum(top1, bottom), 0.0, None), grid))
+
+
+def wear_rail(rail: str | Any, rail_y_mm: ArrayLike, normal_depth_mm: ArrayLike,
+              inclination: float, name: str = "worn") -> WornRail:
+    """Remove a normal wear depth from a rail head (seed 003 §4.3: "in the normal direction to
+    the ... rail profile").
+
+    Parameters
+    ----------
+    rail : a rail name (``60E1``/``UIC60``/``60E2``) or a :class:`WornRail`
+    rail_y_mm, normal_depth_mm : the depth [mm] over the lateral coordinate of the INCLINED
+        rail frame the contact model uses (``ContactTable``: ``rail_y_mm`` of the contacts,
+        e.g. ``wear_loop.rail_depth_per_vehicle``), gauge side at y < 0
+    inclination : rail inclination as a slope (the vehicle's), used to turn the head into
+        that frame and back
+
+    Returns
+    -------
+    WornRail: every point of the inclined head moved along its inward normal by the depth at
+    its y (zero outside the given range), turned back upright, reduced to its upper envelope.
+    """
+    if isinstance(rail, str):
+        base = rail.strip().upper()
+        if base not in REFERENCE_NAMES:
+            raise ValueError(f"rail: unknown rail profile {rail!r}")
+    elif isinstance(rail, WornRail):
+        base = rail.base
+    else:
+        raise ValueError("rail: a rail name or a WornRail")
+    y, z = rail_profile(rail, step_mm=0.05, inclination=inclination)
+    ry = np.asarray(rail_y_mm, float)
+    d = np.asarray(normal_depth_mm, float)
+    if ry.shape != d.shape or ry.ndim != 1 or np.any(np.diff(ry) <= 0):
+        raise ValueError("rail_y_mm must be ascending and match normal_depth_mm")
+    if not np.all(np.isfinite(d)):
+        raise ValueError("normal_depth_mm must be finite")
+    dy = np.gradient(y)
+    dz = np.gradient(z)
+    norm = np.hypot(dy, dz)
+    out_y, out_z = -dz / norm, dy / norm               # outward normal (up on the crown)
+    depth = np.interp(y, ry, d, left=0.0, right=0.0)
+    yw, zw = y - depth * out_y, z - depth * out_z
+    yu, zu = incline(yw, zw, -inclination)              # back to upright
+    yu, zu = upper_envelope(yu, zu)
+    return WornRail(name=name, y_mm=yu, z_mm=zu, base=base)

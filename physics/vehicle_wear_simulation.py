@@ -80,6 +80,9 @@ class VehicleWearOptions:
     friction : coefficient of friction replacing the preset's (None: the preset's) [-]
     patch_width : ``hertz`` | ``kik_piotrowski`` (``wear_loop.class_contacts``)
     application : ``global`` | ``local``
+    rail : the rail under every wheel, replacing the preset's: a name (``60E1``, ``60E2``),
+        a measured rail or a rail worn by the loop (``rail_head_wear.WornRail``, e.g. a rail
+        step of ``wear_loop.simulate_rail_steps``); None: the preset's
     """
 
     forward_share: float = 0.5
@@ -88,6 +91,7 @@ class VehicleWearOptions:
     friction: float | None = None
     patch_width: str = "hertz"
     application: str = "global"
+    rail: Any = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.forward_share <= 1.0:
@@ -224,6 +228,8 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     if not (mileage_km > 0 and depth_per_step_mm > 0):
         raise ValueError("mileage_km and depth_per_step_mm must be positive")
     bogies = vehicle_bogies(vehicle, opts.friction)
+    if opts.rail is not None:
+        bogies = [(replace(b, rail_profile=opts.rail), n) for b, n in bogies]
     classes = as_loop_classes(route_classes)
     shares = np.array([c.share for c in classes], dtype=float)
     shares = shares / shares.sum()

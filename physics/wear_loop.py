@@ -29,8 +29,18 @@ the number of vehicles N (tonnage N M_v). The rail of the tracked wheel's side i
 is worn by both axles of the bogie and by two bogies per vehicle; per vehicle passage, the
 cross-section area removed is the volume per metre rolled / 1000 mm, spread semi-elliptically on
 the rail's own lateral coordinate, averaged over classes with p_k. Rail steps: N_step =
-D_step^r / max(depth per vehicle) (seed 003 eq. 4). The worn rail is an OUTPUT: the curving
-model takes named rail profiles, so the rail's wear is not fed back into the contact.
+D_step^r / max(depth per vehicle) (seed 003 eq. 4). With ``rail_from_all_wheels`` the rail
+wear comes from all four wheels of the bogie, each with its own patches (no scaling), and is
+split into the high rail (the outer rail of each curve), the low rail and the mean rail of
+seed 003 (one mean rail profile for all rails, §4.3).
+
+Rail fed back into the contact (seed 003 §4.3 and §6.1, item 2, :func:`simulate_rail_steps`):
+for each rail step j the wheel evolves from new over its n_sw wheel steps on the rail r_j (the
+contact table rebuilt with r_j and the current wheel at every contact update); the mean rail's
+depth per vehicle, averaged over those wheel steps (the seed's arithmetic mean of the virtual
+rail profiles), is scaled to D_step^r (eq. 4: N_step = D_step^r / max depth) and removed
+along the rail's normal, giving r_{j+1} (:class:`WornRail`). km_tot^j (seed 003 Tables 5, 8) is
+the mileage at the end of the wheel evolution on r_j.
 
 All depths in mm, mileage km, tonnage t (Mt = 1e6 t), speeds m/s inside.
 """
@@ -56,7 +66,9 @@ from wearcast.physics.curving import (
     solve_curving_cases_or_none,
 )
 from wearcast.physics.profiles.parameters import flange_parameters
+from wearcast.physics.profiles.rails import RailShape
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.rail_head_wear import RailHeadWear, WornRail, wear_rail
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle, vehicle_preset
 from wearcast.physics.vocabulary import CurveClass, Direction
 from wearcast.physics.wear_distribution import (
@@ -507,6 +519,48 @@ def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArra
     return np.einsum("c,cn->n", shares, per_class)
 
 
+def rail_depth_per_vehicle_all_wheels(contacts: Mapping[tuple[int, str], ClassContacts],
+                                      law: WearLaw, classes: Sequence[LoopClass],
+                                      shares: NDArray, rail_grid_mm: NDArray,
+                                      bogies_per_vehicle: int = 2
+                                      ) -> dict[str, NDArray[np.float64]]:
+    """Rail normal depth per vehicle passage from every wheel of the bogie [mm], class-averaged
+    with p_k (seed 003 eq. 4), on the rail grid of the inclined rail frame.
+
+    Each wheel's patches wear the rail under it with the rail's share of the law's volume
+    (``wear_laws.wheel_rail_split``): per passage the cross-section area removed is the patch
+    volume per metre rolled / 1000 mm, spread semi-elliptically at the patch's rail position.
+    ``high``: the outer rail of each curve (the wheels on that side); ``low``: the inner rail;
+    on tangent track both rails take the mean of the two sides. ``mean``: (high + low) / 2,
+    the rail of seed 003's single mean rail profile (every rail of a line is the high rail of
+    some curves and the low rail of the others). Returns {"high", "low", "mean"}: (n_rail,).
+    """
+    _, rail_share = wheel_rail_split(law)
+    coeffs = law_coefficients(law)
+    n_class = len(classes)
+    side_depth = {s: np.zeros((n_class, np.size(rail_grid_mm))) for s in ("left", "right")}
+    for (_, side), c in contacts.items():
+        vol = rail_share * contact_volume_basis(c, law) @ coeffs          # (n_class, slot)
+        area = np.where(c.loaded, vol, 0.0) / 1000.0                       # mm^2 per passage
+        b = np.where(c.loaded, c.b_mm, 1.0)
+        # Unit radius 1/(2 pi): semi_elliptic_depth spreads "volume" = area on the rail's y.
+        depth = semi_elliptic_depth(rail_grid_mm, c.rail_y_mm, b, area, 1.0 / (2.0 * np.pi),
+                                    c.angle_rad)
+        side_depth[side] += depth.sum(axis=1)
+    high = np.zeros_like(side_depth["left"])
+    low = np.zeros_like(high)
+    for k, cls in enumerate(classes):
+        if cls.is_tangent:
+            high[k] = low[k] = 0.5 * (side_depth["left"][k] + side_depth["right"][k])
+            continue
+        outer = "right" if cls.direction == "left" else "left"
+        inner = "left" if outer == "right" else "right"
+        high[k], low[k] = side_depth[outer][k], side_depth[inner][k]
+    h = bogies_per_vehicle * np.einsum("c,cn->n", shares, high)
+    lo = bogies_per_vehicle * np.einsum("c,cn->n", shares, low)
+    return {"high": h, "low": lo, "mean": 0.5 * (h + lo)}
+
+
 @dataclass(frozen=True)
 class WearSimulation:
     """Result of :func:`simulate_wear`.
@@ -516,7 +570,9 @@ class WearSimulation:
     step_km (n_steps,), step_max_depth_mm (n_steps,), worn_volume_mm3 (n_steps+1,) (seed 002
     eq. 8 against the initial profile), contact_fallbacks, contact_updates, elapsed_s, law,
     application, rail_y_mm, rail_depth_per_vehicle_mm (n_rail,), rail_steps (rail step ->
-    vehicles, tonnage [t], max depth), step_basis_mm (n_steps, n_basis, n): vertical-equivalent
+    vehicles, tonnage [t], max depth), rail_high/low_depth_per_vehicle_mm (n_rail,) with
+    ``rail_from_all_wheels`` (else None), rail (the rail the wheel ran on: a name or a rail
+    shape), step_basis_mm (n_steps, n_basis, n): vertical-equivalent
     depth of each step per unit basis coefficient (the zone coefficients for Archard/KTH), used
     by the exact calibration; coefficients (n_basis,).
     """
@@ -541,6 +597,9 @@ class WearSimulation:
     rail_steps: tuple
     step_basis_mm: NDArray
     coefficients: NDArray
+    rail_high_depth_per_vehicle_mm: NDArray | None = None
+    rail_low_depth_per_vehicle_mm: NDArray | None = None
+    rail: Any = "60E1"
 
     @property
     def wear_mm(self) -> NDArray:
@@ -614,7 +673,8 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                   fastsim_grid: int = 20, rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
                   n_rail_steps: int = 5, progress: Progress | None = None,
                   contact_cache: dict | None = None,
-                  patch_width: str = "hertz") -> WearSimulation:
+                  patch_width: str = "hertz",
+                  rail_from_all_wheels: bool = False) -> WearSimulation:
     """Simulate the wear of one wheel over a route described by curve classes.
 
     Parameters
@@ -641,6 +701,13 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         an update whose profile is bit-identical to a stored one reuses it, so results are
         identical with and without the cache (only solutions without fallbacks are stored,
         the others depend on the previous update)
+    rail_from_all_wheels : rail wear from all four wheels of the bogie, each with its own
+        patches, split into high, low and mean rail
+        (:func:`rail_depth_per_vehicle_all_wheels`; ``rail_depth_per_vehicle_mm`` is then the
+        mean rail of seed 003); default: from the tracked wheel's rail only
+        (:func:`rail_depth_per_vehicle`). The rail itself is ``vehicle.rail_profile`` (a name,
+        a measured or a :class:`~wearcast.physics.rail_head_wear.WornRail`), in the contact
+        table of every contact update.
 
     Returns
     -------
@@ -672,9 +739,11 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     fallbacks = updates = 0
     since_update = np.inf
     rail_rates = []
+    rail_sides: list[dict[str, NDArray]] = []
+    all_contacts: dict[tuple[int, str], ClassContacts] | None = None
     cache_key = None if contact_cache is None else _contact_key(
         veh, classes, axle, side, unbalanced_acceleration_m_s2, tangent_speed_kmh, fastsim_grid,
-        y, patch_width)
+        y, patch_width) + (rail_from_all_wheels,)
     linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)
     eps = 1e-3
     for i in range(st.n_steps):
@@ -686,8 +755,22 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
             if contacts is None or since_update >= st.contact_update_depth_mm:
                 key = None if contact_cache is None else (cache_key, z.tobytes())
                 hit = None if key is None or contact_cache is None else contact_cache.get(key)
-                if hit is not None:
+                if hit is not None and rail_from_all_wheels:
+                    all_contacts, fb = hit, 0
+                    contacts = all_contacts[(axle, side)]
+                elif hit is not None:
                     contacts, fb = hit, 0
+                elif rail_from_all_wheels:
+                    all_contacts, fb = class_contacts_all_wheels(
+                        veh, classes, y, z, wheels=BOGIE_WHEELS,
+                        unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+                        tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+                        previous=all_contacts, patch_width=patch_width)
+                    # Fallbacks of the tracked wheel only, as without the option.
+                    fb = fb // len(BOGIE_WHEELS)
+                    contacts = all_contacts[(axle, side)]
+                    if key is not None and contact_cache is not None and fb == 0:
+                        contact_cache[key] = all_contacts
                 else:
                     contacts, fb = class_contacts(
                         veh, classes, y, z, axle=axle, side=side,
@@ -703,7 +786,13 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                                               veh.friction)                # mm per m rolled
                 # Smooth each basis row linearly; clipping acts on the sum below.
                 basis_km = linear.apply(np.einsum("c,cbn->bn", shares, per_class) * 1000.0, y)
-                rail_rates.append(rail_depth_per_vehicle(contacts, wl, shares, rail_y))
+                if all_contacts is not None:
+                    sides = rail_depth_per_vehicle_all_wheels(all_contacts, wl, classes, shares,
+                                                              rail_y)
+                    rail_sides.append(sides)
+                    rail_rates.append(sides["mean"])
+                else:
+                    rail_rates.append(rail_depth_per_vehicle(contacts, wl, shares, rail_y))
             assert basis_km is not None
             rate = basis_km.T @ coeffs                                     # mm/km, normal
             if sm.clip_negative:
@@ -759,7 +848,12 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         contact_fallbacks=fallbacks, contact_updates=updates,
         elapsed_s=time.perf_counter() - start, law=wl.name, application=application,
         n_classes=len(classes), rail_y_mm=rail_y, rail_depth_per_vehicle_mm=rail_rate,
-        rail_steps=rail_steps, step_basis_mm=np.array(basis_steps), coefficients=coeffs)
+        rail_steps=rail_steps, step_basis_mm=np.array(basis_steps), coefficients=coeffs,
+        rail_high_depth_per_vehicle_mm=(np.mean([r["high"] for r in rail_sides], axis=0)
+                                        if rail_sides else None),
+        rail_low_depth_per_vehicle_mm=(np.mean([r["low"] for r in rail_sides], axis=0)
+                                       if rail_sides else None),
+        rail=veh.rail_profile)
 
 
 def _check_diverged(z_mm: NDArray, z_initial_mm: NDArray, step: int, mileage_km: float) -> None:
@@ -804,3 +898,144 @@ def class_wear_rates(vehicle: BogieVehicle | str, route_classes: Any,
                                  unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
                                  tangent_speed_kmh=tangent_speed_kmh)
     return contacts, contact_volume_basis(contacts, wl) @ law_coefficients(wl)
+
+
+@dataclass(frozen=True)
+class RailStepSimulation:
+    """Result of :func:`simulate_rail_steps` (seed 003 §6.1, item 2; Tables 5 and 8).
+
+    wheel_runs : one :class:`WearSimulation` per rail step j, the wheel from new on rail r_j
+    rails : r_0 .. r_n (n + 1; r_0 the vehicle's rail), the mean rail fed into the contact
+    high_rails, low_rails : the outer and inner rail of the curves, r_0 .. r_n, worn with the
+        same vehicle numbers from their own depths (computed on the mean rail's contact; they
+        are outputs, not fed back: the contact takes one rail for both wheels)
+    km_tot : (n,) mileage at the end of each wheel evolution [km] (seed 003 km_tot^j)
+    vehicles_per_step : (n,) N_step^j = D_step^r / max(mean rail depth per vehicle) (eq. 4)
+    rail_y_mm : (n_rail,) the inclined rail frame's lateral grid [mm]
+    rail_depth_per_vehicle_mm : (n, n_rail) mean rail depth per vehicle, averaged over the
+        wheel steps of each rail step [mm]
+    rail_step_depth_mm : D_step^r [mm]; vehicle_mass_t : mass per vehicle passage [t]
+    elapsed_s : wall time [s]
+    """
+
+    wheel_runs: tuple[WearSimulation, ...]
+    rails: tuple[Any, ...]
+    high_rails: tuple[Any, ...]
+    low_rails: tuple[Any, ...]
+    km_tot: NDArray
+    vehicles_per_step: NDArray
+    rail_y_mm: NDArray
+    rail_depth_per_vehicle_mm: NDArray
+    rail_step_depth_mm: float
+    vehicle_mass_t: float
+    elapsed_s: float
+
+    @property
+    def tonnage_mt(self) -> NDArray:
+        """Cumulative tonnage at the end of each rail step [Mt] (N_tot M_v)."""
+        return np.cumsum(self.vehicles_per_step) * self.vehicle_mass_t / 1e6
+
+    def head_wear(self, step: int, rail: str = "mean") -> RailHeadWear | None:
+        """W1/W2/W3 of rail r_step (``mean``, ``high`` or ``low``) against its new head
+        (``rail_head_wear``); None for a named (unworn) rail."""
+        rails = {"mean": self.rails, "high": self.high_rails, "low": self.low_rails}[rail]
+        r = rails[step]
+        return r.head_wear() if isinstance(r, WornRail) else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: per rail step km_tot, FT/FH/qR at its end, vehicles, tonnage and
+        the head wear of the three rails it ends with."""
+        rows = []
+        for j, run in enumerate(self.wheel_runs):
+            wear = {}
+            for which in ("mean", "high", "low"):
+                hw = self.head_wear(j + 1, which)
+                wear[which] = None if hw is None else {
+                    "w1_mm": hw.vertical.value_mm, "w2_mm": hw.lateral.value_mm,
+                    "w3_mm": hw.corner_45.value_mm}
+            rows.append({"rail_step": j, "km_tot": float(self.km_tot[j]),
+                         "ft_mm": float(run.sd_mm[-1]), "fh_mm": float(run.sh_mm[-1]),
+                         "qr_mm": float(run.qr_mm[-1]),
+                         "vehicles": float(self.vehicles_per_step[j]),
+                         "tonnage_mt": float(self.tonnage_mt[j]),
+                         "rail_after": wear})
+        return {"rail_steps": rows, "rail_step_depth_mm": self.rail_step_depth_mm,
+                "elapsed_s": self.elapsed_s}
+
+
+def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
+                        n_rail_steps: int = 5,
+                        rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
+                        steps: WearSteps | None = None, law: WearLaw | str = "usfd",
+                        progress: Callable[[int, int, float], None] | None = None,
+                        **kwargs: Any) -> RailStepSimulation:
+    """Wheel and rail evolution with the worn rail fed back into the contact (seed 003 §6.1).
+
+    For rail step j = 0 .. n_rail_steps - 1 the wheel evolves from new over ``steps`` (default
+    20 adaptive steps of D_step^w = 0.2 mm, seed 003) on rail r_j (:func:`simulate_wear` with
+    ``rail_from_all_wheels``: the contact table is rebuilt with r_j and the current wheel at
+    every contact update); the mean rail depth per vehicle averaged over the wheel steps is
+    smoothed like the wheel's (``smoothing``, default a 3 mm moving average), scaled so that
+    its maximum is D_step^r (eq. 4) and removed along the rail's normal
+    (``rail_head_wear.wear_rail``): r_{j+1}. The high and low rails are worn alongside with
+    the same N_step from their own depths (outputs only).
+
+    vehicle : BogieVehicle or preset name (its ``rail_profile`` is r_0: a name, or a
+        ``WornRail`` to continue from); law : default seed 003's USFD; progress :
+        callback(rail step done, n_rail_steps, km_tot); kwargs : passed to
+        :func:`simulate_wear` (axle, side, application, smoothing, ...).
+    """
+    start = time.perf_counter()
+    if n_rail_steps < 1 or not rail_step_depth_mm > 0:
+        raise ValueError("n_rail_steps must be >= 1 and rail_step_depth_mm positive")
+    if "rail_from_all_wheels" in kwargs:
+        raise ValueError("simulate_rail_steps always takes the rail wear from all wheels")
+    veh = vehicle_preset(vehicle) if isinstance(vehicle, str) else vehicle
+    rail: Any = veh.rail_profile
+    if not isinstance(rail, (str, WornRail)):
+        raise ValueError("vehicle.rail_profile must be a rail name or a WornRail "
+                         f"to wear it, got {rail!r}")
+    given = kwargs.get("smoothing")
+    smooth = Smoothing() if given is None else given
+    rails, highs, lows = [rail], [rail], [rail]
+    runs, km_tot, n_step, depths = [], [], [], []
+    rail_y = None
+    for j in range(n_rail_steps):
+        run = simulate_wear(_with_rail(veh, rails[-1]), route_classes, law=law, steps=steps,
+                            rail_from_all_wheels=True, **kwargs)
+        runs.append(run)
+        km_tot.append(float(run.mileage_km[-1]))
+        rail_y = run.rail_y_mm
+        assert run.rail_high_depth_per_vehicle_mm is not None
+        assert run.rail_low_depth_per_vehicle_mm is not None
+        # Smoothed as the wheel's depth (seed 003 §4.3: both distributions are smoothed).
+        mean, high, low = (smooth.apply(d, rail_y) for d in (
+            run.rail_depth_per_vehicle_mm, run.rail_high_depth_per_vehicle_mm,
+            run.rail_low_depth_per_vehicle_mm))
+        peak = float(np.max(mean))
+        if not peak > 0:
+            raise ValueError("the rail does not wear on this route (no loaded patch)")
+        n = rail_step_depth_mm / peak
+        n_step.append(n)
+        depths.append(mean)
+        incl = float(veh.rail_inclination)
+        rails.append(wear_rail(rails[-1], rail_y, n * mean, incl, name=f"r{j + 1}"))
+        highs.append(wear_rail(highs[-1], rail_y, n * high, incl, name=f"high r{j + 1}"))
+        lows.append(wear_rail(lows[-1], rail_y, n * low, incl, name=f"low r{j + 1}"))
+        if progress is not None:
+            progress(j + 1, n_rail_steps, km_tot[-1])
+    assert rail_y is not None
+    mass_t = 4.0 * veh.wheel_load_n / GRAVITY_M_S2 / 1000.0 * 2.0  # two bogies, as _rail_steps
+    return RailStepSimulation(
+        wheel_runs=tuple(runs), rails=tuple(rails), high_rails=tuple(highs),
+        low_rails=tuple(lows), km_tot=np.array(km_tot), vehicles_per_step=np.array(n_step),
+        rail_y_mm=rail_y, rail_depth_per_vehicle_mm=np.array(depths),
+        rail_step_depth_mm=float(rail_step_depth_mm), vehicle_mass_t=mass_t,
+        elapsed_s=time.perf_counter() - start)
+
+
+def _with_rail(vehicle: BogieVehicle, rail: str | RailShape) -> BogieVehicle:
+    """The vehicle on another rail (a name or a rail shape)."""
+    from dataclasses import replace
+
+    return replace(vehicle, rail_profile=rail)

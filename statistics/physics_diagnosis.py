@@ -100,8 +100,10 @@ def catalogue_for(friction: float) -> tuple[PhysicsCause, ...]:
 #: Causes of issue 12 this module cannot build yet, with the reason (reported in ``skipped``).
 NOT_BUILT = {
     "traction_on_motor_axles": "the loop's operating points carry no traction torque yet",
-    "rail_state": "the curving model takes only named rail profiles (no worn or measured "
-                  "rail in the contact)",
+    "rail_state": "a worn or measured rail can enter the contact (VehicleWearOptions.rail, "
+                  "wear_loop.simulate_rail_steps), but the catalogue has no rail state to "
+                  "run it at: no measured rail of the line, and a worn rail per diagnosis "
+                  "needs a rail-step simulation of its own",
     "curve_classes": "needs the route's segments; a class table cannot be re-binned",
 }
 

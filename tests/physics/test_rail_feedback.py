@@ -1,0 +1,241 @@
+"""Rail wear fed back into the contact (seed 003 §4.3, §6.1): worn rail, attribution, rail steps."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from wearcast.physics.curving import build_contact_table
+from wearcast.physics.profiles.rails import rail_profile
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.rail_head_wear import WornRail, wear_rail
+from wearcast.physics.vehicles import vehicle_preset
+from wearcast.physics.wear_laws import ArchardKTH, WearLaw
+from wearcast.physics.wear_loop import (
+    RAIL_GRID_MM,
+    WHEEL_GRID_MM,
+    LoopClass,
+    WearSteps,
+    _grid,
+    class_contacts_all_wheels,
+    contact_volume_basis,
+    law_coefficients,
+    rail_depth_per_vehicle_all_wheels,
+    simulate_rail_steps,
+    simulate_wear,
+)
+
+INCLINATION = 1.0 / 40.0
+GRID = _grid(RAIL_GRID_MM)
+CURVES = [LoopClass(300.0, 100.0, None, "left", 0.15),
+          LoopClass(300.0, 100.0, None, "right", 0.15), LoopClass(None, share=0.7)]
+
+
+def _arc_integral(rail, depth_on_grid: np.ndarray) -> float:
+    """Integral of a normal depth along the inclined head's arc [mm^2]."""
+    y, z = rail_profile(rail, 0.05, INCLINATION)
+    d = np.interp(y, GRID, depth_on_grid, left=0.0, right=0.0)
+    ds = np.hypot(np.diff(y), np.diff(z))
+    return float(np.sum(0.5 * (d[1:] + d[:-1]) * ds))
+
+
+def test_an_unworn_worn_rail_is_the_named_rail_in_the_contact_table():
+    r0 = wear_rail("60E1", GRID, np.zeros_like(GRID), INCLINATION)
+    named = build_contact_table(None, "60E1", INCLINATION)
+    worn = build_contact_table(None, r0, INCLINATION)
+    assert np.max(np.abs(named.gap_mm - worn.gap_mm)) < 1e-5
+    assert worn.rail_offset_mm == pytest.approx(named.rail_offset_mm, abs=1e-6)
+    hw = r0.head_wear()
+    assert hw.reference_fits
+    for m in (hw.vertical, hw.lateral, hw.corner_45):
+        assert abs(m.value_mm) < 1e-3
+    assert r0.area_loss_mm2() == pytest.approx(0.0, abs=1e-6)
+    # Content identity: equal points, equal rail (contact-table caches key on it).
+    assert r0 == wear_rail("60E1", GRID, np.zeros_like(GRID), INCLINATION)
+    assert hash(r0) == hash(wear_rail("60E1", GRID, np.zeros_like(GRID), INCLINATION))
+
+
+def test_wear_along_the_normal_removes_its_area_and_is_measured_where_it_is():
+    # Crown: a uniform 1 mm over |y| < 20 lowers the top by 1 mm (W1), leaves the gauge face.
+    top = np.where(np.abs(GRID) < 20.0, 1.0, 0.0)
+    r_top = wear_rail("60E1", GRID, top, INCLINATION)
+    hw = r_top.head_wear()
+    assert hw.vertical.value_mm == pytest.approx(1.0, abs=0.01)
+    assert abs(hw.lateral.value_mm) < 0.01
+    # Gauge corner: a 0.8 mm bump at y = -31 wears W3 (45 deg) and not the crown.
+    corner = 0.8 * np.exp(-0.5 * ((GRID + 31.0) / 2.0) ** 2)
+    r_corner = wear_rail("60E1", GRID, corner, INCLINATION)
+    hw = r_corner.head_wear()
+    assert hw.corner_45.value_mm > 0.3
+    assert abs(hw.vertical.value_mm) < 0.01
+    # Area: removing d along the normal takes int d ds (to first order in d / radius; the
+    # R13 gauge corner bends the offset curve, hence the 3 %).
+    for rail, depth in ((r_top, top), (r_corner, corner)):
+        assert rail.area_loss_mm2() == pytest.approx(_arc_integral("60E1", depth), rel=0.03)
+    # Worn material is never added: the worn head lies inside the new one.
+    y0, z0 = rail_profile("60E1", 0.05, 0.0)
+    inside = np.interp(r_corner.y_mm, y0, z0, left=np.nan, right=np.nan)
+    ok = np.isfinite(inside)
+    assert np.all(r_corner.z_mm[ok] <= inside[ok] + 1e-3)
+    with pytest.raises(ValueError, match="rail"):
+        wear_rail("UIC54", GRID, top, INCLINATION)
+    with pytest.raises(ValueError, match="ascending"):
+        wear_rail("60E1", GRID[::-1], top, INCLINATION)
+
+
+@pytest.fixture(scope="module")
+def bogie_contacts():
+    veh = vehicle_preset("metro_b")
+    y = _grid(WHEEL_GRID_MM)
+    out, _ = class_contacts_all_wheels(veh, CURVES, y, s1002_height_mm(y))
+    return veh, out
+
+
+@pytest.mark.parametrize("law,rail_share", [
+    (WearLaw("usfd"), 1.0),                      # seed 003 §4.2: the same for wheel and rail
+    (WearLaw("archard_kth"), 0.5),               # seed 004 §2.1: coefficients for both bodies
+    (WearLaw("archard_kth", ArchardKTH(coefficient_scope="per_body")), 1.0),
+])
+def test_rail_takes_its_share_of_every_wheels_volume_per_law(bogie_contacts, law, rail_share):
+    veh, contacts = bogie_contacts
+    shares = np.array([c.share for c in CURVES])
+    # Tangent track: contact angles of a few degrees, vertical and normal depth agree to 0.2 %.
+    y = _grid(WHEEL_GRID_MM)
+    straight, _ = class_contacts_all_wheels(veh, CURVES[2:], y, s1002_height_mm(y))
+    d = rail_depth_per_vehicle_all_wheels(straight, law, CURVES[2:], np.ones(1), GRID)
+    vol_per_m = sum(float(np.sum(contact_volume_basis(c, law) @ law_coefficients(law)))
+                    for c in straight.values())
+    # Two bogies per vehicle; the mean rail is the average of the two rails.
+    expected_area_mm2 = rail_share * 2 * vol_per_m / 1000.0 / 2.0
+    assert np.trapezoid(d["mean"], GRID) == pytest.approx(expected_area_mm2, rel=5e-3)
+    assert np.allclose(d["high"], d["low"])  # tangent track: no high or low rail
+    # Curves: the high rail is worn on its gauge corner by the flanging wheel, the low rail
+    # on its crown; the mean rail is their average.
+    full = rail_depth_per_vehicle_all_wheels(contacts, law, CURVES, shares, GRID)
+    assert -36.0 < GRID[np.argmax(full["high"])] < -25.0
+    assert abs(GRID[np.argmax(full["low"])]) < 15.0
+    assert np.allclose(full["mean"], 0.5 * (full["high"] + full["low"]))
+
+
+@pytest.fixture(scope="module")
+def rail_steps():
+    return simulate_rail_steps("metro_b", CURVES, n_rail_steps=2, law="usfd",
+                               steps=WearSteps(n_steps=4, depth_per_step_mm=0.5))
+
+
+def test_rail_steps_wear_the_rail_by_d_step_and_feed_it_back(rail_steps):
+    rs = rail_steps
+    assert len(rs.wheel_runs) == 2 and len(rs.rails) == 3
+    assert rs.rails[0] == "60E1" and isinstance(rs.rails[1], WornRail)
+    # Each wheel evolution ran on its rail step's rail (the contact table's rail).
+    assert rs.wheel_runs[0].rail == "60E1" and rs.wheel_runs[1].rail == rs.rails[1]
+    assert np.all(rs.km_tot > 0) and np.all(np.diff(rs.tonnage_mt) > 0)
+    # Seed 003 eq. (4): the scaled rail depth of every step peaks at D_step^r.
+    for j in range(2):
+        scaled = rs.vehicles_per_step[j] * rs.rail_depth_per_vehicle_mm[j]
+        assert scaled.max() == pytest.approx(rs.rail_step_depth_mm, rel=1e-9)
+    # Material: the first rail step removes the scaled depth's area along the arc.
+    first = rs.vehicles_per_step[0] * rs.rail_depth_per_vehicle_mm[0]
+    assert rs.rails[1].area_loss_mm2() == pytest.approx(_arc_integral("60E1", first), rel=0.03)
+    # The high rail wears on the gauge corner, the low rail on the crown.
+    high, low = rs.head_wear(1, "high"), rs.head_wear(1, "low")
+    assert high.corner_45.value_mm > 0.2 and high.corner_45.value_mm > 5 * high.vertical.value_mm
+    assert low.vertical.value_mm > 0.2 and low.vertical.value_mm > 5 * abs(
+        low.corner_45.value_mm)
+    d = rs.to_dict()
+    assert [r["rail_step"] for r in d["rail_steps"]] == [0, 1]
+
+
+def test_worn_rail_makes_the_flange_contact_more_conformal(rail_steps):
+    # Seed 003 §6.4: the mileage grows with the rail step "explained by a better conformity
+    # between wheel and rail surfaces". On the new wheel in the 300 m curve, the leading outer
+    # wheel's flange patch on the worn rail is wider, at lower mean pressure, and its
+    # frictional power per area (the USFD wear index) is lower than on the new rail.
+    veh = vehicle_preset("metro_b")
+    y = _grid(WHEEL_GRID_MM)
+    z = s1002_height_mm(y)
+    patch = {}
+    for label, rail in (("new", "60E1"), ("worn", rail_steps.rails[1])):
+        out, fb = class_contacts_all_wheels(replace(veh, rail_profile=rail), CURVES[:1], y, z)
+        assert fb == 0
+        c = out[(1, "right")]
+        i = int(np.argmax(c.normal_n[0]))
+        assert np.degrees(c.angle_rad[0, i]) > 30.0  # the flange patch
+        area = np.pi * c.a_mm[0, i] * c.b_mm[0, i]
+        patch[label] = (c.b_mm[0, i], c.normal_n[0, i] / area, c.t_gamma_n[0, i] / area)
+    assert patch["worn"][0] > 1.1 * patch["new"][0]
+    assert patch["worn"][1] < 0.9 * patch["new"][1]
+    assert patch["worn"][2] < patch["new"][2]
+
+
+def test_a_vehicle_on_a_worn_rail_and_bad_options():
+    rail = wear_rail("60E1", GRID, np.where(np.abs(GRID) < 20.0, 0.5, 0.0), INCLINATION)
+    sim = simulate_wear(replace(vehicle_preset("metro_b"), rail_profile=rail), CURVES[2:],
+                        law="usfd", steps=WearSteps(n_steps=1), rail_from_all_wheels=True)
+    assert sim.rail == rail and sim.rail_high_depth_per_vehicle_mm is not None
+    with pytest.raises(ValueError, match="rail_step_depth_mm"):
+        simulate_rail_steps("metro_b", CURVES, rail_step_depth_mm=0.0)
+    with pytest.raises(ValueError, match="all wheels"):
+        simulate_rail_steps("metro_b", CURVES, rail_from_all_wheels=False)
+
+
+def test_the_whole_vehicle_runs_on_a_given_rail(rail_steps):
+    from wearcast.physics.vehicle_wear_simulation import (
+        VehicleWearOptions,
+        simulate_vehicle_wear,
+        vehicle_bogies,
+    )
+
+    rail = rail_steps.rails[1]
+    kwargs = {"law": "usfd", "mileage_km": 100.0, "depth_per_step_mm": 1.0}
+    new = simulate_vehicle_wear("metro_b", CURVES[:2], **kwargs)
+    worn = simulate_vehicle_wear("metro_b", CURVES[:2], options=VehicleWearOptions(rail=rail),
+                                 **kwargs)
+    # The option puts the rail under every bogie, as bogies built on that rail do.
+    direct = simulate_vehicle_wear(
+        [(replace(b, rail_profile=rail), n) for b, n in vehicle_bogies("metro_b")],
+        CURVES[:2], **kwargs)
+    assert np.array_equal(worn.profiles_mm, direct.profiles_mm)
+    assert np.max(np.abs(worn.profiles_mm - new.profiles_mm)) > 1e-3
+    with pytest.raises(ValueError, match="rail_profile"):
+        simulate_vehicle_wear("metro_b", CURVES[:2], mileage_km=10.0,
+                              options=VehicleWearOptions(rail="UIC54"))
+
+
+#: Tolerance on km_tot^j / km_tot^0 against seed 003 Tables 5/8 [-]: the spread of the seed's
+#: own descriptions of the same line at rail steps 1-2 (complete line and n_class = 4, 6, 8, 10:
+#: 1.027-1.051 at step 1, 1.115-1.154 at step 2), rounded up. The ratio, not km_tot itself:
+#: the loop tracks the leading outer wheel, the seed the mean wheel of the whole vehicle, and
+#: the absolute rate is what the Aosta comparison shows off by -65 %.
+SEED_RATIO_TOLERANCE = 0.05
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1 "
+    "(587 -> 553 km, ratio 0.94 against the seed's 1.04). On the worn rail the flange "
+    "patches are more conformal (route mean area 6.0 -> 7.4 mm^2) and their frictional power "
+    "T gamma falls 3 %, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) makes "
+    "the worn volume of a patch proportional to its AREA there, and the tread's T gamma rises "
+    "3 %: the wheel's worn volume per metre rises 0.036 -> 0.038 mm^3/m on the flange"))
+def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference_dir):
+    import pandas as pd
+
+    table = pd.read_csv(reference_dir / "published" / "aosta_statistical_track_nclass7.csv",
+                        comment="#")
+    classes = []
+    for r in table.itertuples():
+        if not np.isfinite(r.R_c_m):
+            classes.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
+            continue
+        for direction in ("left", "right"):
+            classes.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
+                                     r.p_k_pct / 200.0))
+    ref = pd.read_csv(reference_dir / "published" / "aosta_full_vs_statistical_mileage.csv",
+                      comment="#")
+    seed = ref[ref.description == "complete"].sort_values("rail_step").km_tot.to_numpy(float)
+    rs = simulate_rail_steps("minuetto", classes, n_rail_steps=2, law="usfd",
+                             steps=WearSteps(n_steps=20, depth_per_step_mm=0.2),
+                             unbalanced_acceleration_m_s2=0.8)
+    assert rs.km_tot[1] / rs.km_tot[0] == pytest.approx(seed[1] / seed[0],
+                                                         abs=SEED_RATIO_TOLERANCE)
