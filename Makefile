@@ -7,7 +7,7 @@ TYPES  := .typecheck/wearcast
 HOST   ?= 127.0.0.1
 PORT   ?= 8000
 
-.PHONY: run test test-all lint typecheck bench demo clean lock worker
+.PHONY: run test test-slow test-all lint typecheck bench demo clean lock worker
 
 # dependencies pinned by requirements.lock (pip constraints), the package itself editable
 $(STAMP): pyproject.toml requirements.lock
@@ -35,6 +35,9 @@ worker: $(STAMP)
 
 test: lint typecheck
 	$(BIN)/python -m pytest
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -m slow
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -m ''

@@ -50,6 +50,8 @@ SERIES = {"FT_mm": "sd_mm", "QR_mm": "qr_mm"}
 EXTRAPOLATION = 1.25
 #: Bounds of the fitted wear-coefficient scale c [-].
 SCALE_BOUNDS = (0.05, 20.0)
+#: Points of the log grid the scale search starts from (``_fit``).
+SCALE_GRID_POINTS = 121
 
 
 @dataclass(frozen=True)
@@ -174,8 +176,15 @@ def _blends(cause: PhysicsCause | None, runs: Mapping[Any, _Series]
 
 def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: NDArray,
          cols: Sequence[str]) -> tuple[Any, float, float]:
-    """Best (theta, scale, sse) on the training points (scale by bounded 1-D search)."""
+    """Best (theta, scale, sse) on the training points.
+
+    The scale is searched on a log grid over SCALE_BOUNDS first, then refined by a bounded 1-D
+    search between the grid points around the best one: the error is not unimodal in the scale
+    (a scale beyond the simulated mileage is out of range, a flat cliff, and a series with a
+    running-in has local minima), and a bounded search over the whole range alone can end at a
+    bound."""
     best = (None, 1.0, np.inf)
+    grid = np.linspace(*np.log(SCALE_BOUNDS), SCALE_GRID_POINTS)
     for theta, series, w in candidates:
         def sse(log_c: float, series=series, w=w) -> float:
             try:
@@ -183,10 +192,14 @@ def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: N
             except _OutOfRange:
                 return 1e12
             return float(np.sum((pred - y) ** 2))
-        res = optimize.minimize_scalar(sse, bounds=np.log(SCALE_BOUNDS), method="bounded",
-                                       options={"xatol": 1e-3})
-        if res.fun < best[2]:
-            best = (theta, float(np.exp(res.x)), float(res.fun))
+        coarse = np.array([sse(g) for g in grid])
+        k = int(np.argmin(coarse))
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+        res = optimize.minimize_scalar(sse, bounds=(lo, hi), method="bounded",
+                                       options={"xatol": 1e-4})
+        x, f = (float(res.x), float(res.fun)) if res.fun <= coarse[k] else (grid[k], coarse[k])
+        if f < best[2]:
+            best = (theta, float(np.exp(x)), f)
     return best
 
 
