@@ -184,7 +184,7 @@ def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: N
     running-in has local minima), and a bounded search over the whole range alone can end at a
     bound."""
     best = (None, 1.0, np.inf)
-    grid = np.linspace(*np.log(SCALE_BOUNDS), SCALE_GRID_POINTS)
+    grid = np.linspace(np.log(SCALE_BOUNDS[0]), np.log(SCALE_BOUNDS[1]), SCALE_GRID_POINTS)
     for theta, series, w in candidates:
         def sse(log_c: float, series=series, w=w) -> float:
             try:
