@@ -51,7 +51,12 @@ from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import scenarios as sc
 from wearcast.statistics.generators import twin_effects as te
-from wearcast.statistics.routes import RouteClass
+from wearcast.statistics.generators.scenarios import (
+    LOOP_MEASURE,
+    LOOP_MILEAGES_KM,
+    LOOP_TRUTH,
+    loop_config,
+)
 
 TABLE = ft.synthetic_wear_table()
 
@@ -82,30 +87,8 @@ def run_depot(effect: Any, seed: int) -> Any:
 # what the loop does beyond the hybrid model's linear law (its profile evolution). Loop runs
 # are deterministic and cached across seeds.
 
-def _loop_classes(radius_m: float | None, cant_mm: float, speed_kmh: float, share: float
-                  ) -> list[RouteClass]:
-    if radius_m is None:
-        return [RouteClass(None, None, 0.0, speed_kmh, share)]
-    return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
-
-
-# (radius [m] or None, cant [mm], speed [km/h], share): tangent track and 500 m curves, half
-# bending left (the loop runs one step per class and wheel; a wear-loop run of this route
-# costs about a minute on the shared machine, so every unit runs the same track geometry)
-LOOP_CLASSES = ((None, 0.0, 70.0, 0.6), (500.0, 60.0, 60.0, 0.4))
-LOOP_TRUTH = fl.LoopTruth(vehicles={"motor": "metro_b", "trailer": "metro_b"},
-                          law="archard_kth", n_steps=6, mileage_scale=0.15)
-LOOP_MILEAGES_KM = (15_000.0, 40_000.0, 70_000.0, 100_000.0, 135_000.0, 170_000.0)
-LOOP_MEASURE = "tau_max"   # the loop table carries the loop's rates under both names
 _LOOP_CACHE: dict[Any, Any] = {}
 _LOOP_TABLE: list[pd.DataFrame] = []
-
-
-def loop_route(name: str, lubricated: bool = False) -> ft.TwinRoute:
-    classes: list[RouteClass] = []
-    for radius_m, cant_mm, speed_kmh, share in LOOP_CLASSES:
-        classes += _loop_classes(radius_m, cant_mm, speed_kmh, share)
-    return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
 
 
 def loop_table() -> pd.DataFrame:
@@ -123,45 +106,13 @@ def loop_table() -> pd.DataFrame:
     loop's own profile evolution (a rate that changes with the worn amount) and the nuisance.
     """
     if not _LOOP_TABLE:
-        top_km = max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale
-        rows = []
-        for bogie in ("motor", "trailer"):
-            for axle, wheelset in ((1, "leading"), (2, "trailing")):
-                sims = [v for k, v in _LOOP_CACHE.items() if k[4] == bogie and k[5] == axle]
-                if not sims:
-                    raise RuntimeError("generate a loop fleet before building its table")
-                for region in ("flange", "tread"):
-                    km = np.linspace(0.0, top_km, 21)[1:]
-                    area = np.array([[_loop_area(s, k, region) for k in km] for s in sims])
-                    rate = float(np.sum(area.mean(axis=0) * km) / np.sum(km * km)) * 1e3
-                    for rail, radius in (("tangent", np.nan), ("high", 500.0), ("low", 500.0)):
-                        for measure in ("tau_max", "t_gamma"):
-                            rows.append({"bogie_type": bogie, "wheelset": wheelset,
-                                         "rail": rail, "radius_m": radius, "region": region,
-                                         "measure": measure, "value": max(rate, 0.0)})
-        _LOOP_TABLE.append(pd.DataFrame(rows))
+        runs = {(b, a): [v for k, v in _LOOP_CACHE.items() if k[4] == b and k[5] == a]
+                for b in ("motor", "trailer") for a in (1, 2)}
+        if not all(runs.values()):
+            raise RuntimeError("generate a loop fleet before building its table")
+        _LOOP_TABLE.append(sc.loop_rate_table(
+            runs, max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale))
     return _LOOP_TABLE[0]
-
-
-def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),
-                profile_effects: tuple[Any, ...] = ()) -> ft.FleetConfig:
-    """The fleet twin's four-unit layout (modes, loads, instruments, lubrication, dates) on
-    one track geometry the loop can run (LOOP_CLASSES), a dry and a lubricated line."""
-    line = loop_route("line")
-    greased = loop_route("line_lubricated", lubricated=True)
-    units = (
-        ft.UnitConfig("A", line, vehicles=3, running_mode="mixed", start_date="2021-02-01",
-                      km_per_day=520.0, load_t=13.0, instrument_id="MP-1"),
-        ft.UnitConfig("B", greased, vehicles=3, running_mode="mixed", start_date="2021-07-15",
-                      km_per_day=430.0, load_t=16.0, instrument_id="MP-2"),
-        ft.UnitConfig("C", line, vehicles=3, running_mode="lead", start_date="2021-10-01",
-                      km_per_day=380.0, load_t=14.5, instrument_id="MP-2"),
-        ft.UnitConfig("D", greased, vehicles=3, running_mode="lead", start_date="2022-04-20",
-                      km_per_day=600.0, load_t=11.5, instrument_id="MP-1"),
-    )
-    return ft.FleetConfig(units=units, mileages_km=LOOP_MILEAGES_KM, seed=seed,
-                          points_per_profile=200, wear_effects=wear_effects,
-                          profile_effects=profile_effects)
 
 
 def loop_leading_share(p: float) -> Callable[[ft.WheelSpec, ft.WearHistory], ft.WearHistory]:
@@ -180,19 +131,13 @@ def loop_leading_share(p: float) -> Callable[[ft.WheelSpec, ft.WearHistory], ft.
         out = {}
         for region, area in (("tread", history.tread_area_mm2),
                              ("flange", history.flange_area_mm2)):
-            a = {ax: np.array([_loop_area(by_axle[ax], k, region) for k in km])
+            a = {ax: np.array([sc.loop_wear_area(by_axle[ax], k, region) for k in km])
                  for ax in (1, 2)}
             mix = 0.5 * (a[1] + a[2])
             new = share * a[1] + (1.0 - share) * a[2]
             out[region] = area * np.where(mix > 0, new / np.where(mix > 0, mix, 1.0), 1.0)
         return replace(history, tread_area_mm2=out["tread"], flange_area_mm2=out["flange"])
     return effect
-
-
-def _loop_area(sim: Any, loop_km: float, region: str) -> float:
-    w = sim.wear_at(min(loop_km, sim.mileage_km[-1]))
-    sel = sim.y_mm >= -30.0 if region == "tread" else sim.y_mm < -30.0
-    return float(np.trapezoid(w[sel], sim.y_mm[sel]))
 
 
 def loop_case(effect: Any, seed: int) -> tuple[pd.DataFrame, Any, dict[str, Any],

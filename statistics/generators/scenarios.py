@@ -35,8 +35,9 @@ from wearcast.statistics import hybrid
 from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
+from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import twin_effects as te
-from wearcast.statistics.routes import Route
+from wearcast.statistics.routes import Route, RouteClass
 
 
 @dataclass(frozen=True)
@@ -167,4 +168,79 @@ def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5
         rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
                  for k, a, b in zip(km, ft_mm + rng.normal(0, noise_mm, km.size),
                                     qr_mm + rng.normal(0, noise_mm, km.size), strict=True)]
+    return pd.DataFrame(rows)
+
+
+# --- the loop-driven fleet (fleet_twin_loop) of the detection benchmark and its tests ---
+
+def _loop_classes(radius_m: float | None, cant_mm: float, speed_kmh: float, share: float
+                  ) -> list[RouteClass]:
+    if radius_m is None:
+        return [RouteClass(None, None, 0.0, speed_kmh, share)]
+    return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
+
+
+# (radius [m] or None, cant [mm], speed [km/h], share): tangent track and 500 m curves, half
+# bending left (the loop runs one step per class and wheel; a wear-loop run of this route
+# costs about a minute on the shared machine, so every unit runs the same track geometry)
+LOOP_CLASSES = ((None, 0.0, 70.0, 0.6), (500.0, 60.0, 60.0, 0.4))
+LOOP_TRUTH = fl.LoopTruth(vehicles={"motor": "metro_b", "trailer": "metro_b"},
+                          law="archard_kth", n_steps=6, mileage_scale=0.15)
+LOOP_MILEAGES_KM = (15_000.0, 40_000.0, 70_000.0, 100_000.0, 135_000.0, 170_000.0)
+LOOP_MEASURE = "tau_max"   # the loop table carries the loop's rates under both names
+def loop_route(name: str, lubricated: bool = False) -> ft.TwinRoute:
+    classes: list[RouteClass] = []
+    for radius_m, cant_mm, speed_kmh, share in LOOP_CLASSES:
+        classes += _loop_classes(radius_m, cant_mm, speed_kmh, share)
+    return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
+
+
+def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),
+                profile_effects: tuple[Any, ...] = ()) -> ft.FleetConfig:
+    """The fleet twin's four-unit layout (modes, loads, instruments, lubrication, dates) on
+    one track geometry the loop can run (LOOP_CLASSES), a dry and a lubricated line."""
+    line = loop_route("line")
+    greased = loop_route("line_lubricated", lubricated=True)
+    units = (
+        ft.UnitConfig("A", line, vehicles=3, running_mode="mixed", start_date="2021-02-01",
+                      km_per_day=520.0, load_t=13.0, instrument_id="MP-1"),
+        ft.UnitConfig("B", greased, vehicles=3, running_mode="mixed", start_date="2021-07-15",
+                      km_per_day=430.0, load_t=16.0, instrument_id="MP-2"),
+        ft.UnitConfig("C", line, vehicles=3, running_mode="lead", start_date="2021-10-01",
+                      km_per_day=380.0, load_t=14.5, instrument_id="MP-2"),
+        ft.UnitConfig("D", greased, vehicles=3, running_mode="lead", start_date="2022-04-20",
+                      km_per_day=600.0, load_t=11.5, instrument_id="MP-1"),
+    )
+    return ft.FleetConfig(units=units, mileages_km=LOOP_MILEAGES_KM, seed=seed,
+                          points_per_profile=200, wear_effects=wear_effects,
+                          profile_effects=profile_effects)
+
+
+def loop_wear_area(sim: Any, loop_km: float, region: str) -> float:
+    """Worn area of one loop run's region at a loop mileage (held at its end) [mm^2]."""
+    w = sim.wear_at(min(loop_km, sim.mileage_km[-1]))
+    sel = sim.y_mm >= -30.0 if region == "tread" else sim.y_mm < -30.0
+    return float(np.trapezoid(w[sel], sim.y_mm[sel]))
+
+
+def loop_rate_table(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float) -> pd.DataFrame:
+    """The curve-radius table of the loop's own wear rates: per bogie type and axle (``runs``:
+    the loop runs of that position) and region the least-squares rate through the origin of the
+    mean worn area over 20 mileages up to ``top_km`` [mm^2 per 1,000 km], on every rail and
+    under both measure names (one track geometry: the route's measure is then that rate)."""
+    km = np.linspace(0.0, top_km, 21)[1:]
+    rows = []
+    for bogie in ("motor", "trailer"):
+        for axle, wheelset in ((1, "leading"), (2, "trailing")):
+            sims = runs.get((bogie, axle), ())
+            if not sims:
+                raise ValueError(f"no loop run for the {bogie} bogie's axle {axle}")
+            for region in ("flange", "tread"):
+                area = np.array([[loop_wear_area(s, k, region) for k in km] for s in sims])
+                rate = float(np.sum(area.mean(axis=0) * km) / np.sum(km * km)) * 1e3
+                for rail, radius in (("tangent", np.nan), ("high", 500.0), ("low", 500.0)):
+                    for measure in ("tau_max", "t_gamma"):
+                        rows.append({"bogie_type": bogie, "wheelset": wheelset, "rail": rail,
+                                     "radius_m": radius, "region": region,
+                                     "measure": measure, "value": max(rate, 0.0)})
     return pd.DataFrame(rows)
