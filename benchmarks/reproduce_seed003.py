@@ -104,6 +104,7 @@ from wearcast.physics.wear_loop import (  # noqa: E402
     simulate_rail_steps,
     simulate_wear,
 )
+from wearcast.statistics.generators.scenarios import seed003_classes  # noqa: E402
 from wearcast.statistics.routes import (  # noqa: E402
     route_from_segments,
     speed_from_unbalanced_acceleration_kmh,
@@ -321,16 +322,8 @@ SEED_TABLE4 = {"FH": (27.57, 27.73, 27.89, 28.07, 28.33), "FT": (28.30, 28.36, 2
 
 def table3_classes() -> list[LoopClass]:
     """Seed 003 Table 3 (n_class = 7) as loop classes, each curve in both directions."""
-    table = pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv", comment="#")
-    out = []
-    for r in table.itertuples():
-        if not np.isfinite(r.R_c_m):
-            out.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
-            continue
-        for direction in ("left", "right"):
-            out.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
-                                 r.p_k_pct / 200.0))
-    return out
+    return seed003_classes(pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv",
+                                       comment="#"))
 
 
 def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int) -> None:

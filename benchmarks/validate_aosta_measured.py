@@ -28,7 +28,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from wearcast.physics.step_convergence import converge_steps  # noqa: E402
@@ -37,6 +36,7 @@ from wearcast.physics.vehicle_wear_simulation import (  # noqa: E402
     simulate_vehicle_wear,
 )
 from wearcast.physics.wear_loop import LoopClass  # noqa: E402
+from wearcast.statistics.generators.scenarios import seed003_classes  # noqa: E402
 from wearcast.statistics.physics_comparison import compare_with_measured  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,16 +45,8 @@ IMG = ROOT / "docs" / "img"
 
 
 def aosta_classes(table: pd.DataFrame) -> list[LoopClass]:
-    """Seed 003 Table 3 as loop classes: each curve class in both directions (half the share)."""
-    out = []
-    for r in table.itertuples():
-        if not np.isfinite(r.R_c_m):
-            out.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
-            continue
-        for direction in ("left", "right"):
-            out.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
-                                 r.p_k_pct / 200.0))
-    return out
+    """Seed 003 Table 3 as loop classes (``scenarios.seed003_classes``)."""
+    return seed003_classes(table)
 
 
 def main() -> None:

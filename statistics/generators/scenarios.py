@@ -244,3 +244,19 @@ def loop_rate_table(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float
                                      "radius_m": radius, "region": region,
                                      "measure": measure, "value": max(rate, 0.0)})
     return pd.DataFrame(rows)
+
+
+def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
+    """Seed 003 Table 3's statistical track (columns ``R_c_m`` [m, NaN = tangent], ``H_mm``,
+    ``V_kmh``, ``p_k_pct``) as loop classes: each curve class in both directions with half its
+    share."""
+    out = []
+    columns = [table[c].to_numpy(float) for c in ("R_c_m", "H_mm", "V_kmh", "p_k_pct")]
+    for radius, cant, speed, share_pct in zip(*columns, strict=True):
+        if not np.isfinite(radius):
+            out.append(LoopClass(None, 0.0, float(speed), share=float(share_pct) / 100.0))
+            continue
+        for direction in ("left", "right"):
+            out.append(LoopClass(float(radius), float(cant), float(speed), direction,
+                                 float(share_pct) / 200.0))
+    return out

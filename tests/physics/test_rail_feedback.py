@@ -225,14 +225,9 @@ def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference
 
     table = pd.read_csv(reference_dir / "published" / "aosta_statistical_track_nclass7.csv",
                         comment="#")
-    classes = []
-    for r in table.itertuples():
-        if not np.isfinite(r.R_c_m):
-            classes.append(LoopClass(None, 0.0, float(r.V_kmh), share=r.p_k_pct / 100.0))
-            continue
-        for direction in ("left", "right"):
-            classes.append(LoopClass(float(r.R_c_m), float(r.H_mm), float(r.V_kmh), direction,
-                                     r.p_k_pct / 200.0))
+    from wearcast.statistics.generators.scenarios import seed003_classes
+
+    classes = seed003_classes(table)
     ref = pd.read_csv(reference_dir / "published" / "aosta_full_vs_statistical_mileage.csv",
                       comment="#")
     seed = ref[ref.description == "complete"].sort_values("rail_step").km_tot.to_numpy(float)
