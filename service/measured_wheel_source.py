@@ -18,12 +18,13 @@ from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable
 
 
-def measured_wheel(session: Session, measurement_id: int, field: str = "measurement_id"
-                   ) -> tuple[MeasuredWheel, dict[str, Any]]:
-    """(the wheel, what it was taken from) for a stored profile measurement.
+def processed_measurement(session: Session, measurement_id: int,
+                          field: str = "measurement_id") -> tuple[db.Measurement, Any, Any]:
+    """(the stored row, its profile processed again against its stored reference, that
+    reference's height function): placed by the instrument's datum where the import found one.
 
     404 naming ``field`` when there is no such measurement; 422 when it has no profile or the
-    profile cannot serve as a wheel (too short a range, too few points).
+    profile cannot be processed.
     """
     from wearcast.service.reference_store import height_of, stored_reference_spec
     from wearcast.statistics.processing import process_profile
@@ -41,6 +42,19 @@ def measured_wheel(session: Session, measurement_id: int, field: str = "measurem
     try:
         p = process_profile(y, z, reference_height=height,
                             alignment="datum" if datum else "free")
+    except ValueError as exc:
+        raise Unprocessable(field, f"measurement {measurement_id}: profile cannot be "
+                                   f"processed: {exc}") from None
+    return m, p, height
+
+
+def measured_wheel(session: Session, measurement_id: int, field: str = "measurement_id"
+                   ) -> tuple[MeasuredWheel, dict[str, Any]]:
+    """(the wheel, what it was taken from) for a stored profile measurement (404 / 422 naming
+    ``field``, also when the profile cannot serve as a wheel)."""
+    m, p, _ = processed_measurement(session, measurement_id, field)
+    datum = (m.placement or {}).get("alignment") == "datum"
+    try:
         wheel = MeasuredWheel(f"{m.wheel_id} at {m.mileage_km:,.0f} km (measurement "
                               f"{measurement_id})", p.y_aligned_mm, p.z_aligned_mm)
     except ValueError as exc:

@@ -28,7 +28,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import model_store
 from wearcast.service import models_db as db
-from wearcast.service.errors import NotFound, Unprocessable
+from wearcast.service.errors import NotFound
 from wearcast.service.picture_cache import PictureJob, render
 from wearcast.service.pictures import ImageFormat, _render
 from wearcast.service.schemas import ReprofilingIn
@@ -191,24 +191,9 @@ def measurement_profile_job(session: Session, measurement_id: int,
                             fmt: ImageFormat = "svg") -> PictureJob:
     """Inputs of :func:`measured_profile_figure` for one stored measurement (processed
     again against its stored reference)."""
-    from wearcast.service.reference_store import height_of, stored_reference_spec
-    from wearcast.statistics.processing import process_profile
+    from wearcast.service.measured_wheel_source import processed_measurement
 
-    m = session.get(db.Measurement, measurement_id)
-    if m is None:
-        raise NotFound("measurement_id", f"no measurement {measurement_id}")
-    if m.kind != "profile" or m.y_mm is None or m.z_mm is None:
-        raise Unprocessable("measurement_id", f"measurement {measurement_id} has no profile")
-    spec = stored_reference_spec(session, m.reference_profile)
-    height = height_of(spec)
-    y = np.frombuffer(m.y_mm, "<f4").astype(float)
-    z = np.frombuffer(m.z_mm, "<f4").astype(float)
-    datum = (m.placement or {}).get("alignment") == "datum"
-    try:
-        p = process_profile(y, z, reference_height=height,
-                            alignment="datum" if datum else "free")
-    except ValueError as exc:
-        raise Unprocessable("measurement_id", f"profile cannot be processed: {exc}") from None
+    m, p, height = processed_measurement(session, measurement_id)
     ref_y = np.linspace(-70.0, 60.0, 651)
     ref_z = np.asarray(height(ref_y))
     check = p.reference_check
