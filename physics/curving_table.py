@@ -49,6 +49,9 @@ _NO_CONTACT_GAP_MM = 50.0
 #: Wheel y [mm] below which the gap is smoothed at the flange scale, and above which at the
 #: tread scale (``build_contact_table``), blended linearly between.
 FLANK_SMOOTHING_Y_MM = (-25.0, -15.0)
+#: Standard deviations of the gap's Gaussian smoothing on the tread and on the flange [mm]
+#: (``build_contact_table``).
+GAP_SMOOTHING_MM = (2.0, 2.0)
 
 
 @dataclass(frozen=True)
@@ -61,7 +64,7 @@ class ContactTable:
     points ``wheel_y_mm`` (n_y,) (wheel frame of docs/conventions.md), the wheelset at its nominal
     height
     and without roll, smoothed with a Gaussian of standard deviation ``smoothing_mm`` (n_y,)
-    (the scale of a contact patch, 2 mm by default on tread and flange; S1002 on a rail crown
+    (the scale of a contact patch, ``GAP_SMOOTHING_MM``; S1002 on a rail crown
     is nearly conformal and the raw gap has shallow double minima);
     ``gap2_per_mm`` is its second derivative, the relative lateral curvature at the patch
     scale (Gaussian smoothing keeps the curvature of a parabola and raises its minimum by
@@ -371,7 +374,7 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
                         wheel_radius_m: float = 0.46, max_shift_mm: float = 15.0,
                         shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
                         wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
-                        smoothing_mm: tuple[float, float] = (2.0, 2.0)) -> ContactTable:
+                        smoothing_mm: tuple[float, float] = GAP_SMOOTHING_MM) -> ContactTable:
     """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
 
     The gap comes from the rigid multi-point geometry (``contact.geometry``, the module checked
@@ -393,9 +396,15 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     smoothing_mm : standard deviations of the Gaussian smoothing of the gap along y on the
         tread (y > -15 mm) and on the flange (y < -25 mm), blended linearly between [mm]. The
         tread's 2 mm is the scale of a tread patch (S1002 on a rail crown is nearly conformal
-        and the raw gap has shallow double minima); the flange's 0.3 mm keeps the flank contact
-        where the rigid geometry has it (a 2 mm smoothing moved it 6-8 mm down to the flange
-        root, at a contact angle of 27 deg instead of 66 deg).
+        and the raw gap has shallow double minima). On the flange 2 mm spans the whole 70 deg
+        flank (a few mm of wheel y) and the conformal root, which moves the flange contact
+        1-3 mm down towards the root (contact angle 30-50 deg; the non-Hertzian pipeline,
+        ``contact.wheel_rail``, at the same pose without yaw: 34-48 deg); 0.5 mm on the
+        flange brings it within 0.8 mm of the pipeline
+        (``benchmarks/curving_flange_vs_geometry.py --flange-smoothing 0.5``) but the root
+        patches then become wide and soft and the worn-rail continuation, seed 000's fixed
+        steps and seed 002's local wear no longer converge or hold, so it is not the default
+        (README, known gaps). Below 0.5 mm the continuation fails at single radii.
 
     Returns
     -------
