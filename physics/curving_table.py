@@ -19,11 +19,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import gaussian_filter1d
 
-from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
+from wearcast.physics.contact.geometry import rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
+from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import candidate_slots
-from wearcast.physics.profiles.measured import ProfileCurve
-from wearcast.physics.profiles.measured_rail import NOMINAL_GAUGE_POINT_Y_MM
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -346,19 +345,6 @@ def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLi
     return out
 
 
-#: Depth of the gauge point below the rail top [mm] (EN 13674).
-GAUGE_HEIGHT_MM = 14.0
-
-
-def _reaches_gauge_depth(y_mm: NDArray, z_mm: NDArray, inclination: float) -> bool:
-    """Whether an upright rail curve (gauge side first) reaches GAUGE_HEIGHT_MM below its top
-    on the gauge side once inclined (where ``contact.geometry`` looks for the gauge point)."""
-    alpha = np.arctan(inclination)
-    z_i = np.asarray(y_mm) * np.sin(alpha) + np.asarray(z_mm) * np.cos(alpha)
-    top = int(np.argmax(z_i))
-    return bool(np.any(z_i[: top + 1] < z_i[top] - GAUGE_HEIGHT_MM))
-
-
 @lru_cache(maxsize=1)
 def _hertz_unit_table() -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Hertz approach and semi-axes under 1 N for A = 1/mm over log(B/A) (``contact.hertz``);
@@ -419,18 +405,8 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     h = 0.2
     slope = (wheel(y_w + h) - wheel(y_w - h)) / (2 * h)
     # the rigid geometry on a curve through the wheel's points (0.05 mm) and the rail's
-    y_fine = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, 0.05)
-    y_rail, z_rail = rail_profile(rail, step_mm=0.1, inclination=0.0)
-    # the gauge point is found on the rail curve as for a named rail; a measured or worn head
-    # comes in the nominal rail frame with its gauge point at 60E1's (``contact_points``), which
-    # may lie under a lip the contact curve omits: then that known point places it
-    gauge_point = None
-    if not isinstance(rail, str) and not _reaches_gauge_depth(y_rail, z_rail, inclination):
-        gauge_point = (NOMINAL_GAUGE_POINT_Y_MM, -GAUGE_HEIGHT_MM)
-    track = WheelsetTrack(wheel=ProfileCurve.from_points(y_fine, wheel(y_fine)),
-                          rail=ProfileCurve.from_points(y_rail, z_rail),
-                          nominal_radius_mm=r0_mm, rail_inclination=inclination,
-                          wheel_sample_mm=0.2, rail_gauge_point_mm=gauge_point)
+    track = wheelset_track(wheel_curve_from_height(wheel, wheel_y_range_mm), rail,
+                           inclination, r0_mm)
     # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
     centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
     y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")

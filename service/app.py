@@ -35,6 +35,7 @@ def _router_modules() -> list[Any]:
     from wearcast.service.routers import (
         admin,
         coefficient_fits,
+        contact,
         jobs,
         measurements,
         models,
@@ -47,7 +48,7 @@ def _router_modules() -> list[Any]:
     )
 
     return [measurements, routes, wear_tables, models, simulations, coefficient_fits, rails,
-            planning, references, jobs, admin]
+            planning, references, jobs, admin, contact]
 
 
 def create_app(settings: Settings | None = None, *, migrate: bool = True) -> FastAPI:

@@ -731,6 +731,15 @@ def _add_planning() -> None:
 _add_planning()
 
 
+def _add_contact() -> None:
+    from wearcast.service.contact_cli import contact
+
+    app.command("contact")(contact)
+
+
+_add_contact()
+
+
 def main() -> None:
     """Entry point of the ``wearcast`` script."""
     app()
