@@ -305,7 +305,8 @@ def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray
         sa, ra, ya = shift[active], roll[active], yaw[active]
         g_left, d_left = _min_gap(sides[0], sa, ra, ya, r0)
         g_right, d_right = _min_gap(sides[1], sa, ra, ya, r0)
-        f = g_left - g_right
+        with np.errstate(invalid="ignore"):  # inf - inf: a wheel off its rail, raised below
+            f = g_left - g_right
         gap[active] = 0.5 * (g_left + g_right)
         if not np.all(np.isfinite(f)):
             raise ValueError("a wheel is off its rail for some shift (no rail under the wheel)")
