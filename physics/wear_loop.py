@@ -80,13 +80,17 @@ LoopClass: TypeAlias = CurveClass
 
 
 def as_loop_classes(route_classes: Any) -> list[LoopClass]:
-    """Curve classes from LoopClass objects, mappings, objects with the same attributes
-    (``vocabulary.CurveClass``, ``statistics.routes.RouteClass``) or a route with ``classes``."""
+    """Curve classes from ``vocabulary.CurveClass`` objects, objects that build one with a
+    ``curve_class()`` method (``statistics.routes.RouteClass``), mappings or objects with the
+    same attributes, or a route with ``classes``."""
     items = getattr(route_classes, "classes", route_classes)
     out = []
     for item in items:
         if isinstance(item, CurveClass):  # type: ignore[misc]  # mypy sees wearcast.* as Any
             out.append(item)
+            continue
+        if callable(getattr(item, "curve_class", None)):
+            out.append(item.curve_class())
             continue
         get = item.get if isinstance(item, Mapping) else (lambda k, d=None, i=item:
                                                           getattr(i, k, d))
