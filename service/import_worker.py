@@ -1,5 +1,5 @@
 """Profile processing of an import, run in the importing process or in its pool of worker
-processes (:func:`wearcast.service.importing._submit`).
+processes (:func:`wearcast.service.import_pool.submit_profiles`).
 
 This module imports only numpy and the physics and statistics cores — not the web framework,
 the database layer or the rest of the service — so that a spawned pool worker is ready after

@@ -11,8 +11,8 @@ import numpy as np
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import Field, model_validator
 
-from wearcast.service import importing, reference_store, wheel_pictures
 from wearcast.service import models_db as db
+from wearcast.service import reference_store, wheel_pictures, wheel_reference
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import NotFound
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
@@ -74,7 +74,7 @@ def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str
 @router.put("/wheels/{wheel_id}/reference")
 def set_wheel_reference(wheel_id: str, body: WheelReferenceIn,
                         session: SessionDep) -> dict[str, Any]:
-    return importing.apply_reference(session, wheel_id, body.reference_profile)
+    return wheel_reference.apply_reference(session, wheel_id, body.reference_profile)
 
 
 _IMAGE: dict[int | str, dict[str, Any]] = {
