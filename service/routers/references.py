@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-import numpy as np
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import Field, model_validator
 
@@ -15,6 +14,7 @@ from wearcast.service import models_db as db
 from wearcast.service import reference_store, wheel_pictures, wheel_reference
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import NotFound
+from wearcast.service.float32_blobs import floats_of
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
 from wearcast.service.schemas import Strict
@@ -61,8 +61,7 @@ def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str
         if m is None or m.kind != "profile" or m.y_mm is None or m.z_mm is None:
             raise NotFound("measurement_id", f"no profile measurement with id "
                            f"{body.measurement_id}")
-        y = np.frombuffer(m.y_mm, "<f4").astype(float).tolist()
-        z = np.frombuffer(m.z_mm, "<f4").astype(float).tolist()
+        y, z = floats_of(m.y_mm).tolist(), floats_of(m.z_mm).tolist()
         source = f"measurement {m.id} ({m.source_file or 'api'})"
     else:
         assert body.y_mm is not None and body.z_mm is not None
