@@ -20,20 +20,12 @@ from typing import Any
 from wearcast.service.float32_blobs import f32
 from wearcast.service.import_pool import submit_profiles
 from wearcast.service.import_registry import ImportRegistry
-from wearcast.service.import_worker import Processed
+from wearcast.service.import_worker import Processed, finite_or_none
 from wearcast.service.readers.bundle import Record
 from wearcast.service.readers.records import ParameterRecord, ProfileRecord
 
 #: Header Sd/Sh/qR farther than this [mm] from the recomputed ones are reported.
 HEADER_TOLERANCE_MM = 0.3
-
-
-def _finite_or_none(value: Any) -> float | None:
-    """A finite float, or None (for None, NaN and infinities)."""
-    if value is None:
-        return None
-    number = float(value)
-    return number if math.isfinite(number) else None
 
 
 def measurement_row(record: Record, batch_id: int | None, registry: ImportRegistry,
@@ -71,14 +63,14 @@ def measurement_row(record: Record, batch_id: int | None, registry: ImportRegist
     row.update(
         kind="profile", n_points=int(len(record.y_mm)), y_mm=f32(record.y_mm),
         z_mm=f32(record.z_mm), **wear_columns(p),
-        sd_mm=_finite_or_none(p.sd_mm), sh_mm=_finite_or_none(p.sh_mm),
-        qr_mm=_finite_or_none(p.qr_mm),
+        sd_mm=finite_or_none(p.sd_mm), sh_mm=finite_or_none(p.sh_mm),
+        qr_mm=finite_or_none(p.qr_mm),
         lateral_shift_mm=p.lateral_shift_mm, vertical_shift_mm=p.vertical_shift_mm,
         rotation_rad=p.rotation_rad, rms_residual_mm=p.rms_residual_mm,
         instrument_parameters=dict(reported) or None,
-        reported_sd_mm=_finite_or_none(reported.get("sd_mm")),
-        reported_sh_mm=_finite_or_none(reported.get("sh_mm")),
-        reported_qr_mm=_finite_or_none(reported.get("qr_mm")),
+        reported_sd_mm=finite_or_none(reported.get("sd_mm")),
+        reported_sh_mm=finite_or_none(reported.get("sh_mm")),
+        reported_qr_mm=finite_or_none(reported.get("qr_mm")),
         placement=p.placement,
         warnings=measurement_warnings(record, p) or None,
     )
@@ -92,8 +84,8 @@ def wear_columns(p: Processed) -> dict[str, Any]:
     return {
         "wear_mm": f32(p.wear_mm) if fits else None,
         "wear_grid_start_mm": p.grid_start_mm, "wear_grid_step_mm": p.grid_step_mm,
-        "flange_area_mm2": _finite_or_none(p.flange_area_mm2) if fits else None,
-        "tread_area_mm2": _finite_or_none(p.tread_area_mm2) if fits else None,
+        "flange_area_mm2": finite_or_none(p.flange_area_mm2) if fits else None,
+        "tread_area_mm2": finite_or_none(p.tread_area_mm2) if fits else None,
         "reference_profile": p.reference, "reference_fits": fits,
     }
 

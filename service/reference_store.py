@@ -36,6 +36,7 @@ from wearcast.physics.profiles.references import (
 from wearcast.service import models_db as db
 from wearcast.service.errors import Unprocessable
 from wearcast.service.float32_blobs import f32, floats_of
+from wearcast.service.import_worker import finite_or_none
 
 #: Names that mean "the wheel's own first measurement".
 OWN_BASELINE_NAMES = ("own", "first-measurement", "first_measurement", "baseline")
@@ -155,14 +156,11 @@ def create_reference(session: Session, name: str, y_mm: list[float], z_mm: list[
     row = db.ReferenceProfile(
         name=name, description=description, source=source, n_points=int(cleaned.y_mm.size),
         y_mm=f32(cleaned.y_mm), z_mm=f32(cleaned.z_mm),
-        sd_mm=_finite(params.sd_mm), sh_mm=_finite(params.sh_mm), qr_mm=_finite(params.qr_mm))
+        sd_mm=finite_or_none(params.sd_mm), sh_mm=finite_or_none(params.sh_mm),
+        qr_mm=finite_or_none(params.qr_mm))
     session.add(row)
     session.commit()
     return reference_out(row)
-
-
-def _finite(value: float) -> float | None:
-    return float(value) if np.isfinite(value) else None
 
 
 def reference_out(row: db.ReferenceProfile) -> dict[str, Any]:
