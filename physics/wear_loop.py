@@ -72,6 +72,8 @@ MAX_WHEEL_WEAR_MM = 40.0
 class WearLoopDivergedError(RuntimeError):
     """The wear loop produced a non-finite profile or more wear than a wheel rim allows."""
 
+
+#: Progress callback: (wheel steps done, wheel steps, mileage [km]).
 Progress = Callable[[int, int, float], None]
 
 
