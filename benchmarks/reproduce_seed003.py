@@ -52,7 +52,7 @@ global application, right wheel of the leading axle). The output is a table of m
 the steps, error against the complete line and time, and docs/img/wear_loop_seed003.png.
 
 Rail steps (``--rail-steps``; seed 003 §6.1 item 2, Tables 4, 5 and 8): the worn rail fed back
-into the contact (``physics.wear_loop.simulate_rail_steps``). For each rail step j the wheel
+into the contact (``physics.rail_feedback.simulate_rail_steps``). For each rail step j the wheel
 evolves from new over 20 steps of D_step^w = 0.2 mm on rail r_j, the contact table rebuilt with
 r_j; the mean rail's depth per vehicle, averaged over the wheel steps, is scaled to D_step^r =
 0.8 mm (eq. 4) and removed along the rail's normal: r_{j+1}. Law: seed 003's USFD; route: seed
@@ -97,13 +97,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from wearcast.physics.wear_loop import (  # noqa: E402
-    LoopClass,
-    WearSimulation,
-    WearSteps,
-    simulate_rail_steps,
-    simulate_wear,
-)
+from wearcast.physics.rail_feedback import simulate_rail_steps  # noqa: E402
+from wearcast.physics.wear_loop import LoopClass, WearSteps, simulate_wear  # noqa: E402
+from wearcast.physics.wear_simulation import WearSimulation  # noqa: E402
 from wearcast.statistics.generators.scenarios import seed003_classes  # noqa: E402
 from wearcast.statistics.routes import (  # noqa: E402
     route_from_segments,

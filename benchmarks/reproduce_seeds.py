@@ -27,7 +27,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from wearcast.physics.class_contacts import class_contacts  # noqa: E402
 from wearcast.physics.curving import curve_case  # noqa: E402
+from wearcast.physics.patch_wear import (  # noqa: E402
+    contact_volume_basis,
+    law_coefficients,
+    wheel_depth_basis,
+)
 from wearcast.physics.profiles.s1002 import s1002_height_mm  # noqa: E402
 from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
 from wearcast.physics.wear_distribution import Smoothing  # noqa: E402
@@ -35,12 +41,8 @@ from wearcast.physics.wear_laws import WearLaw  # noqa: E402
 from wearcast.physics.wear_loop import (  # noqa: E402
     LoopClass,
     WearSteps,
-    class_contacts,
     class_wear_rates,
-    contact_volume_basis,
-    law_coefficients,
     simulate_wear,
-    wheel_depth_basis,
 )
 
 IMG = Path(__file__).resolve().parents[1] / "docs" / "img"

@@ -446,7 +446,7 @@ def wear_rail(rail: str | Any, rail_y_mm: ArrayLike, normal_depth_mm: ArrayLike,
     rail : a rail name (``60E1``/``UIC60``/``60E2``) or a :class:`WornRail`
     rail_y_mm, normal_depth_mm : the depth [mm] over the lateral coordinate of the INCLINED
         rail frame the contact model uses (``ContactTable``: ``rail_y_mm`` of the contacts,
-        e.g. ``wear_loop.rail_depth_per_vehicle``), gauge side at y < 0
+        e.g. ``rail_wear_per_vehicle.rail_depth_per_vehicle``), gauge side at y < 0
     inclination : rail inclination as a slope (the vehicle's), used to turn the head into
         that frame and back
 

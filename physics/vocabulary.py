@@ -86,6 +86,10 @@ class CurveClass:
     speed_kmh : running speed [km/h]; None = from the route's unbalanced lateral acceleration
     direction : side towards which the track bends ('left' or 'right'; ignored on tangent)
     share : share of the route's distance in this class [-], >= 0
+
+    A route's stored class, :class:`wearcast.statistics.routes.RouteClass`, differs: its speed
+    is always given, a tangent has direction None, its cant may be negative and its share is a
+    fraction of the route length; ``RouteClass.curve_class()`` builds this class from it.
     """
 
     radius_m: float | None

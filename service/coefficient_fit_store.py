@@ -19,7 +19,6 @@ Storage reuses the ``simulations`` table (no migration): the job's spec carries
 from __future__ import annotations
 
 import logging
-import traceback
 from typing import Any, Literal
 
 import numpy as np
@@ -318,13 +317,7 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
                         on_progress: Any = None, control: Any = None) -> None:
     """Run a claimed fit to the end; progress (per method) and result in its row; a cancel or
     a passed time limit ends it after the method running then."""
-    from wearcast.service.job_store import (
-        JobControl,
-        JobStopped,
-        finish,
-        finite_json,
-        set_job,
-    )
+    from wearcast.service.job_store import JobControl, complete_job, set_job
     from wearcast.statistics.coefficient_fit import compare_methods
 
     control = control or JobControl(factory, job_id, None)
@@ -337,8 +330,7 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
         if on_progress is not None:
             on_progress(done, total, method)
 
-    try:
-        control.check()
+    def compute() -> dict[str, Any]:
         problem = problem_from_spec(spec)
         predict = spec.get("predict") or {}
         pw = (predict.get("wear") or None)
@@ -349,16 +341,9 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
             problem, methods, predict_mileage_km=predict.get("mileage_km"),
             predict_wear_mm=pw_on_y, seed=int(spec.get("seed", 0)),
             max_runs=int(spec.get("max_runs", 5)), rtol=float(spec.get("rtol", 1e-3)))
-        payload = finite_json(result_payload(problem, table, fits))
-    except JobStopped as stop:
-        finish(factory, job_id, stop.status, error=stop.reason, message=stop.reason)
-        return
-    except Exception as exc:  # the job reports any failure; it never kills the worker
-        log.warning("coefficient fit %s failed: %s", job_id, traceback.format_exc())
-        finish(factory, job_id, "failed", error=f"{type(exc).__name__}: {exc}",
-               message="failed")
-        return
-    finish(factory, job_id, "done", progress=1.0, result=payload, message="done")
+        return result_payload(problem, table, fits)
+
+    complete_job(factory, job_id, control, compute, kind="coefficient fit", logger=log)
 
 
 def result_payload(problem: Any, table: Any, fits: dict[str, Any]) -> dict[str, Any]:

@@ -54,13 +54,13 @@ def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, in
 
 def stop_import_workers() -> None:
     """Terminate the import pool's worker processes (at shutdown, e.g. on SIGTERM)."""
-    from wearcast.service import importing
+    from wearcast.service import import_pool
 
-    pool = importing._POOL
+    pool = import_pool._POOL
     if pool is None:
         return
     processes = list((getattr(pool, "_processes", None) or {}).values())
-    importing._discard_pool()
+    import_pool.discard_pool()
     for process in processes:
         if process.is_alive():
             process.terminate()

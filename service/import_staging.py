@@ -1,21 +1,30 @@
-"""Imports staged outside the write lock: parse, check and process every record first, then
-insert the batch in one short transaction.
+"""The records of an import, chunk by chunk: checked, processed, turned into rows, inserted.
 
-Reading and processing an upload (profile cleaning, alignment, wear curves) is the slow part
-of an import; while it ran inside the batch's transaction, SQLite's single write lock was held
-for all of it and every other write waited. Here the rows are built first, with reads only,
-and spooled to an anonymous temporary file (unlinked at once: nothing is left behind by a
-kill), so memory stays flat however large the upload; then the batch, its raw-file rows, new
+A chunk of records is checked for duplicates (a (wheel_id, mileage_km) already stored or met
+earlier in the upload is skipped and counted), its new wheels are registered
+(:mod:`wearcast.service.import_registry`) and its profiles are processed (in worker processes
+when large, :mod:`wearcast.service.import_pool`) while the next chunk is read; then its
+``measurements`` rows are built (:mod:`wearcast.service.measurement_rows`,
+:func:`chunk_rows`).
+
+Imports of an upload are staged outside the write lock: reading and processing an upload
+(profile cleaning, alignment, wear curves) is the slow part of an import; while it ran inside
+the batch's transaction, SQLite's single write lock was held for all of it and every other
+write waited. Here the rows are built first, with reads only, and spooled to an anonymous
+temporary file (unlinked at once: nothing is left behind by a kill), so memory stays flat
+however large the upload (:func:`stage_records`); then the batch, its raw-file rows, new
 vehicles and wheels (upserts: concurrent imports sharing them both succeed) and the
 measurements (a row another import stored meanwhile is skipped as a duplicate) are inserted
-in one transaction — the batch stays atomic and the lock is held only for the inserts.
+in one transaction — the batch stays atomic and the lock is held only for the inserts
+(:func:`write_stage`). Single posts are inserted directly in the session's open transaction
+(:func:`store_records`).
 """
 
 from __future__ import annotations
 
 import pickle
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
@@ -25,19 +34,104 @@ from sqlalchemy import func, insert, select, tuple_
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
-from wearcast.service.importing import (
-    OWN_BASELINE,
-    Progress,
-    Record,
-    _Counts,
-    _Registry,
-    _submit,
-    apply_reference,
-    collect_warnings,
-    measurement_row,
-)
+from wearcast.service.import_pool import submit_profiles
+from wearcast.service.import_registry import ImportRegistry
+from wearcast.service.import_result import ImportCounts, collect_warnings
+from wearcast.service.import_worker import Processed
+from wearcast.service.measurement_rows import measurement_row
+from wearcast.service.readers.bundle import Record
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ProfileRecord
+from wearcast.service.reference_store import OWN_BASELINE
+from wearcast.service.wheel_reference import apply_reference
+
+Progress = Callable[[int], None]
+
+#: Records per chunk (one duplicate query, one processing batch and one bulk insert each).
+DEFAULT_CHUNK = 500
+
+
+def chunk_rows(session: Session, records: Iterable[Record], registry: ImportRegistry,
+               counts: ImportCounts, seen: set[tuple[str, float]], *, batch_id: int | None,
+               chunk_size: int, check: Callable[[list[Record]], None] | None = None
+               ) -> Iterator[tuple[list[dict[str, Any]], int]]:
+    """The ``measurements`` rows of the records' new measurements, chunk by chunk, each with
+    the number of records its chunk read (for progress); a chunk of duplicates only gives [].
+
+    Records already stored or in ``seen`` (the keys of earlier records, updated here) count as
+    duplicates; ``check`` may refuse a chunk (ImportFileError). A chunk's profiles are
+    processed (in worker processes when large) while the next chunk is read and checked; its
+    rows are built after that. Counts, warnings and own-baseline wheels go to ``counts`` and
+    ``registry``.
+    """
+    iterator = iter(records)
+
+    def rows_of(fresh: list[Record], processed: Callable[[], list[Processed]]
+                ) -> list[dict[str, Any]]:
+        if not fresh:
+            return []
+        profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
+        done = dict(zip(map(id, profiles), processed(), strict=True))
+        rows = [measurement_row(r, batch_id, registry, done.get(id(r))) for r in fresh]
+        collect_warnings(counts, registry, fresh, rows)
+        counts.points += sum(r["n_points"] for r in rows)
+        return rows
+
+    pending: tuple[list[Record], Callable[[], list[Processed]], int] | None = None
+    while chunk := list(islice(iterator, chunk_size)):
+        counts.records += len(chunk)
+        if check is not None:
+            check(chunk)
+        keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
+        stored = {tuple(row) for row in session.execute(
+            select(db.Measurement.wheel_id, db.Measurement.mileage_km).where(
+                tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
+        ).all()}
+        fresh: list[Record] = []
+        for record, key in zip(chunk, keys, strict=True):
+            if key in stored or key in seen:
+                counts.duplicates += 1
+                continue
+            seen.add(key)
+            fresh.append(record)
+        if fresh:
+            registry.ensure_wheels(fresh)
+        handle = submit_profiles([r for r in fresh if isinstance(r, ProfileRecord)], registry)
+        if pending is not None:
+            yield rows_of(pending[0], pending[1]), pending[2]
+        pending = (fresh, handle, len(chunk))
+    if pending is not None:
+        yield rows_of(pending[0], pending[1]), pending[2]
+
+
+def store_records(session: Session, records: Iterable[Record], batch_id: int | None, *,
+                  chunk_size: int = DEFAULT_CHUNK, progress: Progress | None = None,
+                  ) -> tuple[ImportCounts, list[int]]:
+    """Insert the records (chunked bulk inserts) inside the session's open transaction.
+
+    Returns the counts and, when ``batch_id`` is None, the new measurement ids (single posts).
+    Duplicates of stored measurements or of earlier records in ``records`` are skipped.
+    """
+    registry = ImportRegistry(session)
+    counts = ImportCounts()
+    new_ids: list[int] = []
+    for rows, n_read in chunk_rows(session, records, registry, counts, set(),
+                                   batch_id=batch_id, chunk_size=chunk_size):
+        if rows:
+            if batch_id is None:
+                for row in rows:
+                    new_ids.append(session.execute(
+                        insert(db.Measurement).returning(db.Measurement.id), [row]
+                    ).scalar_one())
+            else:
+                session.execute(insert(db.Measurement), rows)
+            counts.created += len(rows)
+        if progress is not None:
+            progress(n_read)
+    for wheel_id in sorted(registry.own_wheels):
+        session.flush()
+        apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
+    return counts, new_ids
 
 
 def insert_ignoring_duplicates(session: Session, table: Any, index_elements: list[str]) -> Any:
@@ -52,7 +146,7 @@ def insert_ignoring_duplicates(session: Session, table: Any, index_elements: lis
     return insert(table)
 
 
-def write_new_wheels(session: Session, registry: _Registry) -> None:
+def write_new_wheels(session: Session, registry: ImportRegistry) -> None:
     """Insert the vehicles and wheels a staged import found new (upserts: another import may
     have stored them meanwhile), then check that every one is stored where the upload says."""
     new = registry.new_wheels
@@ -77,8 +171,8 @@ def write_new_wheels(session: Session, registry: _Registry) -> None:
 class Stage:
     """Rows of an upload ready to insert, spooled to an anonymous temporary file."""
 
-    counts: _Counts
-    registry: _Registry
+    counts: ImportCounts
+    registry: ImportRegistry
     spool: IO[bytes]
     chunks: int = 0
     keys: set[tuple[str, float]] = field(default_factory=set)
@@ -96,56 +190,24 @@ def stage_records(session: Session, records: Iterable[Record], *, chunk_size: in
                   tmp_dir: Path | None = None, max_points: int | None = None,
                   max_id_length: int = 200, progress: Progress | None = None) -> Stage:
     """Read, check and process every record (reads only); the rows go to a spool file."""
-    registry = _Registry(session, defer_writes=True)
+    registry = ImportRegistry(session, defer_writes=True)
     if tmp_dir is not None:
         tmp_dir.mkdir(parents=True, exist_ok=True)
-    stage = Stage(_Counts(), registry, tempfile.TemporaryFile(dir=tmp_dir))
-    iterator = iter(records)
+    stage = Stage(ImportCounts(), registry, tempfile.TemporaryFile(dir=tmp_dir))
 
-    def spool(fresh: list[Record], handle: Any) -> None:
-        profiles = [r for r in fresh if isinstance(r, ProfileRecord)]
-        done = dict(zip(map(id, profiles), handle(), strict=True))
-        rows = [measurement_row(r, None, registry, done.get(id(r))) for r in fresh]
-        collect_warnings(stage.counts, registry, fresh, rows)
-        stage.counts.points += sum(r["n_points"] for r in rows)
-        pickle.dump(rows, stage.spool, protocol=pickle.HIGHEST_PROTOCOL)
-        stage.chunks += 1
+    def check(chunk: list[Record]) -> None:
+        if max_points is not None:
+            _check_points(chunk, max_points)
+        _check_texts(chunk, max_id_length)
 
-    # a chunk's profiles are processed (in worker processes when large) while the next
-    # chunk is parsed and checked; its rows are spooled after that
-    pending: tuple[list[Record], Any, int] | None = None
     try:
-        while chunk := list(islice(iterator, chunk_size)):
-            stage.counts.records += len(chunk)
-            if max_points is not None:
-                _check_points(chunk, max_points)
-            _check_texts(chunk, max_id_length)
-            keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
-            stored = {tuple(row) for row in session.execute(
-                select(db.Measurement.wheel_id, db.Measurement.mileage_km).where(
-                    tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
-            ).all()}
-            fresh = []
-            for record, key in zip(chunk, keys, strict=True):
-                if key in stored or key in stage.keys:
-                    stage.counts.duplicates += 1
-                    continue
-                stage.keys.add(key)
-                fresh.append(record)
-            if fresh:
-                registry.ensure_wheels(fresh)
-            handle = _submit([r for r in fresh if isinstance(r, ProfileRecord)], registry)
-            if pending is not None:
-                if pending[0]:
-                    spool(pending[0], pending[1])
-                if progress is not None:
-                    progress(pending[2])
-            pending = (fresh, handle, len(chunk))
-        if pending is not None:
-            if pending[0]:
-                spool(pending[0], pending[1])
+        for rows, n_read in chunk_rows(session, records, registry, stage.counts, stage.keys,
+                                       batch_id=None, chunk_size=chunk_size, check=check):
+            if rows:
+                pickle.dump(rows, stage.spool, protocol=pickle.HIGHEST_PROTOCOL)
+                stage.chunks += 1
             if progress is not None:
-                progress(pending[2])
+                progress(n_read)
     except BaseException:
         stage.close()
         raise
@@ -185,7 +247,7 @@ def _check_points(chunk: list[Record], max_points: int) -> None:
                                   line=meta.source_line, field="y_mm")
 
 
-def write_stage(session: Session, stage: Stage, batch_id: int) -> _Counts:
+def write_stage(session: Session, stage: Stage, batch_id: int) -> ImportCounts:
     """Insert the staged rows under ``batch_id`` in the session's transaction; rows stored
     meanwhile by another import count as duplicates. Returns the final counts."""
     write_new_wheels(session, stage.registry)

@@ -1,5 +1,5 @@
 """Profile processing of an import, run in the importing process or in its pool of worker
-processes (:func:`wearcast.service.importing._submit`).
+processes (:func:`wearcast.service.import_pool.submit_profiles`).
 
 This module imports only numpy and the physics and statistics cores — not the web framework,
 the database layer or the rest of the service — so that a spawned pool worker is ready after
@@ -51,7 +51,8 @@ class Processed(NamedTuple):
     cleaning_notes: tuple[str, ...] = ()
 
 
-def _finite_or_none(value: Any) -> float | None:
+def finite_or_none(value: Any) -> float | None:
+    """A finite float, or None (for None, NaN and infinities): a nullable number column."""
     if value is None:
         return None
     number = float(value)
@@ -98,10 +99,10 @@ def process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, ref: RefTuple | None = No
         d = p.datum
         placement.update(
             back_face_found=d.back_face_found,
-            back_face_y_mm=_finite_or_none(d.back_face_y_mm),
-            tape_circle_z_mm=_finite_or_none(d.tape_circle_z_mm),
-            tilt_back_face_rad=_finite_or_none(d.tilt_back_face_rad),
-            tilt_field_rad=_finite_or_none(d.tilt_field_rad),
+            back_face_y_mm=finite_or_none(d.back_face_y_mm),
+            tape_circle_z_mm=finite_or_none(d.tape_circle_z_mm),
+            tilt_back_face_rad=finite_or_none(d.tilt_back_face_rad),
+            tilt_field_rad=finite_or_none(d.tilt_field_rad),
             tilt_applied_rad=d.tilt_applied_rad, notes=list(d.notes))
     check = p.reference_check
     assert check is not None

@@ -15,6 +15,8 @@ from __future__ import annotations
 import datetime as dt
 import logging
 import math
+import traceback
+from collections.abc import Callable
 from typing import Any
 
 from sqlalchemy import func, select, update
@@ -126,6 +128,30 @@ def finish(factory: SessionFactory, job_id: int, status: str, **values: Any) -> 
         session.execute(update(db.Simulation)
                         .where(db.Simulation.id == job_id, db.Simulation.status == "running")
                         .values(status=status, finished_at=now_utc(), **values))
+
+
+def complete_job(factory: SessionFactory, job_id: int, control: JobControl,
+                 compute: Callable[[], Any], *, kind: str,
+                 logger: logging.Logger | None = None) -> None:
+    """Run a claimed job's computation and write how it ended; never raises for the job.
+
+    ``compute()`` returns the job's result (made JSON-safe by :func:`finite_json`): the job is
+    ``done`` with it. A cancel or a passed time limit (:class:`JobStopped`, checked first and at
+    every progress step) ends it as the signal says; any other exception marks it ``failed``
+    with the error, logged (on ``logger``) with its traceback as the ``kind`` named.
+    """
+    try:
+        control.check()
+        payload = finite_json(compute())
+    except JobStopped as stop:
+        finish(factory, job_id, stop.status, error=stop.reason, message=stop.reason)
+        return
+    except Exception as exc:  # the job reports any failure; it never kills the worker
+        (logger or log).warning("%s %s failed: %s", kind, job_id, traceback.format_exc())
+        finish(factory, job_id, "failed", error=f"{type(exc).__name__}: {exc}",
+               message="failed")
+        return
+    finish(factory, job_id, "done", progress=1.0, result=payload, message="done")
 
 
 class JobControl:

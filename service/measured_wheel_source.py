@@ -16,6 +16,7 @@ from sqlalchemy.orm import Session
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable
+from wearcast.service.float32_blobs import floats_of
 
 
 def processed_measurement(session: Session, measurement_id: int,
@@ -35,8 +36,7 @@ def processed_measurement(session: Session, measurement_id: int,
     if m.kind != "profile" or m.y_mm is None or m.z_mm is None:
         raise Unprocessable(field, f"measurement {measurement_id} has no profile points "
                                    f"(kind {m.kind!r})")
-    y = np.frombuffer(m.y_mm, "<f4").astype(float)
-    z = np.frombuffer(m.z_mm, "<f4").astype(float)
+    y, z = floats_of(m.y_mm), floats_of(m.z_mm)
     datum = (m.placement or {}).get("alignment") == "datum"
     height = height_of(stored_reference_spec(session, m.reference_profile))
     try:

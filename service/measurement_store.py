@@ -23,7 +23,8 @@ from sqlalchemy.orm import Session, defer
 from wearcast.service import models_db as db
 from wearcast.service import route_store
 from wearcast.service.errors import Conflict, NotFound, Unprocessable
-from wearcast.service.importing import from_f32, store_records
+from wearcast.service.float32_blobs import from_f32
+from wearcast.service.import_staging import store_records
 from wearcast.service.readers.records import MeasurementMeta, ParameterRecord, ProfileRecord
 from wearcast.service.schemas import MeasurementIn, MeasurementOut
 

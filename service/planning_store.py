@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import model_store
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
-from wearcast.service.importing import from_f32
+from wearcast.service.float32_blobs import from_f32
 from wearcast.service.planning_schemas import FleetIn, PlanIn, VehicleIn
 from wearcast.statistics import reprofiling as stat_reprofiling
 from wearcast.statistics.maintenance.fleet_state import FleetState, Remaining, fleet_state

@@ -35,6 +35,8 @@ from wearcast.physics.profiles.references import (
 )
 from wearcast.service import models_db as db
 from wearcast.service.errors import Unprocessable
+from wearcast.service.float32_blobs import f32, floats_of
+from wearcast.service.import_worker import finite_or_none
 
 #: Names that mean "the wheel's own first measurement".
 OWN_BASELINE_NAMES = ("own", "first-measurement", "first_measurement", "baseline")
@@ -64,8 +66,7 @@ def height_of(spec: ReferenceSpec) -> HeightFunction:
 
 
 def _from_blobs(y: bytes, z: bytes) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    return (tuple(np.frombuffer(y, dtype="<f4").astype(float).tolist()),
-            tuple(np.frombuffer(z, dtype="<f4").astype(float).tolist()))
+    return tuple(floats_of(y).tolist()), tuple(floats_of(z).tolist())
 
 
 def is_own_baseline(name: str) -> bool:
@@ -111,9 +112,7 @@ def own_baseline_spec(session: Session, wheel_id: str) -> tuple[ReferenceSpec, i
 def _measurement_spec(measurement_id: int, y_blob: bytes, z_blob: bytes) -> ReferenceSpec:
     from wearcast.statistics.cleaning import clean_profile
 
-    y = np.frombuffer(y_blob, dtype="<f4").astype(float)
-    z = np.frombuffer(z_blob, dtype="<f4").astype(float)
-    cleaned = clean_profile(y, z)
+    cleaned = clean_profile(floats_of(y_blob), floats_of(z_blob))
     return ReferenceSpec(f"own:{measurement_id}", "points", tuple(cleaned.y_mm.tolist()),
                          tuple(cleaned.z_mm.tolist()))
 
@@ -156,16 +155,12 @@ def create_reference(session: Session, name: str, y_mm: list[float], z_mm: list[
     params = flange_parameters(cleaned.y_mm, cleaned.z_mm)
     row = db.ReferenceProfile(
         name=name, description=description, source=source, n_points=int(cleaned.y_mm.size),
-        y_mm=np.asarray(cleaned.y_mm, "<f4").tobytes(),
-        z_mm=np.asarray(cleaned.z_mm, "<f4").tobytes(),
-        sd_mm=_finite(params.sd_mm), sh_mm=_finite(params.sh_mm), qr_mm=_finite(params.qr_mm))
+        y_mm=f32(cleaned.y_mm), z_mm=f32(cleaned.z_mm),
+        sd_mm=finite_or_none(params.sd_mm), sh_mm=finite_or_none(params.sh_mm),
+        qr_mm=finite_or_none(params.qr_mm))
     session.add(row)
     session.commit()
     return reference_out(row)
-
-
-def _finite(value: float) -> float | None:
-    return float(value) if np.isfinite(value) else None
 
 
 def reference_out(row: db.ReferenceProfile) -> dict[str, Any]:

@@ -13,7 +13,6 @@ cancel, time limit and recovery are :mod:`wearcast.service.job_store`'s and
 from __future__ import annotations
 
 import logging
-import traceback
 from typing import Any
 
 import numpy as np
@@ -26,9 +25,8 @@ from wearcast.service.errors import NotFound, from_value_error
 from wearcast.service.job_store import (
     RESTART_REASON,
     JobControl,
-    JobStopped,
+    complete_job,
     default_timeout,
-    finish,
     finite_json,
     now_utc,
     queue_job,
@@ -143,19 +141,9 @@ def run_claimed_simulation(factory: SessionFactory, sim_id: int, spec: dict[str,
         if on_progress is not None:
             on_progress(done, total, mileage_km)
 
-    try:
-        control.check()
-        result = simulate_wear(**simulation_arguments(spec), progress=progress)
-        payload = finite_json(result.to_dict())
-    except JobStopped as stop:
-        finish(factory, sim_id, stop.status, error=stop.reason, message=stop.reason)
-        return
-    except Exception as exc:  # the job reports any failure; it never kills the worker
-        log.warning("simulation %s failed: %s", sim_id, traceback.format_exc())
-        finish(factory, sim_id, "failed", error=f"{type(exc).__name__}: {exc}",
-               message="failed")
-        return
-    finish(factory, sim_id, "done", progress=1.0, result=payload, message="done")
+    complete_job(factory, sim_id, control,
+                 lambda: simulate_wear(**simulation_arguments(spec), progress=progress).to_dict(),
+                 kind="simulation", logger=log)
 
 
 def get_simulation(session: Session, sim_id: int, with_result: bool = True) -> SimulationOut:

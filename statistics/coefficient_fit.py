@@ -65,7 +65,8 @@ from wearcast.physics.wear_laws import (
     ArchardKTH,
     WearLaw,
 )
-from wearcast.physics.wear_loop import WearSimulation, WearSteps, simulate_wear
+from wearcast.physics.wear_loop import WearSteps, simulate_wear
+from wearcast.physics.wear_simulation import WearSimulation
 
 #: Seed 000 §V: bounds of k1, k2, k3 used by its optimisers (zone 4 not fitted) [-].
 SEED_000_BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4))

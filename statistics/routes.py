@@ -15,13 +15,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 
 from wearcast.physics.vehicles import GRAVITY_M_S2
-from wearcast.physics.vocabulary import DIRECTIONS, RAILS, SIDES, Rail
+from wearcast.physics.vocabulary import DIRECTIONS, RAILS, SIDES, CurveClass, Direction, Rail
 from wearcast.physics.vocabulary import rail_for as vocabulary_rail_for
 
 SHARE_TOLERANCE = 1e-3
@@ -88,7 +88,16 @@ def _is_tangent_radius(radius: Any) -> bool:
 
 @dataclass(frozen=True)
 class RouteClass:
-    """One curve class of a route.
+    """One curve class of a route, as the route description stores it (seed 003 §5.3).
+
+    Not the physics' :class:`wearcast.physics.vocabulary.CurveClass` (the operating point the
+    wear loop and the curve-radius tables take), though both carry a radius, cant, speed,
+    direction and share: here the speed is always given (the route's recorded or binned speed,
+    0 allowed), a tangent has no direction (None), the cant may be negative (binned from
+    segments) and the share is a fraction of the route length in [0, 1] (a :class:`Route`'s
+    shares sum to 1); a ``CurveClass`` may leave the speed to the unbalanced lateral
+    acceleration (None), always has a direction, a cant >= 0 and any shares >= 0.
+    :meth:`curve_class` builds the physics' class from this one.
 
     Attributes
     ----------
@@ -132,6 +141,14 @@ class RouteClass:
     @property
     def is_tangent(self) -> bool:
         return self.radius_m is None
+
+    def curve_class(self) -> CurveClass:
+        """This class as the physics' :class:`~wearcast.physics.vocabulary.CurveClass`: the same
+        radius, cant, speed and share; a tangent's direction (None) becomes ``'left'``, unused
+        on tangent track. Raises ValueError where the physics' class is narrower (a negative
+        cant, a speed of 0)."""
+        return CurveClass(radius_m=self.radius_m, cant_mm=self.cant_mm, speed_kmh=self.speed_kmh,
+                          direction=cast(Direction, self.direction or "left"), share=self.share)
 
     def to_dict(self) -> dict[str, Any]:
         return {

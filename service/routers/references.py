@@ -7,14 +7,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-import numpy as np
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import Field, model_validator
 
-from wearcast.service import importing, reference_store, wheel_pictures
 from wearcast.service import models_db as db
+from wearcast.service import reference_store, wheel_pictures, wheel_reference
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import NotFound
+from wearcast.service.float32_blobs import floats_of
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
 from wearcast.service.schemas import Strict
@@ -61,8 +61,7 @@ def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str
         if m is None or m.kind != "profile" or m.y_mm is None or m.z_mm is None:
             raise NotFound("measurement_id", f"no profile measurement with id "
                            f"{body.measurement_id}")
-        y = np.frombuffer(m.y_mm, "<f4").astype(float).tolist()
-        z = np.frombuffer(m.z_mm, "<f4").astype(float).tolist()
+        y, z = floats_of(m.y_mm).tolist(), floats_of(m.z_mm).tolist()
         source = f"measurement {m.id} ({m.source_file or 'api'})"
     else:
         assert body.y_mm is not None and body.z_mm is not None
@@ -74,7 +73,7 @@ def create_reference_profile(body: ReferenceIn, session: SessionDep) -> dict[str
 @router.put("/wheels/{wheel_id}/reference")
 def set_wheel_reference(wheel_id: str, body: WheelReferenceIn,
                         session: SessionDep) -> dict[str, Any]:
-    return importing.apply_reference(session, wheel_id, body.reference_profile)
+    return wheel_reference.apply_reference(session, wheel_id, body.reference_profile)
 
 
 _IMAGE: dict[int | str, dict[str, Any]] = {

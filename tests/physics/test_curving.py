@@ -237,8 +237,9 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
     # on the Hertzian tread patch of the tangent class it stays within 25 % of Hertz's b (KP with
     # epsilon = 0.55 is ~5 % wider than Hertz for a circular patch, more for our circular
     # estimate of the approach on elongated ellipses).
+    from wearcast.physics.class_contacts import class_contacts
     from wearcast.physics.profiles.s1002 import s1002_height_mm
-    from wearcast.physics.wear_loop import LoopClass, class_contacts
+    from wearcast.physics.wear_loop import LoopClass
 
     y = np.linspace(-70.0, 60.0, 651)
     z = s1002_height_mm(y)

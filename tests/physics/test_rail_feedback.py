@@ -5,10 +5,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from wearcast.physics.class_contacts import class_contacts_all_wheels
 from wearcast.physics.curving import build_contact_table
+from wearcast.physics.patch_wear import contact_volume_basis, law_coefficients
 from wearcast.physics.profiles.rails import rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.rail_feedback import simulate_rail_steps
 from wearcast.physics.rail_head_wear import WornRail, wear_rail
+from wearcast.physics.rail_wear_per_vehicle import rail_depth_per_vehicle_all_wheels
 from wearcast.physics.vehicles import vehicle_preset
 from wearcast.physics.wear_laws import ArchardKTH, WearLaw
 from wearcast.physics.wear_loop import (
@@ -17,11 +21,6 @@ from wearcast.physics.wear_loop import (
     LoopClass,
     WearSteps,
     _grid,
-    class_contacts_all_wheels,
-    contact_volume_basis,
-    law_coefficients,
-    rail_depth_per_vehicle_all_wheels,
-    simulate_rail_steps,
     simulate_wear,
 )
 

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from wearcast.physics.patch_wear import contact_volume_basis, law_coefficients
 from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
 from wearcast.physics.wear_distribution import Smoothing
 from wearcast.physics.wear_laws import ArchardKTH, WearLaw
@@ -14,8 +15,6 @@ from wearcast.physics.wear_loop import (
     WearLoopDivergedError,
     WearSteps,
     class_wear_rates,
-    contact_volume_basis,
-    law_coefficients,
     simulate_wear,
 )
 

@@ -17,15 +17,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wearcast.physics.class_contacts import class_contacts
+from wearcast.physics.patch_wear import law_coefficients, wheel_depth_basis
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
 from wearcast.physics.wear_laws import WearLaw
-from wearcast.physics.wear_loop import (
-    LoopClass,
-    class_contacts,
-    law_coefficients,
-    wheel_depth_basis,
-)
+from wearcast.physics.wear_loop import LoopClass
 
 Y_MM = np.linspace(-70.0, 60.0, 651)
 CURVES = [(1000.0, 150.0, 120.0), (800.0, 150.0, 100.0), (600.0, 160.0, 90.0),

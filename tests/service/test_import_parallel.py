@@ -10,12 +10,12 @@ import pytest
 from sqlalchemy import func, select
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
-from wearcast.service import importing
+from wearcast.service import import_pool, importing
 from wearcast.service import models_db as db
 from wearcast.service.db import Database
 from wearcast.service.settings import Settings
 
-N_PROFILES = importing.PARALLEL_MIN_PROFILES + 44  # one chunk large enough for the pool
+N_PROFILES = import_pool.PARALLEL_MIN_PROFILES + 44  # one chunk large enough for the pool
 HEADER = "wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,y_mm,z_mm\n"
 
 

@@ -68,6 +68,22 @@ def test_rail_mapping_left_curve_puts_right_wheels_on_high_rail():
     assert rail_for(RouteClass(None, None, 0.0, 100.0, 1.0), "left") == "tangent"
 
 
+def test_route_class_builds_the_physics_curve_class_with_the_same_rail():
+    # RouteClass.curve_class: same radius, cant, speed and share; the tangent's direction None
+    # becomes the vocabulary's 'left'; the rail of each wheel is unchanged.
+    curve = RouteClass(400.0, "right", 80.0, 60.0, 0.3)
+    cc = curve.curve_class()
+    assert (cc.radius_m, cc.cant_mm, cc.speed_kmh, cc.direction, cc.share) == (
+        400.0, 80.0, 60.0, "right", 0.3)
+    tangent = RouteClass(None, None, 0.0, 100.0, 0.7).curve_class()
+    assert tangent.is_tangent and tangent.direction == "left" and tangent.speed_kmh == 100.0
+    for c in (curve, RouteClass(None, None, 0.0, 100.0, 0.7)):
+        for side in ("left", "right"):
+            assert c.curve_class().rail_for(side) == rail_for(c, side)
+    with pytest.raises(ValueError, match="cant_mm"):
+        RouteClass(400.0, "left", -10.0, 60.0, 1.0).curve_class()  # the physics needs cant >= 0
+
+
 def test_route_from_segments_weights_by_length():
     segments = [
         {"length_m": 600.0, "radius_m": None, "direction": None, "cant_mm": 0.0, "speed_kmh": 120},

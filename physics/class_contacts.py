@@ -1,0 +1,271 @@
+"""Quasi-static contacts of a wheel per curve class, for the current (worn) wheel profile.
+
+Step 1 of the wear loop (:mod:`wearcast.physics.wear_loop`; seeds 000, 002, 003, 004 in
+docs/references.md): the quasi-static bogie curving of :mod:`wearcast.physics.curving` with the
+contact table rebuilt from the wheel profile z(y) on the vehicle's rail. Classes of the same
+radius, cant and speed share one solution (an operating point); a right-hand class is the
+mirror image of a left-hand one, so the tracked wheel of a right curve is the opposite wheel of
+the left-curve solution. If the batched solve does not converge for some operating point, it is
+retried from its last equilibrium; if it still fails, the class keeps the contact of its
+previous contact update, or, on the first update, the contact of the converged operating point
+nearest in curvature (then cant) -- the stated simpler contact; both are counted as fallbacks.
+If no class converges, :class:`~wearcast.physics.curving.CurvingConvergenceError` is raised.
+
+Forces in N, lengths in mm (rolling radius in mm), speeds in m/s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from wearcast.physics.curving import (
+    CurvingConvergenceError,
+    CurvingResult,
+    build_contact_table,
+    conformal_half_width_mm,
+    curve_case,
+    solve_curving_cases_or_none,
+)
+from wearcast.physics.vehicles import BogieVehicle
+from wearcast.physics.vocabulary import CurveClass
+
+#: Patch-width models of :func:`class_contacts`.
+PATCH_WIDTHS = ("hertz", "kik_piotrowski")
+
+
+@dataclass(frozen=True)
+class ClassContacts:
+    """Contacts of the tracked wheel per class, shape (n_class, n_slot) (patch slots of the
+    curving model, field side first).
+
+    normal_n [N], wheel_y_mm, rail_y_mm [mm], angle_rad, rolling_radius_mm, a_mm, b_mm, xi,
+    eta [-], phi_per_mm, fx_n, fy_n, mz_nmm, tau_max_mpa, t_gamma_n, loaded (bool); speed_m_s
+    (n_class,). Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape
+    (n_class, 2 axles, n_slot). ``states``: the last curving equilibrium per operating point
+    (the warm start of the next update's failed points).
+    """
+
+    normal_n: NDArray
+    wheel_y_mm: NDArray
+    rail_y_mm: NDArray
+    angle_rad: NDArray
+    rolling_radius_mm: NDArray
+    a_mm: NDArray
+    b_mm: NDArray
+    xi: NDArray
+    eta: NDArray
+    phi_per_mm: NDArray
+    fx_n: NDArray
+    fy_n: NDArray
+    mz_nmm: NDArray
+    tau_max_mpa: NDArray
+    t_gamma_n: NDArray
+    loaded: NDArray
+    speed_m_s: NDArray
+    rail_axles: dict = field(default_factory=dict)
+    states: dict = field(default_factory=dict)
+
+
+_CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
+                   "rolling_radius_m", "a_mm", "b_mm", "xi", "eta", "phi_per_mm", "fx_n", "fy_n",
+                   "mz_nmm", "tau_max_mpa", "t_gamma_n", "in_contact")
+
+
+_RAIL_FIELDS = ("normal_force_n", "rail_y_mm", "contact_angle_rad", "b_mm", "rolling_radius_m",
+                "in_contact")
+_FIELD_NAMES = {"normal_force_n": "normal_n", "wheel_y_mm": "wheel_y_mm", "rail_y_mm": "rail_y_mm",
+                "contact_angle_rad": "angle_rad", "a_mm": "a_mm", "b_mm": "b_mm", "xi": "xi",
+                "eta": "eta", "phi_per_mm": "phi_per_mm", "fx_n": "fx_n", "fy_n": "fy_n",
+                "mz_nmm": "mz_nmm", "tau_max_mpa": "tau_max_mpa", "t_gamma_n": "t_gamma_n",
+                "in_contact": "loaded"}
+
+
+def _operating_point(c: CurveClass, unbalanced_acceleration_m_s2: float,
+                     tangent_speed_kmh: float) -> tuple:
+    if c.is_tangent:
+        v = (c.speed_kmh if c.speed_kmh is not None else tangent_speed_kmh) / 3.6
+        return (None, 0.0, round(v, 9))
+    speed_m_s = None if c.speed_kmh is None else c.speed_kmh / 3.6
+    assert c.radius_m is not None  # not tangent here
+    radius_m = float(c.radius_m)
+    case = curve_case(radius_m, c.cant_mm, speed_m_s, "left", unbalanced_acceleration_m_s2)
+    return (radius_m, float(c.cant_mm), round(case.speed_m_s, 9))
+
+
+def _curvature(point: tuple) -> float:
+    return 0.0 if point[0] is None else 1.0 / point[0]
+
+
+def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int,
+                  warm: dict | None = None, warm_first: bool = False
+                  ) -> list[CurvingResult | None]:
+    """Batched curving of the operating points in one batch; a point that does not converge
+    from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
+    ``CurvingResult.state`` on the previous profile) if it has one, else it is None (the caller
+    falls back to a neighbour or the previous contact). ``warm_first``: start every point that
+    has a last equilibrium from it (Newton at full load, no continuation) and retry the failures
+    by continuation from centred wheelsets (faster when the profile changed little)."""
+    cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
+    labels = [(r, "left", cant) for r, cant, _ in points]
+    first = None
+    if warm_first and warm:
+        first = [warm.get(p) for p in points]
+    out = solve_curving_cases_or_none(vehicle, cases, labels, table,
+                                      fastsim_grid=fastsim_grid, initial_states=first)
+    if first is not None:
+        retry = [i for i, r in enumerate(out) if r is None and first[i] is not None]
+        init: list = [None] * len(retry)
+    else:
+        retry = [i for i, r in enumerate(out) if r is None and points[i] in (warm or {})]
+        init = [(warm or {})[points[i]] for i in retry]
+    if retry:
+        again = solve_curving_cases_or_none(
+            vehicle, [cases[i] for i in retry], [labels[i] for i in retry], table,
+            fastsim_grid=fastsim_grid, initial_states=init)
+        for i, res in zip(retry, again, strict=True):
+            out[i] = res
+    return out
+
+
+#: The four wheels of a bogie, (axle, side); axle 1 leads.
+BOGIE_WHEELS: tuple[tuple[int, str], ...] = ((1, "left"), (1, "right"), (2, "left"),
+                                             (2, "right"))
+
+
+def class_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], y_mm: NDArray,
+                   z_mm: NDArray, *, axle: int = 1, side: str = "right",
+                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_kmh: float = 100.0,
+                   fastsim_grid: int = 20, previous: ClassContacts | None = None,
+                   patch_width: str = "hertz") -> tuple[ClassContacts, int]:
+    """Quasi-static contacts of the tracked wheel per class for the wheel profile z(y).
+
+    patch_width : ``hertz`` (the curving model's ellipse, from the gap smoothed over 2 mm) or
+        ``kik_piotrowski`` (the lateral semi-axis widened to the extent of the unsmoothed gap
+        within 0.55 x the approach, ``curving.conformal_half_width_mm``: conformal flange-root
+        patches become wide and mild; the equilibrium and creepages are unchanged)
+
+    Returns (contacts, number of classes that kept the previous contact). Raises
+    CurvingConvergenceError when a class fails and there is no previous contact.
+    """
+    if axle not in (1, 2) or side not in ("left", "right"):
+        raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
+    out, fallbacks = class_contacts_all_wheels(
+        vehicle, classes, y_mm, z_mm, wheels=((axle, side),),
+        unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+        tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+        previous=None if previous is None else {(axle, side): previous},
+        patch_width=patch_width)
+    return out[(axle, side)], fallbacks
+
+
+def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClass],
+                              y_mm: NDArray, z_mm: NDArray, *,
+                              wheels: Sequence[tuple[int, str]] = BOGIE_WHEELS,
+                              unbalanced_acceleration_m_s2: float = 0.58,
+                              tangent_speed_kmh: float = 100.0, fastsim_grid: int = 20,
+                              previous: Mapping[tuple[int, str], ClassContacts] | None = None,
+                              patch_width: str = "hertz", warm_first: bool = False
+                              ) -> tuple[dict[tuple[int, str], ClassContacts], int]:
+    """:func:`class_contacts` of several wheels of the bogie from ONE curving solve per
+    operating point (all four wheels by default). ``previous``: per wheel the contacts of the
+    previous update (fallback and warm start); ``warm_first``: see :func:`_solve_points`.
+    Returns ({(axle, side): contacts}, class fallbacks summed over the wheels)."""
+    for axle, side in wheels:
+        if axle not in (1, 2) or side not in ("left", "right"):
+            raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
+    if patch_width not in PATCH_WIDTHS:
+        raise ValueError(f"patch_width must be one of {', '.join(PATCH_WIDTHS)}, "
+                         f"got {patch_width!r}")
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    table = build_contact_table(lambda q: np.interp(q, y, z), vehicle.rail_profile,
+                                vehicle.rail_inclination, vehicle.wheel_radius_m)
+    points = [_operating_point(c, unbalanced_acceleration_m_s2, tangent_speed_kmh)
+              for c in classes]
+    unique = sorted(set(points), key=lambda p: (p[0] is None, p[0] or 0.0, p[1], p[2]))
+    prev = dict(previous or {})
+    warm: dict | None = None
+    for pc in prev.values():
+        warm = {**(warm or {}), **pc.states}
+    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm,
+                                            warm_first), strict=True))
+    states = dict(warm or {})
+    states.update({p: r.state for p, r in solved.items() if r is not None})
+    good = [p for p, r in solved.items() if r is not None]
+    if not good and not prev:
+        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
+                                      np.inf, float("nan"))
+    out = {}
+    fallbacks = 0
+    for wheel in wheels:
+        out[wheel], fb = _wheel_contacts(vehicle, classes, points, solved, good, y, z, wheel,
+                                         prev.get(wheel), patch_width, states)
+        fallbacks += fb
+    return out, fallbacks
+
+
+def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points: list,
+                    solved: dict, good: list, y: NDArray, z: NDArray, wheel: tuple[int, str],
+                    previous: ClassContacts | None, patch_width: str, states: dict
+                    ) -> tuple[ClassContacts, int]:
+    """Contacts of one wheel per class from the solved operating points (fallbacks counted)."""
+    axle, side = wheel
+    ai = axle - 1
+    n = len(classes)
+    slots = [np.shape(r.normal_force_n)[-1] for r in solved.values() if r is not None]
+    if previous is not None:
+        slots.append(previous.normal_n.shape[-1])
+    n_slot = max(slots) if slots else 2
+    data = {f: np.zeros((n, n_slot)) for f in _CONTACT_FIELDS}
+    rail = {f: np.zeros((n, 2, n_slot)) for f in _RAIL_FIELDS}
+    speed = np.zeros(n)
+    fallbacks = 0
+    if not good and previous is None:
+        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
+                                      np.inf, float("nan"))
+    for k, (c, p) in enumerate(zip(classes, points, strict=True)):
+        res = solved[p]
+        if res is None and previous is None:
+            # Nearest converged operating point in curvature (then cant) of the same profile.
+            fallbacks += 1
+            res = solved[min(good, key=lambda q: (abs(_curvature(q) - _curvature(p)),
+                                                  abs(q[1] - p[1])))]
+        # Mirror: the tracked wheel of a right curve is the opposite wheel of the left curve.
+        own = 0 if side == "left" else 1
+        si = own if (c.direction == "left" or c.is_tangent) else 1 - own
+        if res is None:
+            assert previous is not None
+            fallbacks += 1
+            m = previous.normal_n.shape[-1]
+            for f, name in _FIELD_NAMES.items():
+                data[f][k, :m] = getattr(previous, name)[k]
+            data["rolling_radius_m"][k, :m] = previous.rolling_radius_mm[k] / 1000.0
+            for f in rail:
+                rail[f][k, :, :m] = previous.rail_axles[f][k]
+            speed[k] = previous.speed_m_s[k]
+            continue
+        m = np.shape(res.normal_force_n)[-1]
+        for f in _CONTACT_FIELDS:
+            data[f][k, :m] = np.asarray(getattr(res, f))[ai, si]
+        for f in rail:
+            rail[f][k, :, :m] = np.asarray(getattr(res, f))[:, si]
+        speed[k] = res.speed_m_s
+    loaded = data["in_contact"].astype(bool) & (data["normal_force_n"] > 1.0)
+    if patch_width == "kik_piotrowski":
+        data["b_mm"] = np.where(loaded, conformal_half_width_mm(
+            y, z, vehicle.rail_profile, vehicle.rail_inclination, data["wheel_y_mm"],
+            data["rail_y_mm"], np.where(loaded, data["normal_force_n"], 0.0), data["a_mm"],
+            data["b_mm"]), data["b_mm"])
+    rail["in_contact"] = rail["in_contact"].astype(bool) & (rail["normal_force_n"] > 1.0)
+    return ClassContacts(
+        normal_n=data["normal_force_n"], wheel_y_mm=data["wheel_y_mm"],
+        rail_y_mm=data["rail_y_mm"], angle_rad=data["contact_angle_rad"],
+        rolling_radius_mm=data["rolling_radius_m"] * 1000.0, a_mm=data["a_mm"],
+        b_mm=data["b_mm"], xi=data["xi"], eta=data["eta"], phi_per_mm=data["phi_per_mm"],
+        fx_n=data["fx_n"], fy_n=data["fy_n"], mz_nmm=data["mz_nmm"],
+        tau_max_mpa=data["tau_max_mpa"], t_gamma_n=data["t_gamma_n"], loaded=loaded,
+        speed_m_s=speed, rail_axles=rail, states=states), fallbacks
