@@ -6,13 +6,15 @@ expected scatter, default 0.02, or 0 = interpolating the raw points) on 60E1 rai
 (both wheels of the wheelset the same measured wheel) is swept over lateral shifts
 -8 ... 10 mm, yaw -10, 0, +10 mrad and roll solved or prescribed (solved + 2 mrad), and each
 pose runs the whole pipeline for the left wheel: contact locus -> patches -> normal contact
-("auto") -> creepages -> FASTSIM (``wheel_rail.loaded_wheel_contact``, 10 kN).  The script
+("auto") -> creepages -> FASTSIM (``wheel_rail.loaded_wheel_contact``, 10 kN).  With
+``--rail FILE.ban`` the rails are that measured MiniProf rail head instead (a worn wheel on a
+worn rail; placed by its gauge point as ``contact.track_profiles`` places stored rails).  The script
 prints, per wheel, the number of poses, the failures by exception type (a ``NoContactError``
 is the expected, typed answer for a wheel that cannot touch its rail, and is counted
 apart), and the number of patches seen.
 
 Usage: ``.venv/bin/python benchmarks/contact_robustness.py [--smoothing 0.02] [--quick]
-[path/to/reference]``
+[--rail path/to/rail.ban] [path/to/reference]``
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ import numpy as np
 
 from wearcast.physics.contact.geometry import WheelsetTrack
 from wearcast.physics.contact.locus import NoContactError, wheel_locus
+from wearcast.physics.contact.track_profiles import wheelset_track
 from wearcast.physics.contact.wheel_rail import loaded_wheel_contact
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve
+from wearcast.physics.profiles.measured_rail import MeasuredRail
 
 DEFAULT_REFERENCE = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
 
@@ -43,11 +47,22 @@ def raw_wheels(reference: Path, smoothing_mm: float) -> dict[str, ProfileCurve]:
     return out
 
 
+def measured_rail(path: Path) -> MeasuredRail:
+    """The first rail head of a MiniProf rail file, in its rail frame."""
+    from wearcast.service.readers.miniprof_rail import read_rail_file
+
+    part = read_rail_file(path.read_bytes(), path.name).parts[0]
+    return MeasuredRail(path.name, *part.rail_frame())
+
+
 def sweep(wheel: ProfileCurve, shifts: np.ndarray, yaws: tuple[float, ...],
-          roll_offsets: tuple[float | None, ...]) -> tuple[int, collections.Counter, list[str],
-                                                            collections.Counter]:
+          roll_offsets: tuple[float | None, ...], rail: MeasuredRail | None = None
+          ) -> tuple[int, collections.Counter, list[str], collections.Counter]:
     """(poses, failures by type, first messages, patch-count histogram)."""
-    wt = WheelsetTrack(wheel=wheel, rail=rail_curve("60E1"))
+    if rail is None:
+        wt = WheelsetTrack(wheel=wheel, rail=rail_curve("60E1"))
+    else:
+        wt = wheelset_track(wheel, rail, 1.0 / 40.0, 460.0)
     failures: collections.Counter = collections.Counter()
     patches: collections.Counter = collections.Counter()
     messages: list[str] = []
@@ -77,7 +92,10 @@ def main() -> None:
     parser.add_argument("reference", nargs="?", type=Path, default=DEFAULT_REFERENCE)
     parser.add_argument("--smoothing", type=float, default=0.02)
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--rail", type=Path, default=None,
+                        help="a MiniProf rail file (.ban) for both rails instead of 60E1")
     args = parser.parse_args()
+    rail = None if args.rail is None else measured_rail(args.rail)
     shifts = np.arange(-8.0, 10.01, 3.0 if args.quick else 1.0)
     yaws = (0.0, 0.01) if args.quick else (-0.01, 0.0, 0.01)
     rolls = (None, 0.002)
@@ -85,7 +103,7 @@ def main() -> None:
     n_total = 0
     for name, curve in raw_wheels(args.reference, args.smoothing).items():
         start = time.perf_counter()
-        poses, failures, messages, patches = sweep(curve, shifts, yaws, rolls)
+        poses, failures, messages, patches = sweep(curve, shifts, yaws, rolls, rail)
         n_total += poses
         total.update(failures)
         print(f"{name:28s} {poses:4d} poses, failures {dict(failures) or 0}, patches "

@@ -13,7 +13,8 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
    extent, a = area / (pi b)) with its normal force;
 5. vertical equilibrium sum F_n cos(delta) + F_s sin(delta) = W: steps 2-4 are repeated with
    the patches' F_s/F_n until the normal forces settle (CONTACT solves the same coupled
-   problem; 2-4 rounds to 1e-4 W; the ratios are under-relaxed after 3 rounds, and with
+   problem; 2-4 rounds to 1e-4 W; the ratios are under-relaxed after 3 rounds, with a
+   falling weight, and with
    method "auto" a pose still unsettled after 10 rounds finishes with the coarse BEM for
    every patch, since a patch at the Hertz criterion's threshold can flip between the two).
 
@@ -140,7 +141,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
     method : normal-contact method ("bem", "kp", "hertz", "auto"; ``normal_contact``)
     n_grid, bound : FASTSIM grid and traction bound
     rtol, max_rounds : convergence of the normal / tangential coupling (normal forces,
-        relative to W); RuntimeError if not reached
+        relative to W or the largest patch force if larger); RuntimeError if not reached
     """
     n = locus.gap_mm.shape[0]
     loads = np.broadcast_to(np.asarray(wheel_load_n, dtype=float), (n,))
@@ -173,12 +174,19 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
             forces = [p.normal_force_n for p in loaded]
             new = [p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0 for p in loaded]
             if ratios is not None and rounds > 3 and len(ratios[0]) == len(new):
-                # under-relaxed after a few rounds: a patch that switches between Hertz and
-                # the BEM (or merges) can otherwise make the fixed point oscillate
-                new = [0.5 * (a + b) for a, b in zip(ratios[0], new, strict=True)]
+                # under-relaxed after a few rounds, with a weight 1 / (rounds - 2) that falls
+                # (1/2, 1/3, ...): a patch that switches between Hertz and the BEM, merges, or
+                # gains a grid element makes the map of F_s/F_n discontinuous, and a fixed
+                # relaxation can then cycle between two values for ever
+                step = 1.0 / (rounds - 2)
+                new = [a + step * (b - a) for a, b in zip(ratios[0], new, strict=True)]
             ratios = [new]
+            # settled when no patch's normal force changes by more than rtol of the larger of
+            # the wheel load and the largest patch force (a 70 deg flange patch carries several
+            # times the vertical load)
+            scale = max(float(loads[row]), max(forces, default=0.0))
             if len(forces) == len(previous) and np.max(
-                    np.abs(np.subtract(forces, previous)), initial=0.0) < rtol * loads[row]:
+                    np.abs(np.subtract(forces, previous)), initial=0.0) < rtol * scale:
                 break
             if rounds >= max_rounds:
                 raise RuntimeError(f"normal/tangential coupling did not converge at pose {row}")

@@ -47,3 +47,45 @@ def test_a_wheel_that_cannot_reach_its_rail_is_a_typed_error():
     assert info.value.field in ("shift", "wheel")
     # phrased "field: reason", which the service maps to a 422 naming the field
     assert str(info.value) == f"{info.value.field}: {info.value.reason}"
+
+
+def test_worn_wheels_on_a_worn_measured_rail_sweep_without_exceptions(reference_dir):
+    # issue 11, "robust on measured data": a worn wheel on a worn rail (MiniProf avg_low2.ban,
+    # a measured low rail), two of the wheels over shifts, yaw and roll
+    from contact_robustness import measured_rail
+
+    rail = measured_rail(reference_dir / "miniprof" / "avg_low2.ban")
+    wheels = raw_wheels(reference_dir, 0.02)
+    for name in ("Car7216_0001r", "whl_left_iter795"):
+        poses, failures, messages, patches = sweep(wheels[name], np.array([-5.0, 1.0, 7.0]),
+                                                   (0.0, 0.01), (None, 0.002), rail)
+        assert not failures, (name, messages)
+        assert sum(patches.values()) == poses == 12
+
+
+def test_the_coarse_boundary_element_force_is_continuous_in_the_approach(reference_dir):
+    # The coarse BEM grid sits on a fixed lattice (normal_contact._lattice): as the approach
+    # grows, elements join at the margin, out of contact. With a grid stretched over the
+    # interpenetration region instead, the force of this measured wheel on avg_low2.ban jumped
+    # by 2 % of the load within 1e-9 mm of approach (an element count changing), and the
+    # approach iteration could not carry the load.
+    from contact_robustness import measured_rail
+
+    from wearcast.physics.contact.normal_contact import patch_normal_contact
+    from wearcast.physics.contact.patches import patch_regions
+    from wearcast.physics.contact.track_profiles import wheelset_track
+
+    rail = measured_rail(reference_dir / "miniprof" / "avg_low2.ban")
+    wheel = raw_wheels(reference_dir, 0.02)["Car7216_0001r"]
+    wt = wheelset_track(wheel, rail, 1.0 / 40.0, 460.0)
+    roll = wheel_locus(wt, [-5.0], "left", yaw_rad=0.01).roll_rad + 0.002
+    locus = wheel_locus(wt, [-5.0], "left", yaw_rad=0.01, roll_rad=roll)
+    approaches = np.linspace(0.0290, 0.0300, 201)
+    forces = []
+    for d in approaches:
+        regions = patch_regions(locus, 0, d)
+        forces.append(sum(patch_normal_contact(locus, 0, r, d, "bem-coarse", 2.1e5, 0.28,
+                                               0.2).normal_force_n for r in regions))
+    steps = np.abs(np.diff(forces))
+    # a smooth force grows by ~ dF/dd * 5e-6 mm ~ 3 N per step here; a jump is 200 N
+    assert np.max(steps) < 5.0 * np.median(steps) + 1.0
