@@ -87,7 +87,8 @@ def default_timeout() -> float | None:
 def queue_job(session: Session, name: str | None, spec: dict[str, Any],
               owner_key_id: int | None = None, timeout_s: float | None = None
               ) -> db.Simulation:
-    """Store a validated job (simulation or coefficient fit, told apart by its spec) as queued."""
+    """Store a validated job (simulation, coefficient fit or table build, told apart by its
+    spec's ``kind``) as queued."""
     from wearcast.service.auth import current_principal
 
     principal = current_principal.get()
@@ -250,10 +251,15 @@ def run_job(factory: SessionFactory, job_id: int, on_progress: Any = None,
         return
     spec, timeout_s = row
     control = JobControl(factory, job_id, timeout_s)
-    if (spec or {}).get("kind") == "coefficient_fit":
+    kind = (spec or {}).get("kind")
+    if kind == "coefficient_fit":
         from wearcast.service.coefficient_fit_store import run_coefficient_fit
 
         run_coefficient_fit(factory, job_id, spec, on_progress, control=control)
+    elif kind == "wear_table":
+        from wearcast.service.wear_table_jobs import run_wear_table_job
+
+        run_wear_table_job(factory, job_id, spec, on_progress, control=control)
     else:
         from wearcast.service.simulation_store import run_claimed_simulation
 

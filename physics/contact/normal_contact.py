@@ -211,7 +211,7 @@ def _lattice(lo: float, hi: float, step: float) -> _FloatArray:
     jumping function of the approach (up to 6 % of the load on measured wheels)."""
     k0 = int(np.floor(lo / step))
     k1 = max(int(np.ceil(hi / step)), k0 + 3)
-    return (np.arange(k0, k1) + 0.5) * step
+    return np.asarray((np.arange(k0, k1) + 0.5) * step, dtype=np.float64)
 
 
 def _grid(ps: _PlaneSamples, approach_mm: float, element_mm: float, margin_mm: float,

@@ -1,5 +1,6 @@
-"""``/v1/jobs``: every background job (simulations, coefficient fits) in one list, one job's
-status and progress, and cancelling a job (its owner's key or an admin key)."""
+"""``/v1/jobs``: every background job (simulations, coefficient fits, table builds) in one
+list, one job's status and progress (and a table build's result: the stored table), and
+cancelling a job (its owner's key or an admin key)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Request, Response
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 from sqlalchemy import select
 
 from wearcast.service import job_store
@@ -20,9 +21,12 @@ router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
 
 
+JobKind = Literal["simulation", "coefficient_fit", "wear_table"]
+
+
 class JobOut(BaseModel):
     id: int
-    kind: Literal["simulation", "coefficient_fit"]
+    kind: JobKind
     name: str | None
     status: Literal["queued", "running", "done", "failed", "cancelled"]
     progress: float
@@ -36,13 +40,17 @@ class JobOut(BaseModel):
     started_at: dt.datetime | None = None
     finished_at: dt.datetime | None = None
     heartbeat_at: dt.datetime | None = None
+    result: dict[str, Any] | None = Field(default=None, description=(
+        "a table build's result once done: {wear_table_id, n_rows} (simulations and fits "
+        "answer theirs at /v1/simulations/{id} and /v1/coefficient-fits/{id})"))
 
 
-def _out(row: Any) -> JobOut:
-    kind: Literal["simulation", "coefficient_fit"] = (
-        "coefficient_fit" if (row.spec or {}).get("kind") == "coefficient_fit"
-        else "simulation")
-    return JobOut(id=row.id, kind=kind, name=row.name, status=row.status,
+def job_out(row: Any) -> JobOut:
+    """The job's status as answered by ``/v1/jobs`` (also for table builds)."""
+    spec_kind = (row.spec or {}).get("kind")
+    kind: JobKind = spec_kind if spec_kind in ("coefficient_fit", "wear_table") else "simulation"
+    return JobOut(result=row.result if kind == "wear_table" else None,
+                  id=row.id, kind=kind, name=row.name, status=row.status,
                   progress=float(row.progress), message=row.message, error=row.error,
                   owner_key_id=row.owner_key_id, attempts=row.attempts or 0,
                   cancel_requested=bool(row.cancel_requested), timeout_s=row.timeout_s,
@@ -58,7 +66,7 @@ def list_jobs(session: SessionDep, limit: Annotated[int, Query(ge=1, le=1000)] =
     query = select(db.Simulation).order_by(db.Simulation.id.desc()).limit(limit)
     if status is not None:
         query = query.where(db.Simulation.status == status)
-    return json_response([_out(r) for r in session.scalars(query)])
+    return json_response([job_out(r) for r in session.scalars(query)])
 
 
 @router.get("/jobs/{job_id}", response_model=JobOut)
@@ -66,7 +74,7 @@ def get_job(job_id: JobId, session: SessionDep) -> Response:
     row = session.get(db.Simulation, job_id)
     if row is None:
         raise NotFound("job_id", f"no job with id {job_id}")
-    return json_response(_out(row))
+    return json_response(job_out(row))
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=JobOut)
@@ -83,4 +91,4 @@ def cancel_job(job_id: JobId, session: SessionDep, request: Request) -> JobOut:
     if row.status not in job_store.ACTIVE:
         raise ApiError(409, "job_id", f"the job has already ended ({row.status})")
     row = job_store.cancel(session, job_id)
-    return _out(row)
+    return job_out(row)

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, File, Form, UploadFile
+from fastapi import APIRouter, File, Form, Request, UploadFile
 
-from wearcast.service import wear_table_store
+from wearcast.service import wear_table_jobs, wear_table_store
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Unprocessable
+from wearcast.service.routers.jobs import JobOut, job_out
 from wearcast.service.schemas import WearTableComputeIn, WearTableContactsOut, WearTableOut
 
 router = APIRouter(tags=["wear tables"])
@@ -33,6 +34,15 @@ def compute_wear_table(body: WearTableComputeIn, session: SessionDep) -> WearTab
     """Build a table with the physics core for a vehicle preset and a route (or radii)."""
     row = wear_table_store.compute_wear_table(session, body)
     return wear_table_store.wear_table_out(session, row)
+
+
+@router.post("/wear-tables/jobs", response_model=JobOut, status_code=202)
+def compute_wear_table_job(body: WearTableComputeIn, session: SessionDep,
+                           request: Request) -> JobOut:
+    """Build a table as a background job (the body of ``/wear-tables/compute``); poll
+    ``GET /v1/jobs/{id}``: once ``done`` its ``result`` names the stored table."""
+    row = wear_table_jobs.submit(session, request.app.state.simulations, body)
+    return job_out(row)
 
 
 @router.get("/wear-tables/{table_id}", response_model=WearTableOut)
