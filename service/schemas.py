@@ -332,6 +332,10 @@ class CalibrationIn(Strict):
 
 
 class ModelIn(Strict):
+    """A hybrid model (seed 001): calibrated on profile measurements with a curve-radius
+    table. ``kind`` may be omitted (hybrid is the default)."""
+
+    kind: Literal["hybrid"] = "hybrid"
     name: str = Field(min_length=1, max_length=200)
     measure: Measure
     running_mode: RunningMode
@@ -340,18 +344,28 @@ class ModelIn(Strict):
 
 
 class ModelOut(BaseModel):
+    """A stored model. ``kind``: ``hybrid`` (seed 001's statistical model), ``extended`` (a
+    hybrid model extended by the discrepancy finder) or ``physics`` (the whole-vehicle wear
+    loop with a calibrated wear-coefficient scale: ``measure``, ``running_mode`` and
+    ``wear_table_id`` are null, ``physics`` holds the calibration; a physics model saved by
+    a diagnosis also has ``derived_from`` and ``extension``)."""
+
     id: int
     name: str
-    measure: str
-    running_mode: str
-    wear_table_id: int
+    measure: str | None
+    running_mode: str | None
+    wear_table_id: int | None
     route_id: int
     calibration: dict[str, Any]
     n_calibration_measurements: int
     summary: dict[str, Any]
-    kind: Literal["hybrid", "extended"] = "hybrid"
+    kind: Literal["hybrid", "extended", "physics"] = "hybrid"
     derived_from: int | None = None
     extension: dict[str, Any] | None = None
+    physics: dict[str, Any] | None = Field(default=None, description=(
+        "physics models: vehicle, law, options, wear_scale with its P10/P90 and spread, "
+        "what it was calibrated on, the simulated vehicle-mean series and the error per "
+        "vehicle and quantity (schema PhysicsModelSummary)"))
 
 
 class RouteRef(Strict):
@@ -360,7 +374,8 @@ class RouteRef(Strict):
 
     @model_validator(mode="after")
     def _one_route(self) -> RouteRef:
-        if (self.route_id is None) == (self.route is None):
+        # neither: a physics model runs on its own route; a hybrid model answers 422 route_id
+        if self.route_id is not None and self.route is not None:
             raise ValueError("give either route_id or route (exactly one)")
         return self
 
@@ -465,7 +480,8 @@ class ReprofilingIn(Strict):
 
     @model_validator(mode="after")
     def _check(self) -> ReprofilingIn:
-        if (self.route_id is None) == (self.route is None):
+        # neither: a physics model runs on its own route; a hybrid model answers 422 route_id
+        if self.route_id is not None and self.route is not None:
             raise ValueError("give either route_id or route (exactly one)")
         starts = [self.wheel_id, self.measurement_id, self.profile]
         if sum(v is not None for v in starts) > 1:

@@ -1,4 +1,5 @@
-"""``/v1/jobs``: every background job (simulations, coefficient fits) in one list, one job's
+"""``/v1/jobs``: every background job (simulations, coefficient fits, physics models and
+their diagnoses) in one list, one job's
 status and progress, and cancelling a job (its owner's key or an admin key)."""
 
 from __future__ import annotations
@@ -7,7 +8,7 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Request, Response
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 from sqlalchemy import select
 
 from wearcast.service import job_store
@@ -20,9 +21,15 @@ router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
 
 
+JobKind = Literal["simulation", "coefficient_fit", "physics_model", "physics_diagnosis"]
+#: Kinds whose (small) result ``GET /v1/jobs/{id}`` carries: the physics model built
+#: (``model_id``, ``model``) or the diagnosis (the ``DiagnosisOut`` of the model's diagnose).
+RESULT_KINDS = ("physics_model", "physics_diagnosis")
+
+
 class JobOut(BaseModel):
     id: int
-    kind: Literal["simulation", "coefficient_fit"]
+    kind: JobKind
     name: str | None
     status: Literal["queued", "running", "done", "failed", "cancelled"]
     progress: float
@@ -36,13 +43,17 @@ class JobOut(BaseModel):
     started_at: dt.datetime | None = None
     finished_at: dt.datetime | None = None
     heartbeat_at: dt.datetime | None = None
+    result: dict[str, Any] | None = Field(default=None, description=(
+        "physics_model and physics_diagnosis jobs once done: {model_id, model} or the "
+        "diagnosis (simulations and fits: GET /v1/simulations/{id}, "
+        "/v1/coefficient-fits/{id})"))
 
 
-def _out(row: Any) -> JobOut:
-    kind: Literal["simulation", "coefficient_fit"] = (
-        "coefficient_fit" if (row.spec or {}).get("kind") == "coefficient_fit"
-        else "simulation")
-    return JobOut(id=row.id, kind=kind, name=row.name, status=row.status,
+def _out(row: Any, with_result: bool = False) -> JobOut:
+    kind: JobKind = (row.spec or {}).get("kind") or "simulation"
+    result = row.result if with_result and kind in RESULT_KINDS and row.status == "done" \
+        else None
+    return JobOut(id=row.id, kind=kind, name=row.name, status=row.status, result=result,
                   progress=float(row.progress), message=row.message, error=row.error,
                   owner_key_id=row.owner_key_id, attempts=row.attempts or 0,
                   cancel_requested=bool(row.cancel_requested), timeout_s=row.timeout_s,
@@ -66,7 +77,7 @@ def get_job(job_id: JobId, session: SessionDep) -> Response:
     row = session.get(db.Simulation, job_id)
     if row is None:
         raise NotFound("job_id", f"no job with id {job_id}")
-    return json_response(_out(row))
+    return json_response(_out(row, with_result=True))
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=JobOut)
