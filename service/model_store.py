@@ -143,6 +143,10 @@ def model_inputs(session: Session, model_id: int) -> ModelInputs:
     """
     found = session.execute(_MODEL_INPUTS, {"model_id": model_id}).first()
     if found is None:
+        if session.scalar(select(db.Model.kind).where(db.Model.id == model_id)) == "physics":
+            raise Unprocessable("model_id", f"model {model_id} is a physics model: it has no "
+                                "curve-radius table; use POST /v1/models/{id}/predict, "
+                                "/reprofiling or /diagnose")
         raise NotFound("model_id", f"no model with id {model_id}")
     created_at, table_id, sha256, n_rows = found  # the inner join: a hybrid model's table
     assert table_id is not None

@@ -39,7 +39,8 @@ class PhysicsSimulationIn(Strict):
     mileage_km: float | None = Field(default=None, gt=0, le=MAX_SIMULATED_KM, description=(
         "simulated mileage [km]; default: twice the furthest calibration mileage, run "
         "further (up to max_mileage_km) when the fitted scale needs more"))
-    max_mileage_km: float = Field(default=200_000.0, gt=0, le=MAX_SIMULATED_KM, description=(
+    max_mileage_km: float = Field(default=MAX_SIMULATED_KM, gt=0, le=MAX_SIMULATED_KM,
+                                  description=(
         "the automatic mileage never exceeds this [km]"))
     max_steps: int = Field(default=200, ge=1, le=400, description="most steps of one run")
     step_convergence: bool = Field(default=False, description=(
