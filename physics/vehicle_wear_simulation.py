@@ -212,7 +212,8 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                           unbalanced_acceleration_m_s2: float = 0.58,
                           tangent_speed_kmh: float = 100.0, fastsim_grid: int = 20,
                           max_steps: int = 400,
-                          progress: Callable[[float], None] | None = None
+                          progress: Callable[[float], None] | None = None,
+                          continue_from: VehicleWearSimulation | None = None
                           ) -> VehicleWearSimulation:
     """Wear of every wheel of a vehicle over a route of curve classes to ``mileage_km``.
 
@@ -220,6 +221,10 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         pairs; route_classes : as ``wear_loop.simulate_wear``; law : WearLaw or name (default
         seed 003's USFD); depth_per_step_mm : D_step [mm] (seed 003: 0.2); options :
         :class:`VehicleWearOptions`; progress : callback(mileage_km).
+    continue_from : an earlier run of the same vehicle, route, law and options to go on from
+        (its wheel profiles at its end, its series kept; the first contact solve starts cold):
+        a longer run without redoing the first part; ``max_steps`` counts the new steps. The
+        wheels, grid, law and options are checked; vehicle and route are the caller's.
     """
     start = time.perf_counter()
     opts = options or VehicleWearOptions()
@@ -250,6 +255,17 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     mileage = [0.0]
     params = [_parameters(y, profiles)]
     updates = fallbacks = 0
+    if continue_from is not None:
+        if (continue_from.wheels != labels or continue_from.y_mm.shape != y.shape
+                or continue_from.law != wl.name or continue_from.options != opts):
+            raise ValueError("continue_from: a run of other wheels, wheel grid, law or "
+                             "options")
+        z0 = continue_from.initial_profile_mm
+        profiles = continue_from.profiles_mm.reshape(n_b, 4, -1).copy()
+        mileage = [float(m) for m in continue_from.mileage_km]
+        params = [np.stack([continue_from.sd_mm[i], continue_from.sh_mm[i],
+                            continue_from.qr_mm[i]]) for i in range(len(mileage))]
+        updates, fallbacks = continue_from.contact_updates, continue_from.contact_fallbacks
     fwd = opts.forward_share
     lead_index = {w: i for i, w in enumerate(BOGIE_WHEELS)}
     for _ in range(max_steps):

@@ -9,9 +9,10 @@ measured Sd/Sh/qR that the calibration filter selects (:mod:`wearcast.statistics
   vehicle, route, law, options, and that the filter selects measurements with Sd and qR of
   at least one wheel beyond 0 km. The build then runs as a job (``physics_model`` in the
   ``simulations`` table, like coefficient fits): the loop to twice the furthest measured
-  mileage (or ``simulation.mileage_km``), run further (at most twice) when the fitted scale
-  needs more, the scale fitted, compared per vehicle and quantity, the model row stored
-  with its calibration measurements linked (measurements are only read).
+  mileage (or ``simulation.mileage_km``), continued further (at most twice, from where it
+  ended: ``continue_from``) when the fitted scale needs more, the scale fitted, compared
+  per vehicle and quantity, the model row stored with its calibration measurements linked
+  (measurements are only read).
 * The stored state carries the run's per-wheel series, so predict and reprofiling need no
   new run: the wheel position's Sd/Sh/qR at wheel mileage m are the run's at c m (P10/P90
   from the vehicle-to-vehicle spread of c).
@@ -35,8 +36,8 @@ from wearcast.service.cache import LruCache
 from wearcast.service.db import SessionFactory, transaction
 from wearcast.service.errors import NotFound, Unprocessable
 from wearcast.service.job_store import JobControl, finite_json, resolve_classes
-from wearcast.service.physics_schemas import PhysicsModelIn, PhysicsModelSummary
-from wearcast.service.schemas import ModelOut, PredictIn, ReprofilingIn
+from wearcast.service.physics_schemas import PhysicsModelIn
+from wearcast.service.schemas import ModelOut, PhysicsModelSummary, PredictIn, ReprofilingIn
 from wearcast.statistics.physics_comparison import loss_rate_per_1000_km
 from wearcast.statistics.physics_model import (
     QUANTITIES,
@@ -132,9 +133,10 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
 
 def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: dict[str, Any],
              mileage_km: float, params: dict[str, Any] | None = None,
-             progress: Any = None) -> Any:
+             progress: Any = None, continue_from: Any = None) -> Any:
     """One whole-vehicle run with a model's options, ``params`` (VehicleWearOptions fields or
-    ``law``) replacing them."""
+    ``law``) replacing them; ``continue_from`` an earlier run to go on from (not with
+    ``step_convergence``, which runs anew)."""
     from wearcast.physics.vehicle_wear_simulation import (
         VehicleWearOptions,
         simulate_vehicle_wear,
@@ -153,7 +155,8 @@ def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: 
     step = float(simulation.get("depth_per_step_mm", 0.8))
     if simulation.get("step_convergence"):
         return simulate_vehicle_wear_converged(vehicle, route, first_step_mm=step, **kwargs)
-    return simulate_vehicle_wear(vehicle, route, depth_per_step_mm=step, **kwargs)
+    return simulate_vehicle_wear(vehicle, route, depth_per_step_mm=step,
+                                 continue_from=continue_from, **kwargs)
 
 
 def _needed_mileage(series: VehicleSeries, measured: pd.DataFrame, mileage_km: float) -> float:
@@ -184,17 +187,18 @@ def build(spec: dict[str, Any], control: JobControl | None = None
     mileage = float(fixed) if fixed else 2.0 * float(measured["distance_km"].max())
     runs: list[dict[str, Any]] = []
     warnings: list[str] = []
+    sim: Any = None
     for attempt in range(MAX_RUNS):
         def progress(km: float, attempt: int = attempt, total: float = mileage) -> None:
             if control is not None:
                 control.progress(min(0.95, (attempt + km / total) / MAX_RUNS),
                                  f"run {attempt + 1}: {km:,.0f} of {total:,.0f} km")
         sim = run_loop(spec["vehicle"], spec["resolved_classes"], spec["law"], sim_spec,
-                       mileage, progress=progress)
+                       mileage, progress=progress, continue_from=sim)
         series = VehicleSeries.from_simulation(sim)
         calibration = calibrate_scale(series, measured)
         runs.append({"mileage_km": mileage, "steps": int(series.mileage_km.size - 1),
-                     "elapsed_s": float(sim.elapsed_s),
+                     "elapsed_s": float(sim.elapsed_s), "continued": attempt > 0,
                      "wear_scale": calibration.fit.wear_scale,
                      "at_reach": calibration.fit.at_reach})
         if not calibration.fit.at_reach or fixed or mileage >= cap:
@@ -208,7 +212,8 @@ def build(spec: dict[str, Any], control: JobControl | None = None
     info = {"mileage_km": float(series.mileage_km[-1]), "steps": runs[-1]["steps"],
             "depth_per_step_mm": float(sim.depth_per_step_mm),
             "contact_updates": int(sim.contact_updates),
-            "contact_fallbacks": int(sim.contact_fallbacks), "elapsed_s": float(sim.elapsed_s),
+            "contact_fallbacks": int(sim.contact_fallbacks),
+            "elapsed_s": float(sum(r["elapsed_s"] for r in runs)),
             "step_convergence": None if sim.convergence is None else sim.convergence.to_dict(),
             "runs": runs}
     return series, calibration, info, warnings
@@ -292,7 +297,7 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
         summary={"vehicle": state["vehicle"], "law": state["law"], "wear_scale": c,
                  "rms_mm": cal["rms_mm"]},
         kind="physics", derived_from=row.spec.get("derived_from"),
-        extension=state.get("extension"), physics=summary.model_dump(mode="json"))
+        extension=state.get("extension"), physics=summary)
 
 
 @dataclass(frozen=True)

@@ -97,34 +97,6 @@ ModelCreateIn = Annotated[
                   custom_error_message="kind must be hybrid or physics")]
 
 
-class PhysicsModelSummary(BaseModel):
-    """``ModelOut.physics`` of a physics model."""
-
-    vehicle: str
-    law: str
-    route_id: int
-    options: dict[str, Any] = Field(description="VehicleWearOptions of the run")
-    wear_scale: float = Field(description="fitted wear-coefficient scale c [-]")
-    wear_scale_p10: float
-    wear_scale_p90: float
-    spread: dict[str, Any] = Field(description="how P10/P90 were derived (method, log_sigma, "
-                                   "per-vehicle scales)")
-    rms_mm: float = Field(description="RMS error of the fitted FT/qR points [mm]")
-    at_reach: bool = Field(description="the fit ended at the largest scale the run reaches")
-    calibrated_on: dict[str, Any] = Field(description=(
-        "filter, n_measurements, measurement_ids, vehicles and the vehicle-averaged series "
-        "the scale was fitted to"))
-    series: dict[str, Any] = Field(description=(
-        "vehicle means of the run at scale c: mileage_km (wheel km), ft_mm, fh_mm, qr_mm"))
-    errors: dict[str, Any] = Field(description=(
-        "per_vehicle and overall: n, bias_mm, rms_mm, measured and simulated loss per "
-        "1,000 km, per quantity (FT_mm, FH_mm, QR_mm)"))
-    simulation: dict[str, Any] = Field(description=(
-        "the run: simulated mileage, steps, D_step, contact updates and fallbacks, elapsed_s, "
-        "step_convergence, runs made"))
-    warnings: list[str] = Field(default_factory=list)
-
-
 class PhysicsPointOut(BaseModel):
     """One mileage of a physics prediction: Sd/Sh/qR [mm] at the P50 wear scale, their
     P10/P50/P90, the vehicle mean (all wheels, P50 scale) and whether the run was continued

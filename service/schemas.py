@@ -343,6 +343,34 @@ class ModelIn(Strict):
     calibration: CalibrationIn
 
 
+class PhysicsModelSummary(BaseModel):
+    """``ModelOut.physics`` of a physics model."""
+
+    vehicle: str
+    law: str
+    route_id: int
+    options: dict[str, Any] = Field(description="VehicleWearOptions of the run")
+    wear_scale: float = Field(description="fitted wear-coefficient scale c [-]")
+    wear_scale_p10: float
+    wear_scale_p90: float
+    spread: dict[str, Any] = Field(description="how P10/P90 were derived (method, log_sigma, "
+                                   "per-vehicle scales)")
+    rms_mm: float = Field(description="RMS error of the fitted FT/qR points [mm]")
+    at_reach: bool = Field(description="the fit ended at the largest scale the run reaches")
+    calibrated_on: dict[str, Any] = Field(description=(
+        "filter, n_measurements, measurement_ids, vehicles and the vehicle-averaged series "
+        "the scale was fitted to"))
+    series: dict[str, Any] = Field(description=(
+        "vehicle means of the run at scale c: mileage_km (wheel km), ft_mm, fh_mm, qr_mm"))
+    errors: dict[str, Any] = Field(description=(
+        "per_vehicle and overall: n, bias_mm, rms_mm, measured and simulated loss per "
+        "1,000 km, per quantity (FT_mm, FH_mm, QR_mm)"))
+    simulation: dict[str, Any] = Field(description=(
+        "the run: simulated mileage, steps, D_step, contact updates and fallbacks, elapsed_s, "
+        "step_convergence, runs made"))
+    warnings: list[str] = Field(default_factory=list)
+
+
 class ModelOut(BaseModel):
     """A stored model. ``kind``: ``hybrid`` (seed 001's statistical model), ``extended`` (a
     hybrid model extended by the discrepancy finder) or ``physics`` (the whole-vehicle wear
@@ -362,10 +390,7 @@ class ModelOut(BaseModel):
     kind: Literal["hybrid", "extended", "physics"] = "hybrid"
     derived_from: int | None = None
     extension: dict[str, Any] | None = None
-    physics: dict[str, Any] | None = Field(default=None, description=(
-        "physics models: vehicle, law, options, wear_scale with its P10/P90 and spread, "
-        "what it was calibrated on, the simulated vehicle-mean series and the error per "
-        "vehicle and quantity (schema PhysicsModelSummary)"))
+    physics: PhysicsModelSummary | None = None
 
 
 class RouteRef(Strict):
