@@ -49,10 +49,10 @@ def _client(tmp_path: Path) -> TestClient:
 
 
 def _load(client: TestClient, hidden: dict | None = None, *, vehicles: int = 4,
-          seed: int = 3) -> int:
-    """Route and per-wheel parameter measurements of the loop run with ``hidden``; returns
-    the number of measurements stored."""
-    truth = _simulate()(hidden or {})
+          seed: int = 3, truth=None, scale: float = SCALE) -> int:
+    """Route and per-wheel parameter measurements of the loop run with ``hidden`` (or of
+    ``truth``) at ``scale`` times the mileage; returns the number of measurements stored."""
+    truth = truth if truth is not None else _simulate()(hidden or {})
     assert client.post("/v1/routes", json=ROUTE).status_code == 201
     rng = np.random.default_rng(seed)
     n = 0
@@ -60,7 +60,7 @@ def _load(client: TestClient, hidden: dict | None = None, *, vehicles: int = 4,
         for km in np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))]):
             for j, wheel in enumerate(truth.wheels):      # e.g. "motor0-1R"
                 bogie = "motor" if wheel.startswith("motor") else "trailer"
-                values = {q: float(np.interp(SCALE * km, truth.mileage_km,
+                values = {q: float(np.interp(scale * km, truth.mileage_km,
                                              getattr(truth, q)[:, j]) + rng.normal(0, 0.02))
                           for q in ("sd_mm", "sh_mm", "qr_mm")}
                 r = client.post("/v1/measurements", json={
@@ -250,3 +250,21 @@ def test_the_whole_catalogue_names_a_hidden_cause_or_none(tmp_path, hidden, expe
     r = client.post(f"/v1/models/{saved['id']}/predict", json={
         "bogie_type": "trailer", "axle": 2, "side": "left", "mileage_km": [500]})
     assert r.status_code == 200, r.text
+
+
+@pytest.mark.slow
+def test_a_scale_beyond_the_first_run_continues_the_run(tmp_path) -> None:
+    # wheels wearing 3x the loop's rate: the first run (twice the furthest mileage) reaches a
+    # scale of 2.5 only, so the build continues it and fits 3 (measured when written: one
+    # continuation, scale within 3 %)
+    client = _client(tmp_path)
+    truth = cached_vehicle_simulator(LOOP_ROUTE, "metro_b", law="usfd", mileage_km=6000.0,
+                                     depth_per_step_mm=1.0)({})
+    _load(client, vehicles=3, truth=truth, scale=3.0)
+    body = {**MODEL, "simulation": {"depth_per_step_mm": 1.0}}
+    r = client.post("/v1/models", json=body)
+    assert r.status_code == 201, r.text
+    physics = r.json()["physics"]
+    runs = physics["simulation"]["runs"]
+    assert len(runs) >= 2 and runs[0]["at_reach"] and runs[1]["continued"]
+    assert not physics["at_reach"] and physics["wear_scale"] == pytest.approx(3.0, rel=0.03)
