@@ -156,7 +156,8 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
     else:
         sim_spec[parameter] = value
     new_spec = {**model_spec, "law": law, "simulation": sim_spec, "vehicle": state["vehicle"],
-                "route_db_id": model.route_id, "measured": spec["measured"]}
+                "route_db_id": model.route_id, "measured": spec["measured"],
+                "measurement_ids": spec["measurement_ids"]}
     info = dict(state["simulation"])
     info.update(elapsed_s=float(getattr(sim, "elapsed_s", 0.0)),
                 steps=int(series.mileage_km.size - 1), runs=[])

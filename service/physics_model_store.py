@@ -228,6 +228,7 @@ def state_of(spec: dict[str, Any], series: VehicleSeries, calibration: Any,
         "series": series.to_dict(), "calibration": calibration.to_dict(),
         "measured": spec["measured"], "simulation": info, "warnings": warnings,
         "extension": extension, "resolved_classes": spec["resolved_classes"],
+        "measurement_ids": list(spec["measurement_ids"]),
         "route_db_id": spec["route_db_id"]})
 
 
@@ -283,6 +284,7 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
         at_reach=cal["at_reach"],
         calibrated_on={"filter": row.spec.get("calibration", {}).get("filter", {}),
                        "n_measurements": int(n),
+                       "measurement_ids": state.get("measurement_ids", []),
                        "vehicles": sorted(measured["vehicle"].astype(str).unique().tolist()),
                        "n_points": cal["n_points"], "series": state["measured"]},
         series={"mileage_km": (series.mileage_km / c).tolist(),

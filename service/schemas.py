@@ -358,8 +358,9 @@ class PhysicsModelSummary(BaseModel):
     rms_mm: float = Field(description="RMS error of the fitted FT/qR points [mm]")
     at_reach: bool = Field(description="the fit ended at the largest scale the run reaches")
     calibrated_on: dict[str, Any] = Field(description=(
-        "filter, n_measurements, measurement_ids, vehicles and the vehicle-averaged series "
-        "the scale was fitted to"))
+        "filter, n_measurements, measurement_ids, vehicles, n_points and the vehicle-averaged "
+        "series (vehicle, distance_km, FT_mm, FH_mm, QR_mm, n_wheels) the scale was fitted "
+        "to"))
     series: dict[str, Any] = Field(description=(
         "vehicle means of the run at scale c: mileage_km (wheel km), ft_mm, fh_mm, qr_mm"))
     errors: dict[str, Any] = Field(description=(

@@ -97,6 +97,7 @@ def test_a_physics_model_recovers_the_wear_scale_of_loop_data(built) -> None:
     assert physics["wear_scale_p10"] < physics["wear_scale"] < physics["wear_scale_p90"]
     assert not physics["at_reach"] and physics["calibrated_on"]["vehicles"] == [
         "V0", "V1", "V2", "V3"]
+    assert sorted(physics["calibrated_on"]["measurement_ids"]) == list(range(1, n + 1))
     overall = {e["quantity"]: e for e in physics["errors"]["overall"]}
     assert set(overall) == {"FT_mm", "FH_mm", "QR_mm"}
     assert all(e["rms_mm"] < 0.02 for e in overall.values())
