@@ -203,6 +203,10 @@ def test_a_bad_physics_request_is_a_422_naming_its_field(built) -> None:
     assert _bad(client, measure="tau_max") == "measure"    # a hybrid field
     r = client.post("/v1/models", json={**MODEL, "route_id": "nowhere"})
     assert r.status_code == 404 and r.json()["errors"][0]["field"] == "route_id"
+    # a run that fails (here: one step of 0.05 mm does not reach 2,000 km) is a 422 too
+    r = client.post("/v1/models", json={**MODEL, "simulation": {
+        "max_steps": 1, "depth_per_step_mm": 0.05, "mileage_km": RUN_KM}})
+    assert _field(r) == "simulation" and "max_steps" in r.json()["detail"]
 
 
 def test_a_physics_build_answers_202_with_its_job_when_asked_not_to_wait(tmp_path) -> None:
