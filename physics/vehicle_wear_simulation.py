@@ -8,7 +8,7 @@ default the right wheel of the leading axle), which is not what was measured. He
 * The vehicle is a list of bogie types with their number (the Minuetto: two motor end bogies
   and two trailer Jacobs bogies, seed 003 §3). Each bogie type is solved by the quasi-static
   curving model once per step and operating point; the contacts of its four wheels come from
-  that one solution (:func:`wear_loop.class_contacts_all_wheels`).
+  that one solution (:func:`class_contacts.class_contacts_all_wheels`).
 * Running directions: a vehicle that reverses at the termini runs a share ``forward_share`` of
   its mileage with axle 1 leading and the rest with axle 2 leading. The bogie is symmetric
   fore and aft, so running backwards is the same bogie with the other axle leading: the
@@ -82,7 +82,7 @@ class VehicleWearOptions:
     application : ``global`` | ``local``
     rail : the rail under every wheel, replacing the preset's: a name (``60E1``, ``60E2``),
         a measured rail or a rail worn by the loop (``rail_head_wear.WornRail``, e.g. a rail
-        step of ``wear_loop.simulate_rail_steps``); None: the preset's
+        step of ``rail_feedback.simulate_rail_steps``); None: the preset's
     """
 
     forward_share: float = 0.5
@@ -212,7 +212,8 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                           unbalanced_acceleration_m_s2: float = 0.58,
                           tangent_speed_kmh: float = 100.0, fastsim_grid: int = 20,
                           max_steps: int = 400,
-                          progress: Callable[[float], None] | None = None
+                          progress: Callable[[float], None] | None = None,
+                          continue_from: VehicleWearSimulation | None = None
                           ) -> VehicleWearSimulation:
     """Wear of every wheel of a vehicle over a route of curve classes to ``mileage_km``.
 
@@ -220,6 +221,10 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         pairs; route_classes : as ``wear_loop.simulate_wear``; law : WearLaw or name (default
         seed 003's USFD); depth_per_step_mm : D_step [mm] (seed 003: 0.2); options :
         :class:`VehicleWearOptions`; progress : callback(mileage_km).
+    continue_from : an earlier run of the same vehicle, route, law and options to go on from
+        (its wheel profiles at its end, its series kept; the first contact solve starts cold):
+        a longer run without redoing the first part; ``max_steps`` counts the new steps. The
+        wheels, grid, law and options are checked; vehicle and route are the caller's.
     """
     start = time.perf_counter()
     opts = options or VehicleWearOptions()
@@ -250,6 +255,17 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     mileage = [0.0]
     params = [_parameters(y, profiles)]
     updates = fallbacks = 0
+    if continue_from is not None:
+        if (continue_from.wheels != labels or continue_from.y_mm.shape != y.shape
+                or continue_from.law != wl.name or continue_from.options != opts):
+            raise ValueError("continue_from: a run of other wheels, wheel grid, law or "
+                             "options")
+        z0 = continue_from.initial_profile_mm
+        profiles = continue_from.profiles_mm.reshape(n_b, 4, -1).copy()
+        mileage = [float(m) for m in continue_from.mileage_km]
+        params = [np.stack([continue_from.sd_mm[i], continue_from.sh_mm[i],
+                            continue_from.qr_mm[i]]) for i in range(len(mileage))]
+        updates, fallbacks = continue_from.contact_updates, continue_from.contact_fallbacks
     fwd = opts.forward_share
     lead_index = {w: i for i, w in enumerate(BOGIE_WHEELS)}
     for _ in range(max_steps):

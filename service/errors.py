@@ -114,7 +114,11 @@ def validation_items(errors: Sequence[Any]) -> list[dict[str, Any]]:
     """FastAPI/pydantic error dicts reduced to ``loc``, ``field`` and ``reason``."""
     items = []
     for error in errors:
-        loc = [p for p in error.get("loc", ()) if not (isinstance(p, str) and "[" in p)]
+        # "[": pydantic's validator names; "kind=": the tags of a union told apart by kind
+        loc = [p for p in error.get("loc", ()) if not (isinstance(p, str) and (
+            "[" in p or p.startswith("kind=")))]
+        if error.get("type") == "model_kind":
+            loc = [*loc, "kind"]
         loc = [p if isinstance(p, int | str) else str(p) for p in loc]
         reason = str(error.get("msg", "invalid value"))
         reason = reason.removeprefix("Value error, ")

@@ -2,12 +2,13 @@
 cancel, time limit, and the end of a job; shared by every kind of job.
 
 A job is a ``simulations`` row (a coefficient fit's spec carries ``kind =
-"coefficient_fit"``). Its status goes ``queued`` -> ``running`` -> ``done`` | ``failed`` |
-``cancelled``. A worker *claims* a queued job with one conditional UPDATE (so two workers,
-threads or processes, never run the same job), writes a heartbeat with every progress step
-and, between steps, reads whether the job was cancelled or passed its time limit
-(:class:`JobControl`). The kinds are run by :func:`run_job`, which imports the module of
-each kind only when needed (no module of a kind imports another).
+"coefficient_fit"``, the build and the diagnosis of a physics model ``physics_model`` and
+``physics_diagnosis``; a simulation's spec has no ``kind``). Its status goes ``queued`` ->
+``running`` -> ``done`` | ``failed`` | ``cancelled``. A worker *claims* a queued job with one
+conditional UPDATE (so two workers, threads or processes, never run the same job), writes a
+heartbeat with every progress step and, between steps, reads whether the job was cancelled
+or passed its time limit (:class:`JobControl`). The kinds are run by :func:`run_job`, which
+imports the module of each kind only when needed (no module of a kind imports another).
 """
 
 from __future__ import annotations
@@ -260,6 +261,10 @@ def run_job(factory: SessionFactory, job_id: int, on_progress: Any = None,
         from wearcast.service.wear_table_jobs import run_wear_table_job
 
         run_wear_table_job(factory, job_id, spec, on_progress, control=control)
+    elif kind in ("physics_model", "physics_diagnosis"):
+        from wearcast.service.physics_jobs import run_physics_job
+
+        run_physics_job(factory, job_id, spec, control=control)
     else:
         from wearcast.service.simulation_store import run_claimed_simulation
 

@@ -143,8 +143,13 @@ def model_inputs(session: Session, model_id: int) -> ModelInputs:
     """
     found = session.execute(_MODEL_INPUTS, {"model_id": model_id}).first()
     if found is None:
+        if session.scalar(select(db.Model.kind).where(db.Model.id == model_id)) == "physics":
+            raise Unprocessable("model_id", f"model {model_id} is a physics model: it has no "
+                                "curve-radius table; use POST /v1/models/{id}/predict, "
+                                "/reprofiling or /diagnose")
         raise NotFound("model_id", f"no model with id {model_id}")
-    created_at, table_id, sha256, n_rows = found
+    created_at, table_id, sha256, n_rows = found  # the inner join: a hybrid model's table
+    assert table_id is not None
 
     def deserialise() -> AnyModel:
         state = session.scalar(select(db.Model.state).where(db.Model.id == model_id))
@@ -230,6 +235,10 @@ def create_model(session: Session, body: ModelIn) -> db.Model:
 
 
 def model_out(session: Session, row: db.Model) -> ModelOut:
+    if row.kind == "physics":
+        from wearcast.service import physics_model_store
+
+        return physics_model_store.model_out(session, row)
     n = session.scalar(select(func.count()).select_from(db.ModelCalibrationMeasurement)
                        .where(db.ModelCalibrationMeasurement.model_id == row.id)) or 0
     state = row.state

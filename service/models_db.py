@@ -220,14 +220,21 @@ class WearTableRow(Base):
 
 
 class Model(Base):
-    """A calibrated hybrid model: the request (spec) and the fitted state."""
+    """A calibrated model: the request (spec) and the fitted state.
+
+    ``kind`` is the model family (migration 0007): ``hybrid`` (seed 001's statistical model,
+    also when the discrepancy finder extended it; ``state["kind"] == "extended"`` then) or
+    ``physics`` (the whole-vehicle wear loop with a calibrated wear-coefficient scale;
+    ``service.physics_model_store``), which has no wear table, measure or running mode.
+    """
 
     __tablename__ = "models"
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     name: Mapped[str] = mapped_column(String(200))
-    measure: Mapped[str] = mapped_column(String(20))
-    running_mode: Mapped[str] = mapped_column(String(20))
-    wear_table_id: Mapped[int] = mapped_column(ForeignKey("wear_tables.id"))
+    kind: Mapped[str] = mapped_column(String(20), default="hybrid", server_default="hybrid")
+    measure: Mapped[str | None] = mapped_column(String(20))
+    running_mode: Mapped[str | None] = mapped_column(String(20))
+    wear_table_id: Mapped[int | None] = mapped_column(ForeignKey("wear_tables.id"))
     route_id: Mapped[int] = mapped_column(ForeignKey("routes.id"))
     spec: Mapped[dict[str, Any]] = mapped_column(JSON)
     state: Mapped[dict[str, Any]] = mapped_column(JSON)

@@ -68,6 +68,10 @@ class Settings(BaseSettings):
     job_timeout_s: float = Field(default=3600.0, gt=0, description="longest job [s]")
     job_quota_per_key: int = Field(default=8, ge=1,
                                    description="queued or running jobs one key may hold")
+    job_wait_s: float = Field(default=300.0, ge=0, le=3600, description=(
+        "how long POST /v1/models with kind physics and a physics model's diagnose wait for "
+        "their job before answering 202 with it [s]; a request's Prefer: respond-async (0) "
+        "or Prefer: wait=N overrides it"))
     job_queue: str = Field(default="embedded", pattern="^(embedded|dramatiq)$",
                            description="embedded (in-process threads) or dramatiq (workers)")
     broker_url: str = Field(default="redis://127.0.0.1:6379/0",

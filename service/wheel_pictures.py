@@ -151,12 +151,54 @@ def wheel_parameter_picture(session: Session, model_id: int, *, wheel_id: str,
                                       route_id=route_id, horizon_km=horizon_km, fmt=fmt))
 
 
+def _physics_parameter_job(session: Session, model_id: int, *, wheel_id: str,
+                           route_id: int | str | None, horizon_km: float | None,
+                           fmt: ImageFormat) -> PictureJob:
+    """:func:`wheel_parameter_job` of a physics model: its wheel position's series at the
+    P10/P50/P90 wear scales from the wheel's latest measurement on."""
+    from wearcast.service import physics_model_store
+    from wearcast.statistics.physics_model import QUANTITIES, predict_position
+
+    body = ReprofilingIn(route_id=route_id, wheel_id=wheel_id)
+    answer = physics_model_store.reprofiling(session, model_id, body)
+    model = physics_model_store.load(session, model_id)
+    remaining = answer["remaining_km"]["p90"] or answer["remaining_km"]["p50"]
+    top = horizon_km or (1.3 * remaining if remaining else 300_000.0)
+    corridor = None
+    start_km = float(answer["start_mileage_km"])
+    if not answer["crossed_limits"]:
+        grid = np.linspace(0.0, top, 61)
+        pred = predict_position(model.series, list(model.scales), grid,
+                                bogie_type=answer["bogie_type"], axle=answer["axle"],
+                                side=answer["side"], start_km=start_km,
+                                start=answer["start_parameters_mm"])
+        params = np.stack([pred[q] for q in QUANTITIES], axis=-1)[::-1]  # high scale first
+        corridor = ParameterCorridor(grid, params, pred["extrapolated"])
+    measured = _wheel_measured(session, wheel_id)
+    p50 = answer["mileage_km"]["p50"]
+    title = (f"wheel {wheel_id}: physics model {model_id} on route {answer['route']}; "
+             + ("reprofiling now" if answer["crossed_limits"] else
+                f"reprofiling at {p50:,.0f} km (P50)" if p50 is not None
+                else "no limit within the horizon"))
+    return PictureJob(parameter_history_figure,
+                      (measured, corridor, start_km, answer["limits"], answer),
+                      {"title": title, "fmt": fmt})
+
+
 def wheel_parameter_job(session: Session, model_id: int, *, wheel_id: str,
-                        route_id: int | str, horizon_km: float | None = None,
+                        route_id: int | str | None, horizon_km: float | None = None,
                         fmt: ImageFormat = "svg") -> PictureJob:
     """Inputs of :func:`parameter_history_figure` read from storage for a stored wheel."""
+    from wearcast.service.errors import Unprocessable
+    from wearcast.service.physics_model_store import is_physics
+
     if session.get(db.Wheel, wheel_id) is None:
         raise NotFound("wheel_id", f"no wheel {wheel_id!r}")
+    if is_physics(session, model_id):
+        return _physics_parameter_job(session, model_id, wheel_id=wheel_id,
+                                      route_id=route_id, horizon_km=horizon_km, fmt=fmt)
+    if route_id is None:
+        raise Unprocessable("route_id", "a hybrid model needs the route the wheel runs on")
     body = ReprofilingIn(route_id=route_id, wheel_id=wheel_id)
     inputs, route = model_store.load_inputs(session, model_id, route_id, None)
     start = model_store.wheel_start(session, body)

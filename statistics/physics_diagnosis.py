@@ -86,15 +86,27 @@ CATALOGUE: tuple[PhysicsCause, ...] = (
 )
 
 
-def catalogue_for(friction: float) -> tuple[PhysicsCause, ...]:
+def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None
+                  ) -> tuple[PhysicsCause, ...]:
     """:data:`CATALOGUE` with the friction level around a vehicle's own coefficient mu (its
-    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28)."""
+    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28).
+
+    ``nulls`` : {parameter: the model's own value} for a model that is not the catalogue's
+    default (e.g. ``{"law": "archard_kth", "forward_share": 1.0}``): that value becomes the
+    cause's null and is added to the values it is run at."""
     out = []
     for c in CATALOGUE:
         if c.parameter == "friction":
             c = PhysicsCause(c.name, c.summary, c.parameter,
                              (round(0.7 * friction, 4), friction, round(1.4 * friction, 4)),
                              friction)
+        if nulls and c.parameter in nulls and nulls[c.parameter] is not None:
+            null = nulls[c.parameter]
+            if c.categorical:
+                values = (null, *[v for v in c.values if v != null])
+            else:
+                values = tuple(sorted({float(v) for v in c.values} | {float(null)}))
+            c = PhysicsCause(c.name, c.summary, c.parameter, values, null)
         out.append(c)
     return tuple(out)
 
@@ -103,7 +115,7 @@ def catalogue_for(friction: float) -> tuple[PhysicsCause, ...]:
 NOT_BUILT = {
     "traction_on_motor_axles": "the loop's operating points carry no traction torque yet",
     "rail_state": "a worn or measured rail can enter the contact (VehicleWearOptions.rail, "
-                  "wear_loop.simulate_rail_steps), but the catalogue has no rail state to "
+                  "rail_feedback.simulate_rail_steps), but the catalogue has no rail state to "
                   "run it at: no measured rail of the line, and a worn rail per diagnosis "
                   "needs a rail-step simulation of its own",
     "curve_classes": "needs the route's segments; a class table cannot be re-binned",
@@ -203,6 +215,48 @@ def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: N
     return best
 
 
+@dataclass(frozen=True)
+class ScaleFit:
+    """The wear-coefficient scale c of one run fitted to measured series (the null model's
+    fit of :func:`diagnose_physics`): c, the sum of squared errors [mm^2] and RMS error [mm]
+    over the fitted points, their number, and ``reach``: the largest c the run can be
+    evaluated at for the furthest measured mileage (``EXTRAPOLATION`` x its end / that
+    mileage); ``at_reach`` when the fit ended there (the optimum may lie beyond: simulate
+    further)."""
+
+    wear_scale: float
+    sse_mm2: float
+    rms_mm: float
+    n_points: int
+    reach: float
+    at_reach: bool
+
+
+def _measured_points(measured: pd.DataFrame) -> tuple[list[str], pd.DataFrame]:
+    cols = [c for c in SERIES if c in measured]
+    if not cols or "vehicle" not in measured or "distance_km" not in measured:
+        raise ValueError("measured needs vehicle, distance_km and FT_mm and/or QR_mm")
+    return cols, measured.dropna(subset=cols).reset_index(drop=True)
+
+
+def fit_wear_scale(simulation: Any, measured: pd.DataFrame) -> ScaleFit:
+    """Least-squares wear-coefficient scale of one run against measured FT/qR series
+    (``measured`` as :func:`diagnose_physics` reads it): the search of the diagnosis's null
+    model (log grid over SCALE_BOUNDS, then a bounded refinement)."""
+    cols, data = _measured_points(measured)
+    if data.empty:
+        raise ValueError("measured has no complete FT_mm/QR_mm point")
+    km = data["distance_km"].to_numpy(float)
+    y = data[cols].to_numpy(float)
+    series = _Series(simulation)
+    _, scale, sse = _fit(_blends(None, {None: series}), km, y, cols)
+    far = float(km.max())
+    reach = EXTRAPOLATION * float(series.km[-1]) / far if far > 0 else SCALE_BOUNDS[1]
+    at_reach = bool(sse >= 1e12 or (far > 0 and scale >= 0.97 * reach))
+    return ScaleFit(float(scale), float(sse), float(np.sqrt(sse / y.size)), int(y.size),
+                    float(min(reach, SCALE_BOUNDS[1])), at_reach)
+
+
 def _holm(pvalues: Sequence[float]) -> NDArray:
     p = np.asarray(pvalues, dtype=float)
     order = np.argsort(p)
@@ -227,10 +281,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         is not required: a scale that needs more is simply not reachable)
     measured : columns ``vehicle``, ``distance_km`` and ``FT_mm`` and/or ``QR_mm``
     """
-    cols = [c for c in SERIES if c in measured]
-    if not cols or "vehicle" not in measured or "distance_km" not in measured:
-        raise ValueError("measured needs vehicle, distance_km and FT_mm and/or QR_mm")
-    data = measured.dropna(subset=cols).reset_index(drop=True)
+    cols, data = _measured_points(measured)
     km = data["distance_km"].to_numpy(float)
     y = data[cols].to_numpy(float)
     vehicles = data["vehicle"].astype(str).to_numpy()

@@ -1,6 +1,7 @@
-"""``/v1/jobs``: every background job (simulations, coefficient fits, table builds) in one
-list, one job's status and progress (and a table build's result: the stored table), and
-cancelling a job (its owner's key or an admin key)."""
+"""``/v1/jobs``: every background job (simulations, coefficient fits, table builds, physics
+models and their diagnoses) in one list, one job's status and progress (with the small
+result of a table build or a physics job), and cancelling a job (its owner's key or an admin
+key)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,12 @@ router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
 
 
-JobKind = Literal["simulation", "coefficient_fit", "wear_table"]
+JobKind = Literal["simulation", "coefficient_fit", "wear_table", "physics_model",
+                  "physics_diagnosis"]
+#: Kinds whose (small) result ``GET /v1/jobs/{id}`` carries: the table built
+#: (``wear_table_id``, ``n_rows``), the physics model built (``model_id``, ``model``) or the
+#: diagnosis (the ``DiagnosisOut`` of the model's diagnose).
+RESULT_KINDS = ("wear_table", "physics_model", "physics_diagnosis")
 
 
 class JobOut(BaseModel):
@@ -41,16 +47,17 @@ class JobOut(BaseModel):
     finished_at: dt.datetime | None = None
     heartbeat_at: dt.datetime | None = None
     result: dict[str, Any] | None = Field(default=None, description=(
-        "a table build's result once done: {wear_table_id, n_rows} (simulations and fits "
-        "answer theirs at /v1/simulations/{id} and /v1/coefficient-fits/{id})"))
+        "wear_table, physics_model and physics_diagnosis jobs once done: {wear_table_id, "
+        "n_rows}, {model_id, model} or the diagnosis (simulations and fits: "
+        "GET /v1/simulations/{id}, /v1/coefficient-fits/{id})"))
 
 
-def job_out(row: Any) -> JobOut:
-    """The job's status as answered by ``/v1/jobs`` (also for table builds)."""
-    spec_kind = (row.spec or {}).get("kind")
-    kind: JobKind = spec_kind if spec_kind in ("coefficient_fit", "wear_table") else "simulation"
-    return JobOut(result=row.result if kind == "wear_table" else None,
-                  id=row.id, kind=kind, name=row.name, status=row.status,
+def job_out(row: Any, with_result: bool = False) -> JobOut:
+    """The job's status as answered by ``/v1/jobs`` (its result only with ``with_result``)."""
+    kind: JobKind = (row.spec or {}).get("kind") or "simulation"
+    result = row.result if with_result and kind in RESULT_KINDS and row.status == "done" \
+        else None
+    return JobOut(id=row.id, kind=kind, name=row.name, status=row.status, result=result,
                   progress=float(row.progress), message=row.message, error=row.error,
                   owner_key_id=row.owner_key_id, attempts=row.attempts or 0,
                   cancel_requested=bool(row.cancel_requested), timeout_s=row.timeout_s,
@@ -74,7 +81,7 @@ def get_job(job_id: JobId, session: SessionDep) -> Response:
     row = session.get(db.Simulation, job_id)
     if row is None:
         raise NotFound("job_id", f"no job with id {job_id}")
-    return json_response(job_out(row))
+    return json_response(job_out(row, with_result=True))
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=JobOut)

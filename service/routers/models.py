@@ -12,22 +12,36 @@ from __future__ import annotations
 import json
 from typing import Annotated, Any, Literal
 
+import orjson
 from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import HTMLResponse
 from pydantic import BaseModel, ValidationError
 from starlette.concurrency import run_in_threadpool
 
-from wearcast.service import diagnosis_store, model_store, pictures
+from wearcast.service import (
+    diagnosis_store,
+    model_store,
+    physics_diagnosis_store,
+    physics_jobs,
+    physics_model_store,
+    pictures,
+)
 from wearcast.service.db import Database
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Unprocessable, validation_items
+from wearcast.service.job_store import default_timeout, queue_job
+from wearcast.service.physics_schemas import (
+    JobAccepted,
+    ModelCreateIn,
+    PhysicsModelIn,
+    PhysicsPredictionOut,
+)
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import ImageFormat
 from wearcast.service.schemas import (
     BogieType,
     DiagnoseIn,
     DiagnosisOut,
-    ModelIn,
     ModelOut,
     PredictIn,
     PredictionOut,
@@ -40,14 +54,62 @@ router = APIRouter(tags=["models"])
 QueryAxle = Annotated[int, Query(ge=1, le=2, description="1 or 2")]
 
 
-@router.post("/models", response_model=ModelOut, status_code=201)
-def create_model(body: ModelIn, session: SessionDep) -> ModelOut:
+_JOB_ANSWER: dict[int | str, dict[str, Any]] = {
+    202: {"model": JobAccepted, "description": (
+        "the work still runs as a job after the request's wait (setting job_wait_s, header "
+        "Prefer: respond-async | wait=N): poll GET /v1/jobs/{id} (Location) for its result")}}
+
+
+@router.post("/models", response_model=ModelOut, status_code=201, responses=_JOB_ANSWER)
+def create_model(body: ModelCreateIn, session: SessionDep, request: Request) -> Any:
+    """Calibrate a model.
+
+    ``kind`` omitted or ``hybrid``: seed 001's hybrid model, calibrated at once (201).
+    ``kind: "physics"``: the whole-vehicle wear loop of ``vehicle`` on ``route_id``'s curve
+    classes with ``law``, its wear-coefficient scale fitted to the measured Sd/Sh/qR that
+    ``calibration.filter`` selects. The request is validated at once (422/404 naming the
+    field); the build runs as a job (``physics_model``) and the request waits for it: 201
+    with the model when it ends within the wait, else 202 with the job, whose ``result``
+    (``GET /v1/jobs/{id}``) names ``model_id`` once done; 422 when the run failed.
+    """
+    if isinstance(body, PhysicsModelIn):
+        runner = request.app.state.jobs
+        runner.check_quota(session)
+        spec = physics_model_store.prepare(session, body)
+        row = queue_job(session, body.name, spec, timeout_s=default_timeout())
+        runner.submit(row.id)
+        return physics_jobs.answer(request.app.state.database.session_factory, row.id,
+                                   physics_jobs.wait_seconds(request), 201)
     return model_store.model_out(session, model_store.create_model(session, body))
 
 
 @router.get("/models/{model_id}", response_model=ModelOut)
 def get_model(model_id: int, session: SessionDep) -> Response:
     return _json(model_store.model_out_cached(session, model_id))
+
+
+async def _physics(request: Request, model_id: int) -> bool:
+    """Whether a model is a physics model (404 when there is none); read from the database
+    once per process (a model's kind never changes), then from memory on the event loop."""
+    url = _database_url(request)
+    known = physics_model_store.known_kind(url, model_id)
+    if known is None:
+        known = await run_in_threadpool(_read_kind, request, url, model_id)
+    return known
+
+
+def _read_kind(request: Request, url: str, model_id: int) -> bool:
+    with request.app.state.database.session_factory() as session:
+        return physics_model_store.remember_kind(url, model_id,
+                                                 physics_model_store.is_physics(session,
+                                                                                model_id))
+
+
+def _physics_answer(request: Request, model_id: int, body: Any, what: str) -> Response:
+    with request.app.state.database.session_factory() as session:
+        fn = physics_model_store.predict if what == "predict" else \
+            physics_model_store.reprofiling
+        return _bytes(orjson.dumps(fn(session, model_id, body)))
 
 
 def _json(out: BaseModel) -> Response:
@@ -91,8 +153,12 @@ def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -
 # computed right here on the event loop, without a database session or a threadpool hop
 # (the hop costs more CPU than it could save: the computation holds the GIL). Otherwise (the
 # first request, a wheel's latest state) the database is read in the threadpool.
-@router.post("/models/{model_id}/predict", response_model=PredictionOut)
+@router.post("/models/{model_id}/predict", response_model=PredictionOut | PhysicsPredictionOut)
 async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
+    """Predict a wheel position at mileages. A physics model answers
+    ``PhysicsPredictionOut`` (Sd/Sh/qR P10/P50/P90 per mileage, on its own route)."""
+    if await _physics(request, model_id):
+        return await run_in_threadpool(_physics_answer, request, model_id, body, "predict")
     cached = None
     if body.wheel_id is None and body.measurement_id is None:  # stored starts: always read
         cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
@@ -105,6 +171,12 @@ async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
 
 @router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
 async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> Response:
+    """Mileage at which the first limit is crossed (P10/P50/P90). A physics model follows
+    its wheel position's series at its P90/P50/P10 wear scales (plus ``kind``,
+    ``wear_scale``)."""
+    if await _physics(request, model_id):
+        return await run_in_threadpool(_physics_answer, request, model_id, body,
+                                       "reprofiling")
     cached = None
     if body.wheel_id is None and body.measurement_id is None:  # stored states: always read
         cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
@@ -128,7 +200,9 @@ def wear_area_picture(model_id: int, session: SessionDep, request: Request, rout
                       wheel_id: str | None = None,
                       max_mileage_km: Annotated[float | None, Query(gt=0, le=5e6)] = None,
                       format: ImageFormat = "svg") -> Response:
-    """Wear area over mileage: prediction corridor and measured points (seed 001 Fig. 11)."""
+    """Wear area over mileage: prediction corridor and measured points (seed 001 Fig. 11).
+    Not for a physics model (422): it predicts Sd/Sh/qR, not region wear areas."""
+    _no_physics_picture(session, model_id, "wear-area")
     job = pictures.wear_area_job(session, model_id, route_id=route_id,
                                  bogie_type=bogie_type, axle=axle, side=side,
                                  wheel_id=wheel_id, max_mileage_km=max_mileage_km, fmt=format)
@@ -141,7 +215,9 @@ def profile_picture(model_id: int, session: SessionDep, request: Request, route_
                     bogie_type: BogieType, axle: QueryAxle, side: Side,
                     mileage_km: Annotated[float, Query(ge=0, le=5e6)],
                     wheel_id: str | None = None, format: ImageFormat = "svg") -> Response:
-    """Predicted worn profile vs reference and measured profiles (seed 001 Figs. 12–14)."""
+    """Predicted worn profile vs reference and measured profiles (seed 001 Figs. 12–14).
+    Not for a physics model (422): its run keeps the worn profiles at its end only."""
+    _no_physics_picture(session, model_id, "profile")
     job = pictures.profile_job(session, model_id, route_id=route_id, bogie_type=bogie_type,
                                axle=axle, side=side, mileage_km=mileage_km,
                                wheel_id=wheel_id, fmt=format)
@@ -149,14 +225,27 @@ def profile_picture(model_id: int, session: SessionDep, request: Request, route_
 
 
 @router.post("/models/{model_id}/diagnose", response_model=DiagnosisOut,
-             responses={200: {"content": {"text/html": {}}}})
-def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep,
+             responses={200: {"content": {"text/html": {}}}, **_JOB_ANSWER})
+def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep, request: Request,
              format: Literal["json", "html"] = "json") -> Response:
     """What the calibrated model gets wrong, the cause, the extension and its gain.
 
     ``?format=html`` returns the HTML report instead (figures included); ``save_as`` in the
     body stores the model extended by the verdict's cause as a new model.
+
+    A physics model is diagnosed with the physical catalogue
+    (``statistics.physics_diagnosis``: one loop run per catalogue value) as a job
+    (``physics_diagnosis``): 200 with the diagnosis when it ends within the request's wait,
+    else 202 with the job (its ``result`` is the diagnosis); no HTML report (422).
     """
+    if physics_model_store.is_physics(session, model_id):
+        if format == "html":
+            raise Unprocessable("format", "a physics model's diagnosis has no HTML report; "
+                                "ask for json")
+        job_id = physics_diagnosis_store.submit(session, request.app.state.jobs, model_id,
+                                                body)
+        return physics_jobs.answer(request.app.state.database.session_factory, job_id,
+                                   physics_jobs.wait_seconds(request), 200)
     if format == "html":
         return HTMLResponse(diagnosis_store.report_html(session, model_id, body))
     return _json(diagnosis_store.diagnose(session, model_id, body))
@@ -170,6 +259,9 @@ def diagnose_report(model_id: int, session: SessionDep,
                     ) -> HTMLResponse:
     """The diagnosis as a self-contained HTML report (residuals against the named
     covariate, predicted vs measured wear areas before and after the extension)."""
+    if physics_model_store.is_physics(session, model_id):
+        raise Unprocessable("model_id", "a physics model's diagnosis has no HTML report: "
+                            "POST /v1/models/{id}/diagnose answers it as JSON")
     body = DiagnoseIn(filter=_filter_from_query(filter), seed=seed)
     return HTMLResponse(diagnosis_store.report_html(session, model_id, body, cause))
 
@@ -187,3 +279,12 @@ def _filter_from_query(raw: str | None) -> dict:
         return DiagnoseIn(filter=value).filter
     except ValidationError as exc:
         raise Unprocessable("filter", validation_items(exc.errors())[0]["reason"]) from exc
+
+
+def _no_physics_picture(session: SessionDep, model_id: int, picture: str) -> None:
+    if physics_model_store.is_physics(session, model_id):
+        why = ("it predicts Sd/Sh/qR, not region wear areas" if picture == "wear-area" else
+               "its run keeps the worn profiles at its end only, not at every mileage")
+        raise Unprocessable("model_id", f"model {model_id} is a physics model: no {picture} "
+                            f"picture ({why}); GET /v1/wheels/{{wheel_id}}/pictures/"
+                            f"parameters?model_id={model_id} draws its Sd/Sh/qR")

@@ -85,11 +85,13 @@ _IMAGE: dict[int | str, dict[str, Any]] = {
 @router.get("/wheels/{wheel_id}/pictures/parameters", response_class=Response,
             responses=_IMAGE)
 def wheel_parameters_picture(
-        wheel_id: str, session: SessionDep, request: Request, model_id: int, route_id: str,
+        wheel_id: str, session: SessionDep, request: Request, model_id: int,
+        route_id: str | None = None,
         horizon_km: Annotated[float | None, Query(gt=0)] = None,
         format: ImageFormat = "svg") -> Response:
     """Sd, Sh, qR against mileage: measured points, predicted P10–P90 band, limits and the
-    crossing."""
+    crossing. ``route_id`` is required for a hybrid model; a physics model runs on its own
+    route (give none or that one)."""
     job = wheel_pictures.wheel_parameter_job(session, model_id, wheel_id=wheel_id,
                                              route_id=route_id, horizon_km=horizon_km,
                                              fmt=format)

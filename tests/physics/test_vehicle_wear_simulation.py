@@ -130,3 +130,30 @@ def test_converged_run_reports_its_step_check():
     assert sim.depth_per_step_mm == 1.0
     assert set(conv.changes[0]) == {"FT", "qR"}
     assert sim.to_dict()["step_convergence"]["steps"] == [2.0, 1.0]
+
+
+def test_a_run_continues_from_an_earlier_one():
+    # metro_b, D_step 1 mm: 1,000 km, then on to 2,000 km. The first part is the short run as
+    # it was; the rest goes on wearing. It is not the 2,000 km run step for step: the steps
+    # fall elsewhere and the continuation starts its contacts cold (measured when written:
+    # FT 32.03 at 2,000 km with 0 contact fallbacks against the direct run's 32.12 with 16
+    # fallbacks that kept stale contacts), so only the size of the loss is compared.
+    short = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=1000.0,
+                                  depth_per_step_mm=1.0)
+    longer = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=2000.0,
+                                   depth_per_step_mm=1.0, continue_from=short)
+    direct = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=2000.0,
+                                   depth_per_step_mm=1.0)
+    n = short.mileage_km.size
+    np.testing.assert_array_equal(longer.mileage_km[:n], short.mileage_km)
+    np.testing.assert_array_equal(longer.sd_mm[:n], short.sd_mm)
+    assert longer.mileage_km[-1] == pytest.approx(2000.0) and longer.mileage_km.size > n
+    assert longer.contact_updates > short.contact_updates
+    for q in ("sd_mm", "qr_mm"):
+        assert np.all(np.diff(longer.mean(q)[n - 1:]) < 0)
+        loss = longer.mean(q)[0] - longer.mean(q)[-1]
+        direct_loss = direct.mean(q)[0] - direct.mean(q)[-1]
+        assert 0.5 * direct_loss < loss < 2.0 * direct_loss
+    with pytest.raises(ValueError, match="continue_from"):
+        simulate_vehicle_wear("metro_b", ROUTE, law="archard_kth", mileage_km=2000.0,
+                              continue_from=short)

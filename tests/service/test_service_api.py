@@ -393,7 +393,7 @@ def test_model_requests_refused_naming_the_field(loaded: dict, table_csv: bytes)
                "mileage_km": [1000.0]}
     for change, field in (({"mileage_km": [-1.0]}, "mileage_km"),
                           ({"mileage_km": []}, "mileage_km"), ({"side": "top"}, "side"),
-                          ({"route_id": None}, "body"),
+                          ({"route_id": None}, "route_id"),
                           ({"route_id": None, "route": {"classes": [
                               {"radius_m": 80, "direction": "left", "speed_kmh": 30,
                                "share": 1}]}}, "route.classes.radius_m")):

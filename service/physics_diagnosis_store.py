@@ -1,0 +1,197 @@
+"""The physics diagnosis on stored data: what a physics model gets wrong, and why.
+
+:func:`wearcast.statistics.physics_diagnosis.diagnose_physics` scores each cause of the
+physical catalogue (flange lubrication, friction level, running-direction share, patch model,
+wear law; ``catalogue_for`` the model's own friction, law and options as the nulls) out of
+sample with folds grouped by vehicle. Its ``simulate`` is the model's whole-vehicle run: the
+stored run for the null, one new run per catalogue value to the model's simulated mileage.
+That is several loop runs, so the diagnosis is a job (``physics_diagnosis``); the request
+waits for it like the build (:mod:`wearcast.service.physics_jobs`).
+
+Measured: the model's calibration measurements, plus those the request's ``filter`` selects
+(as the hybrid diagnosis adds its calibration set), averaged per vehicle and mileage.
+``save_as`` stores the model extended by the verdict's cause: the loop run with the fitted
+parameter value and the scale refitted on all the measurements, a new physics model with
+``derived_from`` and ``extension``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pandas as pd
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from wearcast.service import measurement_store
+from wearcast.service import models_db as db
+from wearcast.service import physics_model_store as store
+from wearcast.service.db import SessionFactory, transaction
+from wearcast.service.errors import Unprocessable
+from wearcast.service.job_store import JobControl, default_timeout, queue_job
+from wearcast.service.schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
+from wearcast.statistics.physics_diagnosis import catalogue_for, diagnose_physics
+from wearcast.statistics.physics_model import VehicleSeries, calibrate_scale
+
+KIND = "physics_diagnosis"
+
+
+def _friction(state: dict[str, Any]) -> float:
+    from wearcast.physics.vehicle_wear_simulation import vehicle_bogies
+
+    given = state["options"].get("friction")
+    return float(given) if given is not None else float(
+        vehicle_bogies(state["vehicle"])[0][0].friction)
+
+
+def catalogue(state: dict[str, Any]) -> tuple[Any, ...]:
+    """The catalogue with the model's own values as the nulls."""
+    opts = state["options"]
+    nulls = {"law": state["law"], "forward_share": opts.get("forward_share", 0.5),
+             "flange_wear_factor": opts.get("flange_wear_factor", 1.0),
+             "patch_width": opts.get("patch_width", "hertz")}
+    return catalogue_for(_friction(state), nulls)
+
+
+def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> int:
+    """Validate a physics diagnosis and queue it; the job id."""
+    model = store.load(session, model_id)
+    names = [c.name for c in catalogue(model.state)]
+    if body.causes is not None:
+        for i, code in enumerate(body.causes):
+            if code not in names:
+                raise Unprocessable(f"causes[{i}]", f"unknown cause {code!r} of the physics "
+                                    f"catalogue; known: {', '.join(names)}")
+    link = db.ModelCalibrationMeasurement
+    ids = set(session.scalars(select(link.measurement_id).where(link.model_id == model_id)))
+    if body.filter:
+        matched = set(measurement_store.matching_ids(session, dict(body.filter), "filter"))
+        if not matched:  # not silently the calibration set alone
+            raise Unprocessable("filter", "no measurements match the filter")
+        ids |= matched
+    if not ids:
+        raise Unprocessable("filter", "no measurements to diagnose")
+    measured, used = _by_ids(session, sorted(ids))
+    if measured["vehicle"].nunique() < 2:
+        raise Unprocessable("filter", "the physics diagnosis needs measurements of at least "
+                            "two vehicles (it scores every cause on a vehicle it was not "
+                            "fitted on)")
+    runner.check_quota(session)
+    spec = {"kind": KIND, "model_id": model_id, "request": body.model_dump(mode="json"),
+            "measured": measured.to_dict(orient="records"), "measurement_ids": used}
+    row = queue_job(session, f"diagnose model {model_id}", spec, timeout_s=default_timeout())
+    runner.submit(row.id)
+    return row.id
+
+
+def _by_ids(session: Session, ids: list[int]) -> tuple[pd.DataFrame, list[int]]:
+    from wearcast.statistics.physics_model import measured_vehicle_means
+
+    frame, _ = measurement_store.calibration_frame(session, ids)
+    usable = (frame["sd_mm"].notna() & frame["qr_mm"].notna()).to_numpy()
+    frame = frame[usable].reset_index(drop=True)
+    if frame.empty:
+        raise Unprocessable("filter", "no measurement with Sd and qR to diagnose")
+    return measured_vehicle_means(frame), frame["measurement_id"].astype(int).tolist()
+
+
+def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any],
+                      control: JobControl) -> dict[str, Any]:
+    """The diagnosis job's work; its result is the ``DiagnosisOut`` of the request."""
+    with factory() as session:
+        model = store.load(session, int(spec["model_id"]))
+        model_spec = session.scalar(select(db.Model.spec).where(db.Model.id == model.id)) or {}
+    state = model.state
+    request = DiagnoseIn.model_validate(spec["request"])
+    cat = catalogue(state)
+    if request.causes is not None:
+        cat = tuple(c for c in cat if c.name in request.causes)
+    n_runs = sum(len(c.values) - 1 for c in cat) + (1 if request.save_as else 0)
+    done = [0]
+    simulated_km = float(state["simulation"]["mileage_km"])
+    route = {"classes": state["resolved_classes"], "km": simulated_km}
+
+    def simulate(params: Any) -> Any:
+        params = dict(params)
+        if not params:
+            return model.series
+        label = ", ".join(f"{k}={v}" for k, v in params.items())
+
+        def progress(km: float) -> None:
+            control.progress(min(0.95, (done[0] + km / simulated_km) / max(n_runs, 1)),
+                             f"run {done[0] + 1}/{n_runs} ({label}): {km:,.0f} km")
+
+        sim = store.run_loop(state["vehicle"], route["classes"], state["law"],
+                             state["simulation_spec"], simulated_km, params, progress)
+        done[0] += 1
+        return sim
+
+    measured = pd.DataFrame(spec["measured"])
+    diagnosis = diagnose_physics(simulate, measured, catalogue=cat, seed=request.seed)
+    saved, reason = None, None
+    if request.save_as is not None:
+        saved, reason = _save(factory, model, model_spec, diagnosis, request.save_as,
+                              spec, route["classes"], simulate)
+    out = _out(model.id, diagnosis, saved, reason, factory)
+    return out.model_dump(mode="json") | {"null_fit": diagnosis.null_fit}
+
+
+def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagnosis: Any,
+          name: str, spec: dict[str, Any], classes: list[dict[str, Any]],
+          simulate: Any) -> tuple[int | None, str | None]:
+    """Store the model extended by the verdict's cause (a new physics model)."""
+    if diagnosis.verdict == "none":
+        return None, "the verdict is 'none': no extension improves the model materially"
+    finding = diagnosis.finding(diagnosis.verdict)
+    parameter, value = finding.extension["parameter"], finding.extension["value"]
+    sim = simulate({parameter: value})
+    series = VehicleSeries.from_simulation(sim) if not isinstance(sim, VehicleSeries) else sim
+    measured = pd.DataFrame(spec["measured"])
+    calibration = calibrate_scale(series, measured)
+    state = model.state
+    sim_spec = dict(state["simulation_spec"])
+    law = state["law"]
+    if parameter == "law":
+        law = value
+    else:
+        sim_spec[parameter] = value
+    new_spec = {**model_spec, "law": law, "simulation": sim_spec, "vehicle": state["vehicle"],
+                "route_db_id": model.route_id, "measured": spec["measured"],
+                "measurement_ids": spec["measurement_ids"]}
+    info = dict(state["simulation"])
+    info.update(elapsed_s=float(getattr(sim, "elapsed_s", 0.0)),
+                steps=int(series.mileage_km.size - 1), runs=[])
+    extension = {"cause": finding.cause, "parameter": parameter, "value": value,
+                 "null_value": finding.extension.get("null_value"),
+                 "gain": finding.gain.to_dict()}
+    new_spec["resolved_classes"] = classes
+    new_state = store.state_of(new_spec, series, calibration, info, [], extension)
+    with transaction(factory) as session:
+        row = store.store_model(session, name, new_spec, new_state, spec["measurement_ids"],
+                                derived_from=model.id)
+        session.flush()
+        return row.id, None
+
+
+def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
+         factory: SessionFactory) -> DiagnosisOut:
+    d = diagnosis.to_dict()
+    findings = [FindingOut(cause=f["cause"], summary=f["summary"], evidence=f["evidence"],
+                           extension=f["extension"], gain=GainOut(**f["gain"]),
+                           significant=f["significant"], material=f["material"])
+                for f in d["findings"]]
+    saved_model = None
+    if saved is not None:
+        with factory() as session:
+            row = session.get(db.Model, saved)
+            assert row is not None
+            saved_model = store.model_out(session, row)
+    ranked = [f for f in diagnosis.findings if f.cause != diagnosis.verdict]
+    return DiagnosisOut(
+        model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
+        n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
+        selected=[d["verdict"]] if d["verdict"] != "none" else [],
+        runner_up=ranked[0].cause if ranked else None,
+        null_test="held-out FT/qR error, one-sided test over the held-out groups with "
+                  "Holm's correction",
+        saved_model=saved_model, save_reason=reason)
