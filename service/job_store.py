@@ -257,6 +257,10 @@ def run_job(factory: SessionFactory, job_id: int, on_progress: Any = None,
         from wearcast.service.coefficient_fit_store import run_coefficient_fit
 
         run_coefficient_fit(factory, job_id, spec, on_progress, control=control)
+    elif kind == "diagnosis":
+        from wearcast.service.diagnosis_jobs import run_diagnosis_job
+
+        run_diagnosis_job(factory, job_id, spec, on_progress, control=control)
     elif kind == "wear_table":
         from wearcast.service.wear_table_jobs import run_wear_table_job
 

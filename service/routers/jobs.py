@@ -22,12 +22,12 @@ router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
 
 
-JobKind = Literal["simulation", "coefficient_fit", "wear_table", "physics_model",
-                  "physics_diagnosis"]
+JobKind = Literal["simulation", "coefficient_fit", "wear_table", "diagnosis",
+                  "physics_model", "physics_diagnosis"]
 #: Kinds whose (small) result ``GET /v1/jobs/{id}`` carries: the table built
-#: (``wear_table_id``, ``n_rows``), the physics model built (``model_id``, ``model``) or the
-#: diagnosis (the ``DiagnosisOut`` of the model's diagnose).
-RESULT_KINDS = ("wear_table", "physics_model", "physics_diagnosis")
+#: (``wear_table_id``, ``n_rows``), a hybrid diagnosis, the physics model built (``model_id``,
+#: ``model``) or its diagnosis (the ``DiagnosisOut`` of the model's diagnose).
+RESULT_KINDS = ("wear_table", "diagnosis", "physics_model", "physics_diagnosis")
 
 
 class JobOut(BaseModel):

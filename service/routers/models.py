@@ -19,6 +19,7 @@ from pydantic import BaseModel, ValidationError
 from starlette.concurrency import run_in_threadpool
 
 from wearcast.service import (
+    diagnosis_jobs,
     diagnosis_store,
     model_store,
     physics_diagnosis_store,
@@ -236,7 +237,9 @@ def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep, request: Requ
     A physics model is diagnosed with the physical catalogue
     (``statistics.physics_diagnosis``: one loop run per catalogue value) as a job
     (``physics_diagnosis``): 200 with the diagnosis when it ends within the request's wait,
-    else 202 with the job (its ``result`` is the diagnosis); no HTML report (422).
+    else 202 with the job (its ``result`` is the diagnosis); no HTML report (422). A hybrid
+    model's diagnosis runs on the request unless ``Prefer: respond-async`` or ``wait=N`` asks
+    for a job (``diagnosis_jobs``), answered the same way.
     """
     if physics_model_store.is_physics(session, model_id):
         if format == "html":
@@ -248,6 +251,10 @@ def diagnose(model_id: int, body: DiagnoseIn, session: SessionDep, request: Requ
                                    physics_jobs.wait_seconds(request), 200)
     if format == "html":
         return HTMLResponse(diagnosis_store.report_html(session, model_id, body))
+    if diagnosis_jobs.wants_job(request.headers.get("prefer", "")):
+        job_id = diagnosis_jobs.submit(session, request.app.state.jobs, model_id, body)
+        return physics_jobs.answer(request.app.state.database.session_factory, job_id,
+                                   physics_jobs.wait_seconds(request), 200)
     return _json(diagnosis_store.diagnose(session, model_id, body))
 
 
