@@ -57,6 +57,11 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics.discrepancy_progression import (
+    ExpectedProgression,
+    centred,
+    exponent_offset,
+)
 from wearcast.statistics.extension import (
     ExtendedModel,
     apply_extension,
@@ -153,12 +158,26 @@ def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
 def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
                routes_by_name: Mapping[str, Route], table: pd.DataFrame | WearTable, *,
                calibration_wheel_ids: Collection[Any] = (),
-               route_attributes: Mapping[str, Mapping[str, Any]] | None = None
+               route_attributes: Mapping[str, Mapping[str, Any]] | None = None,
+               expected_progression: ExpectedProgression | None = None
                ) -> cz.FinderData:
-    """Residuals and covariates in the form the causes read (see ``causes.FinderData``)."""
+    """Residuals and covariates in the form the causes read (see ``causes.FinderData``).
+
+    With ``expected_progression`` the base prediction carries the simulated progression
+    shape of every row (``discrepancy_progression``): the causes are departures from it.
+    """
     res = model_residuals(model, measurements, routes_by_name, table,
                           calibration_wheel_ids=calibration_wheel_ids)
     frame = res.frame
+    mileage = frame["mileage_km"].to_numpy(dtype=float)
+    lead = leading_shares(frame["axle"].to_numpy(), res.mode)
+    base = res.predicted_mm2
+    factor = None
+    if expected_progression is not None:
+        factor = expected_progression.row_factors(
+            frame["bogie_type"].to_numpy(), mileage, res.parts, lead,
+            WEAR_MEASURES.index(model.measure))
+        base = base * factor
     rcol = "route" if "route" in frame.columns else "route_id"
     route = frame[rcol].astype(str).to_numpy()
     shape = None
@@ -169,17 +188,25 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         d = np.nan_to_num(shape_residuals(model, res.measured_mm2, wear_curves), nan=0.0)
         coef, *_ = np.linalg.lstsq(basis.T, d.T, rcond=None)
         shape = (basis.T @ coef).T
-    return cz.FinderData(
-        frame=frame, measured=res.measured_mm2, base=res.predicted_mm2, floor=res.floor_mm2,
-        mileage_km=frame["mileage_km"].to_numpy(dtype=float),
+    data = cz.FinderData(
+        frame=frame, measured=res.measured_mm2, base=base, floor=res.floor_mm2,
+        mileage_km=mileage,
         c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
         measure_index=WEAR_MEASURES.index(model.measure),
-        lead_share=leading_shares(frame["axle"].to_numpy(), res.mode), mode=res.mode,
+        lead_share=lead, mode=res.mode,
         left_right=res.left_right_shares, route=route,
         lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
                                      res.history),
         shape_res=shape, basis=basis,
     )
+    if factor is not None:
+        # the expected progression's own exponent over these mileages: a named
+        # nonlinear_progression reports expected + departure (``NonlinearProgression.public``)
+        x = cz.NonlinearProgression().features(data, np.zeros(2))[:, 0, 0]
+        data.cache["expected_exponent_offset"] = exponent_offset(
+            centred(np.log(factor), cz.life_ids(frame, mileage), mileage), x)
+        data.cache["expected_progression"] = expected_progression.source
+    return data
 
 
 @dataclass
@@ -225,6 +252,7 @@ def diagnose(
     *,
     calibration_wheel_ids: Collection[Any] = (),
     route_attributes: Mapping[str, Mapping[str, Any]] | None = None,
+    expected_progression: ExpectedProgression | None = None,
     causes: Sequence[str] | None = None,
     alpha: float = DEFAULT_ALPHA,
     min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
@@ -250,6 +278,10 @@ def diagnose(
     routes_by_name : Route per route name used in the ``route``/``route_id`` column
     table : curve-radius table (both measures for ``wear_measure``)
     route_attributes : attributes per route name (``flange_lubrication``, ...)
+    expected_progression : the progression shape a simulation of the routes expects
+        (``discrepancy_progression.ExpectedProgression``); the baseline and every cause then
+        carry it, so wear that is as nonlinear as the physics says is not a discrepancy.
+        None: the hybrid model's linear growth
     causes : cause codes to try (default: the whole catalogue)
     alpha : family-wise error rate of naming a cause (max-T over the catalogue) and level of
         the margin test
@@ -266,7 +298,8 @@ def diagnose(
     wt = compile_wear_table(table)
     data = build_data(model, measurements_df, wear_curves, routes_by_name, wt,
                       calibration_wheel_ids=calibration_wheel_ids,
-                      route_attributes=route_attributes)
+                      route_attributes=route_attributes,
+                      expected_progression=expected_progression)
     frame = data.frame
     vehicle = frame["vehicle_id"].astype(str).to_numpy()
     wheel = frame["wheel_id"].astype(str).to_numpy()
@@ -448,6 +481,9 @@ def diagnose(
                else "residuals permuted within wheels") + "), "
             "Westfall-Young max-T across the catalogue; margin over the runner-up by a "
             f"sign-flip test over {np.unique(groups).size} {group_by} groups")
+    if expected_progression is not None:
+        test += ("; the baseline grows as the expected progression of "
+                 f"{expected_progression.source} (not linearly in mileage)")
     return Diagnosis(verdict=verdict, findings=tuple(findings), skipped=skipped,
                      n_measurements=data.n, n_groups=int(np.unique(groups).size),
                      group_by=group_by, residuals=frame, covariates=covs, predictions=preds,
