@@ -4,6 +4,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--generators twin,alt,depot,loop] [--causes traction,seasonal_friction,...]
          [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
          [--resampling wild|permute] [--loop-null simulated|linear]
+         [--progression-stretch F] [--margin-test bootstrap|sign_flip]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -96,6 +97,9 @@ _LOOP_PROGRESSION: list[Any] = []
 # the loop's null: "simulated" (the baseline grows as the loop runs of the track say,
 # ``scenarios.loop_expected_progression``) or "linear" (the hybrid model's linear law)
 LOOP_NULL = ["simulated"]
+# the simulation's km per fleet km relative to the loop that made the data (1: the same
+# wear speed; 1.3: the user's simulation wears 30 % slower, so its progression is stretched)
+LOOP_PROGRESSION_STRETCH = [1.0]
 
 
 def _loop_runs() -> dict[tuple[str, int], list[Any]]:
@@ -134,9 +138,11 @@ def loop_progression() -> Any:
     if LOOP_NULL[0] == "linear":
         return None
     if not _LOOP_PROGRESSION:
-        _LOOP_PROGRESSION.append(sc.loop_expected_progression(
+        ep = sc.loop_expected_progression(
             _loop_runs(), max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale,
-            LOOP_TRUTH.mileage_scale))
+            LOOP_TRUTH.mileage_scale)
+        _LOOP_PROGRESSION.append(replace(ep, mileage_km=ep.mileage_km
+                                         * LOOP_PROGRESSION_STRETCH[0]))
     return _LOOP_PROGRESSION[0]
 
 
@@ -259,13 +265,21 @@ def main() -> None:
                     help="one line per dataset: verdict, runner-up, margin, p-values")
     ap.add_argument("--resampling", default=fs.RESAMPLING, choices=("wild", "permute"),
                     help="nuisance-only resampling of the finder (finder_scoring.RESAMPLING)")
+    ap.add_argument("--margin-test", default=fs.MARGIN_TEST, choices=("bootstrap", "sign_flip"),
+                    help="test of the verdict's margin over the runner-up "
+                         "(finder_scoring.MARGIN_TEST)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
                     help="loop generator: baseline grows as the loop runs say or linearly")
+    ap.add_argument("--progression-stretch", type=float, default=1.0,
+                    help="loop generator: the expected progression's mileage axis times this "
+                         "(a simulation that wears slower > 1, faster < 1 than the data)")
     ap.add_argument("--loop-cache", default="",
                     help="pickle file keeping the wear-loop runs between invocations")
     args = ap.parse_args()
     fs.RESAMPLING = args.resampling
+    fs.MARGIN_TEST = args.margin_test
     LOOP_NULL[0] = args.loop_null
+    LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):
         with open(args.loop_cache, "rb") as fh:
             _LOOP_CACHE.update(pickle.load(fh))

@@ -24,9 +24,11 @@ scores it out of sample and names a cause only when it is specific:
    wear-curve shape cause is tested the same way on its coefficients;
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
-   runner-up (the next best cause) by a margin that is itself tested: a sign-flip
-   randomisation test over the groups of the held-out error difference. If it does not,
-   the verdict is ``ambiguous`` and lists the candidates;
+   runner-up (the next best cause) by a margin that is itself tested: a parametric
+   bootstrap under "the runner-up is the cause" (datasets carrying the runner-up's fitted
+   effect and resampled nuisance, both causes scored on them as on the data;
+   ``finder_scoring.margin_p``). If it does not, the verdict is ``ambiguous`` and lists the
+   candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
@@ -34,7 +36,10 @@ scores it out of sample and names a cause only when it is specific:
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
    size instead of ``none``;
-7. effect sizes (multipliers, exponents, shares) with 95 % intervals from the
+7. with ``expected_progression`` (``discrepancy_progression``) the baseline grows as a
+   simulation of the route says instead of linearly in mileage, so every cause is a
+   departure from the simulated progression;
+8. effect sizes (multipliers, exponents, shares) with 95 % intervals from the
    vehicle-clustered (sandwich) covariance of the fit, Student t with groups - 1 degrees of
    freedom.
 
@@ -418,18 +423,20 @@ def diagnose(
         others = [c for c in remaining if c is not best]
         if others:
             runner = max(others, key=lambda c: scored[c.code].gain)
-            diff = fs.group_sums(rows[runner.code] - rows[best.code], groups)
-            p_m = fs.sign_flip_p(diff, 4000, rng)
+
+            step_ctx = fs.MarginTest(data, rows, before, best.code, dict(
+                zip([c.code for c in remaining], alt, strict=True)),
+                fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng)
+            p_m = step_ctx.p_value(runner.code)
             m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
                                                                              1e-300))
             if step == 0:
                 runner_up, margin, margin_p = runner.code, m, p_m
-            if p_m >= alpha:
+            if not fs.separated(p_m, alpha):
                 if step == 0:
-                    candidates = [best.code] + [
-                        c.code for c in others
-                        if fs.sign_flip_p(fs.group_sums(rows[c.code] - rows[best.code], groups),
-                                          4000, rng) >= alpha]
+                    candidates = [best.code] + [c.code for c in others
+                                                if not fs.separated(step_ctx.p_value(c.code),
+                                                                 alpha)]
                 break
         selected.append(best)
         remaining.remove(best)
@@ -453,7 +460,7 @@ def diagnose(
 
     unexplained: list[dict[str, Any]] = []
     if verdict == "none" and base_residual is not None:
-        unexplained = _structure(data, base_residual, vehicle, wheel, n_null, rng,
+        unexplained = fs.structure_scan(data, base_residual, vehicle, wheel, n_null, rng,
                                  structure_alpha, min_relative_gain)
         if unexplained:
             verdict = "outside_catalogue"
@@ -479,8 +486,11 @@ def diagnose(
             "(vehicle and wheel log-scale effects and residuals, "
             + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
                else "residuals permuted within wheels") + "), "
-            "Westfall-Young max-T across the catalogue; margin over the runner-up by a "
-            f"sign-flip test over {np.unique(groups).size} {group_by} groups")
+            "Westfall-Young max-T across the catalogue; margin over the runner-up "
+            + (f"by a sign-flip test over {np.unique(groups).size} {group_by} groups"
+               if fs.MARGIN_TEST == "sign_flip" else
+               f"against {n_null} datasets carrying the runner-up's fitted effect and "
+               "resampled nuisance"))
     if expected_progression is not None:
         test += ("; the baseline grows as the expected progression of "
                  f"{expected_progression.source} (not linearly in mileage)")
@@ -502,33 +512,6 @@ def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
 def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
            rng: np.random.Generator) -> bool:
     return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
-
-
-def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDArray[Any],
-               wheel: NDArray[Any], n_null: int, rng: np.random.Generator, alpha: float,
-               min_share: float) -> list[dict[str, Any]]:
-    """Residual structure outside the catalogue (``finder_scoring.structure_scan``)."""
-    factors = fs.structure_factors(data.frame, data.mileage_km)
-    if not factors:
-        return []
-    sw = np.sqrt(data.weights)
-    nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
-    draws = nm.draws(n_null, rng).reshape(data.n, 2, n_null)
-    names = list(factors)
-    observed = np.array([float(fs.structure_share(sw * residual, sw * data.phi,
-                                                  factors[f])[0]) for f in names])
-    null = np.vstack([fs.structure_share(draws, sw * data.phi, factors[f]) for f in names])
-    p_raw, p_adj = fs.min_p(observed, null)
-    out: list[dict[str, Any]] = []
-    for i, name in enumerate(names):
-        excess = float(observed[i] - np.median(null[i]))
-        if p_adj[i] <= alpha and excess >= min_share:   # resampling p: reject at <= alpha
-            out.append({"by": name, "share_of_residual": float(observed[i]),
-                        "share_beyond_null": excess, "p_value": float(p_adj[i]),
-                        "levels": fs.level_effects(residual, data.phi, factors[name],
-                                                   REGIONS)})
-    out.sort(key=lambda u: -u["share_beyond_null"])
-    return out
 
 
 _SUBGROUPS = {
