@@ -204,7 +204,7 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
                                      res.history),
         shape_res=shape, basis=basis,
     )
-    if factor is not None:
+    if expected_progression is not None and factor is not None:
         # the expected progression's own exponent over these mileages: a named
         # nonlinear_progression reports expected + departure (``NonlinearProgression.public``)
         x = cz.NonlinearProgression().features(data, np.zeros(2))[:, 0, 0]
