@@ -4,7 +4,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--generators twin,alt,depot,loop] [--causes traction,seasonal_friction,...]
          [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
          [--resampling wild|permute] [--loop-null simulated|linear]
-         [--progression-stretch F] [--margin-test bootstrap|sign_flip]
+         [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -265,7 +265,8 @@ def main() -> None:
                     help="one line per dataset: verdict, runner-up, margin, p-values")
     ap.add_argument("--resampling", default=fs.RESAMPLING, choices=("wild", "permute"),
                     help="nuisance-only resampling of the finder (finder_scoring.RESAMPLING)")
-    ap.add_argument("--margin-test", default=fs.MARGIN_TEST, choices=("bootstrap", "sign_flip"),
+    ap.add_argument("--margin-test", default=fs.MARGIN_TEST,
+                    choices=("combined", "bootstrap", "sign_flip"),
                     help="test of the verdict's margin over the runner-up "
                          "(finder_scoring.MARGIN_TEST)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),

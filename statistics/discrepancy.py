@@ -27,8 +27,9 @@ scores it out of sample and names a cause only when it is specific:
    runner-up (the next best cause) by a margin that is itself tested: a parametric
    bootstrap under "the runner-up is the cause" (datasets carrying the runner-up's fitted
    effect and resampled nuisance, both causes scored on them as on the data;
-   ``finder_scoring.margin_p``). If it does not, the verdict is ``ambiguous`` and lists the
-   candidates;
+   ``finder_scoring.margin_p``) and a sign-flip randomisation over the groups, combined by
+   Bonferroni (``finder_scoring.MarginTest``). If it does not, the verdict is ``ambiguous``
+   and lists the candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
@@ -487,10 +488,14 @@ def diagnose(
             + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
                else "residuals permuted within wheels") + "), "
             "Westfall-Young max-T across the catalogue; margin over the runner-up "
-            + (f"by a sign-flip test over {np.unique(groups).size} {group_by} groups"
-               if fs.MARGIN_TEST == "sign_flip" else
-               f"against {n_null} datasets carrying the runner-up's fitted effect and "
-               "resampled nuisance"))
+            + {"sign_flip": f"by a sign-flip test over {np.unique(groups).size} {group_by} "
+                            "groups",
+               "bootstrap": f"against {n_null} datasets carrying the runner-up's fitted "
+                            "effect and resampled nuisance",
+               "combined": f"against {n_null} datasets carrying the runner-up's fitted "
+                           "effect and resampled nuisance and by a sign-flip test over "
+                           f"{np.unique(groups).size} {group_by} groups (Bonferroni)"
+               }[fs.MARGIN_TEST])
     if expected_progression is not None:
         test += ("; the baseline grows as the expected progression of "
                  f"{expected_progression.source} (not linearly in mileage)")
