@@ -9,7 +9,8 @@ table of the new profile the finder rightly names ``wear_measure``/``running_dir
 every dataset: the worn profiles share the wear differently). The loop's wear is not linear
 in mileage (its profiles evolve), so the finder's baseline grows as the same loop runs say
 (``scenarios.loop_expected_progression``, what a user gets by simulating the route); with the
-linear law the finder named ``nonlinear_progression`` on 8 of 20 effect-free loop datasets.
+linear law the finder named ``nonlinear_progression`` (or led an ``ambiguous``) on 12 of 20
+effect-free loop datasets.
 The effects are hidden in the loop's areas; the finder must name them, and answer ``none``
 on effect-free data. The sweep over seeds: ``benchmarks/detection_rates.py --generators
 loop``. The loop runs take one to a few minutes, so these tests are marked slow; with
