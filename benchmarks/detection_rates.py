@@ -3,7 +3,8 @@
 Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--generators twin,alt,depot,loop] [--causes traction,seasonal_friction,...]
          [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
-         [--resampling wild|permute]
+         [--resampling wild|permute] [--loop-null simulated|linear]
+         [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -21,7 +22,10 @@ Generators (``wearcast.statistics.generators``):
 - ``loop``: ``fleet_twin_loop`` -- the twin's layout on one track geometry (tangent and
   500 m curves) with the physics wear loop as truth (metro_b, KTH/Archard law), processed
   profiles; the model's table holds the loop's own mean rates (``loop_table``); the running
-  direction is hidden by weighting the loop's axle-1 and axle-2 runs. Causes the loop cannot
+  direction is hidden by weighting the loop's axle-1 and axle-2 runs; the finder's baseline
+  grows as the same loop runs say (``--loop-null simulated``, the default:
+  ``scenarios.loop_expected_progression``), or linearly (``--loop-null linear``, the hybrid
+  model's law, which the loop's evolving profiles break). Causes the loop cannot
   carry on one geometry with one law (curve asymmetry, wear measure) are not in its sweep.
 Prints one line per (generator, cause, strength): the share of seeds whose verdict names the
 cause, and per generator the false-alarm rate (verdict other than ``none``) on effect-free
@@ -89,6 +93,21 @@ def run_depot(effect: Any, seed: int) -> Any:
 
 _LOOP_CACHE: dict[Any, Any] = {}
 _LOOP_TABLE: list[pd.DataFrame] = []
+_LOOP_PROGRESSION: list[Any] = []
+# the loop's null: "simulated" (the baseline grows as the loop runs of the track say,
+# ``scenarios.loop_expected_progression``) or "linear" (the hybrid model's linear law)
+LOOP_NULL = ["simulated"]
+# the simulation's km per fleet km relative to the loop that made the data (1: the same
+# wear speed; 1.3: the user's simulation wears 30 % slower, so its progression is stretched)
+LOOP_PROGRESSION_STRETCH = [1.0]
+
+
+def _loop_runs() -> dict[tuple[str, int], list[Any]]:
+    runs = {(b, a): [v for k, v in _LOOP_CACHE.items() if k[4] == b and k[5] == a]
+            for b in ("motor", "trailer") for a in (1, 2)}
+    if not all(runs.values()):
+        raise RuntimeError("generate a loop fleet before building its table")
+    return runs
 
 
 def loop_table() -> pd.DataFrame:
@@ -106,13 +125,25 @@ def loop_table() -> pd.DataFrame:
     loop's own profile evolution (a rate that changes with the worn amount) and the nuisance.
     """
     if not _LOOP_TABLE:
-        runs = {(b, a): [v for k, v in _LOOP_CACHE.items() if k[4] == b and k[5] == a]
-                for b in ("motor", "trailer") for a in (1, 2)}
-        if not all(runs.values()):
-            raise RuntimeError("generate a loop fleet before building its table")
         _LOOP_TABLE.append(sc.loop_rate_table(
-            runs, max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale))
+            _loop_runs(), max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale))
     return _LOOP_TABLE[0]
+
+
+def loop_progression() -> Any:
+    """The progression the same loop runs expect (``scenarios.loop_expected_progression``):
+    the loop's wear is not linear in mileage (its profiles evolve), so the finder's null on
+    loop data grows as the loop says, as a user's would after simulating the route; None
+    with ``--loop-null linear``."""
+    if LOOP_NULL[0] == "linear":
+        return None
+    if not _LOOP_PROGRESSION:
+        ep = sc.loop_expected_progression(
+            _loop_runs(), max(LOOP_MILEAGES_KM) * LOOP_TRUTH.mileage_scale,
+            LOOP_TRUTH.mileage_scale)
+        _LOOP_PROGRESSION.append(replace(ep, mileage_km=ep.mileage_km
+                                         * LOOP_PROGRESSION_STRETCH[0]))
+    return _LOOP_PROGRESSION[0]
 
 
 def loop_leading_share(p: float) -> Callable[[ft.WheelSpec, ft.WearHistory], ft.WearHistory]:
@@ -157,7 +188,8 @@ def loop_case(effect: Any, seed: int) -> tuple[pd.DataFrame, Any, dict[str, Any]
 def run_loop(effect: Any, seed: int) -> Any:
     df, curves, routes, attrs, table, (model, cal) = loop_case(effect, seed)
     return diagnose(model, df, curves, routes, table, route_attributes=attrs,
-                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300)
+                    calibration_wheel_ids=set(df["wheel_id"][cal]), n_boot=300,
+                    expected_progression=loop_progression())
 
 
 # (strength, effect) from weak to strong; the last entry is the tests' moderate strength
@@ -233,10 +265,22 @@ def main() -> None:
                     help="one line per dataset: verdict, runner-up, margin, p-values")
     ap.add_argument("--resampling", default=fs.RESAMPLING, choices=("wild", "permute"),
                     help="nuisance-only resampling of the finder (finder_scoring.RESAMPLING)")
+    ap.add_argument("--margin-test", default=fs.MARGIN_TEST,
+                    choices=("combined", "bootstrap", "sign_flip"),
+                    help="test of the verdict's margin over the runner-up "
+                         "(finder_scoring.MARGIN_TEST)")
+    ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
+                    help="loop generator: baseline grows as the loop runs say or linearly")
+    ap.add_argument("--progression-stretch", type=float, default=1.0,
+                    help="loop generator: the expected progression's mileage axis times this "
+                         "(a simulation that wears slower > 1, faster < 1 than the data)")
     ap.add_argument("--loop-cache", default="",
                     help="pickle file keeping the wear-loop runs between invocations")
     args = ap.parse_args()
     fs.RESAMPLING = args.resampling
+    fs.MARGIN_TEST = args.margin_test
+    LOOP_NULL[0] = args.loop_null
+    LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):
         with open(args.loop_cache, "rb") as fh:
             _LOOP_CACHE.update(pickle.load(fh))

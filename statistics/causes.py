@@ -170,6 +170,9 @@ class NonlinearProgression(Cause):
                    "A = c P s_ref (s / s_ref)^beta per region instead of linear growth "
                    "(seed 003 §6, seed 001 §2.3).")
     reference_mileage_km: float = 100_000.0
+    # exponent - 1 of the expected progression the baseline already carries (per region;
+    # ``discrepancy_progression``): theta is the departure from it, public() the total
+    expected_offset: tuple[float, float] = (0.0, 0.0)
 
     def skip_reason(self, data: FinderData) -> str | None:
         s = data.mileage_km[data.mileage_km > 0]
@@ -180,6 +183,8 @@ class NonlinearProgression(Cause):
     def prepare(self, data: FinderData, rows: Mask) -> None:
         s = data.mileage_km[rows & (data.mileage_km > 0)]
         self.reference_mileage_km = float(np.median(s)) if s.size else 100_000.0
+        off = data.cache.get("expected_exponent_offset")
+        self.expected_offset = (0.0, 0.0) if off is None else (float(off[0]), float(off[1]))
 
     def param_names(self) -> list[str]:
         return ["beta_flange_minus_1", "beta_tread_minus_1"]
@@ -205,13 +210,20 @@ class NonlinearProgression(Cause):
         return out
 
     def public(self) -> dict[str, Any]:
-        return {"beta_flange": 1.0 + float(self.theta_[0]),
-                "beta_tread": 1.0 + float(self.theta_[1]),
-                "reference_mileage_km": self.reference_mileage_km}
+        """Total exponents (the expected progression's own plus the fitted departure)."""
+        off = self.expected_offset
+        out = {"beta_flange": 1.0 + off[0] + float(self.theta_[0]),
+               "beta_tread": 1.0 + off[1] + float(self.theta_[1]),
+               "reference_mileage_km": self.reference_mileage_km}
+        if any(off):
+            out.update(expected_beta_flange=1.0 + off[0], expected_beta_tread=1.0 + off[1])
+        return out
 
     def intervals(self) -> dict[str, dict[str, float]]:
+        off = self.expected_offset
         return {f"beta_{r}": _interval(self.theta_[i], self._se(i), self.n_groups_,
-                                       lambda v: 1.0 + v) for i, r in enumerate(REGIONS)}
+                                       lambda v, o=off[i]: 1.0 + o + v)
+                for i, r in enumerate(REGIONS)}
 
     def from_params(self, params: Mapping[str, Any]) -> Cause:
         est = copy.copy(self)
@@ -222,6 +234,10 @@ class NonlinearProgression(Cause):
 
     def describe(self) -> str:
         p = self.public()
+        if "expected_beta_flange" in p:
+            return (f"wear area grows as mileage^{p['beta_flange']:.2f} (flange) and "
+                    f"^{p['beta_tread']:.2f} (tread) where the simulated progression gives "
+                    f"^{p['expected_beta_flange']:.2f} and ^{p['expected_beta_tread']:.2f}")
         return (f"wear area grows as mileage^{p['beta_flange']:.2f} (flange) and "
                 f"^{p['beta_tread']:.2f} (tread) instead of linearly")
 

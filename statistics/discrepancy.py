@@ -24,9 +24,12 @@ scores it out of sample and names a cause only when it is specific:
    wear-curve shape cause is tested the same way on its coefficients;
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
-   runner-up (the next best cause) by a margin that is itself tested: a sign-flip
-   randomisation test over the groups of the held-out error difference. If it does not,
-   the verdict is ``ambiguous`` and lists the candidates;
+   runner-up (the next best cause) by a margin that is itself tested: a parametric
+   bootstrap under "the runner-up is the cause" (datasets carrying the runner-up's fitted
+   effect and resampled nuisance, both causes scored on them as on the data;
+   ``finder_scoring.margin_p``) and a sign-flip randomisation over the groups, combined by
+   Bonferroni (``finder_scoring.MarginTest``). If it does not, the verdict is ``ambiguous``
+   and lists the candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
@@ -34,7 +37,10 @@ scores it out of sample and names a cause only when it is specific:
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
    size instead of ``none``;
-7. effect sizes (multipliers, exponents, shares) with 95 % intervals from the
+7. with ``expected_progression`` (``discrepancy_progression``) the baseline grows as a
+   simulation of the route says instead of linearly in mileage, so every cause is a
+   departure from the simulated progression;
+8. effect sizes (multipliers, exponents, shares) with 95 % intervals from the
    vehicle-clustered (sandwich) covariance of the fit, Student t with groups - 1 degrees of
    freedom.
 
@@ -57,6 +63,11 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics.discrepancy_progression import (
+    ExpectedProgression,
+    centred,
+    exponent_offset,
+)
 from wearcast.statistics.extension import (
     ExtendedModel,
     apply_extension,
@@ -153,12 +164,26 @@ def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
 def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
                routes_by_name: Mapping[str, Route], table: pd.DataFrame | WearTable, *,
                calibration_wheel_ids: Collection[Any] = (),
-               route_attributes: Mapping[str, Mapping[str, Any]] | None = None
+               route_attributes: Mapping[str, Mapping[str, Any]] | None = None,
+               expected_progression: ExpectedProgression | None = None
                ) -> cz.FinderData:
-    """Residuals and covariates in the form the causes read (see ``causes.FinderData``)."""
+    """Residuals and covariates in the form the causes read (see ``causes.FinderData``).
+
+    With ``expected_progression`` the base prediction carries the simulated progression
+    shape of every row (``discrepancy_progression``): the causes are departures from it.
+    """
     res = model_residuals(model, measurements, routes_by_name, table,
                           calibration_wheel_ids=calibration_wheel_ids)
     frame = res.frame
+    mileage = frame["mileage_km"].to_numpy(dtype=float)
+    lead = leading_shares(frame["axle"].to_numpy(), res.mode)
+    base = res.predicted_mm2
+    factor = None
+    if expected_progression is not None:
+        factor = expected_progression.row_factors(
+            frame["bogie_type"].to_numpy(), mileage, res.parts, lead,
+            WEAR_MEASURES.index(model.measure))
+        base = base * factor
     rcol = "route" if "route" in frame.columns else "route_id"
     route = frame[rcol].astype(str).to_numpy()
     shape = None
@@ -169,17 +194,25 @@ def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
         d = np.nan_to_num(shape_residuals(model, res.measured_mm2, wear_curves), nan=0.0)
         coef, *_ = np.linalg.lstsq(basis.T, d.T, rcond=None)
         shape = (basis.T @ coef).T
-    return cz.FinderData(
-        frame=frame, measured=res.measured_mm2, base=res.predicted_mm2, floor=res.floor_mm2,
-        mileage_km=frame["mileage_km"].to_numpy(dtype=float),
+    data = cz.FinderData(
+        frame=frame, measured=res.measured_mm2, base=base, floor=res.floor_mm2,
+        mileage_km=mileage,
         c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
         measure_index=WEAR_MEASURES.index(model.measure),
-        lead_share=leading_shares(frame["axle"].to_numpy(), res.mode), mode=res.mode,
+        lead_share=lead, mode=res.mode,
         left_right=res.left_right_shares, route=route,
         lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
                                      res.history),
         shape_res=shape, basis=basis,
     )
+    if expected_progression is not None and factor is not None:
+        # the expected progression's own exponent over these mileages: a named
+        # nonlinear_progression reports expected + departure (``NonlinearProgression.public``)
+        x = cz.NonlinearProgression().features(data, np.zeros(2))[:, 0, 0]
+        data.cache["expected_exponent_offset"] = exponent_offset(
+            centred(np.log(factor), cz.life_ids(frame, mileage), mileage), x)
+        data.cache["expected_progression"] = expected_progression.source
+    return data
 
 
 @dataclass
@@ -225,6 +258,7 @@ def diagnose(
     *,
     calibration_wheel_ids: Collection[Any] = (),
     route_attributes: Mapping[str, Mapping[str, Any]] | None = None,
+    expected_progression: ExpectedProgression | None = None,
     causes: Sequence[str] | None = None,
     alpha: float = DEFAULT_ALPHA,
     min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
@@ -250,6 +284,10 @@ def diagnose(
     routes_by_name : Route per route name used in the ``route``/``route_id`` column
     table : curve-radius table (both measures for ``wear_measure``)
     route_attributes : attributes per route name (``flange_lubrication``, ...)
+    expected_progression : the progression shape a simulation of the routes expects
+        (``discrepancy_progression.ExpectedProgression``); the baseline and every cause then
+        carry it, so wear that is as nonlinear as the physics says is not a discrepancy.
+        None: the hybrid model's linear growth
     causes : cause codes to try (default: the whole catalogue)
     alpha : family-wise error rate of naming a cause (max-T over the catalogue) and level of
         the margin test
@@ -266,7 +304,8 @@ def diagnose(
     wt = compile_wear_table(table)
     data = build_data(model, measurements_df, wear_curves, routes_by_name, wt,
                       calibration_wheel_ids=calibration_wheel_ids,
-                      route_attributes=route_attributes)
+                      route_attributes=route_attributes,
+                      expected_progression=expected_progression)
     frame = data.frame
     vehicle = frame["vehicle_id"].astype(str).to_numpy()
     wheel = frame["wheel_id"].astype(str).to_numpy()
@@ -385,18 +424,20 @@ def diagnose(
         others = [c for c in remaining if c is not best]
         if others:
             runner = max(others, key=lambda c: scored[c.code].gain)
-            diff = fs.group_sums(rows[runner.code] - rows[best.code], groups)
-            p_m = fs.sign_flip_p(diff, 4000, rng)
+
+            step_ctx = fs.MarginTest(data, rows, before, best.code, dict(
+                zip([c.code for c in remaining], alt, strict=True)),
+                fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng)
+            p_m = step_ctx.p_value(runner.code)
             m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
                                                                              1e-300))
             if step == 0:
                 runner_up, margin, margin_p = runner.code, m, p_m
-            if p_m >= alpha:
+            if not fs.separated(p_m, alpha):
                 if step == 0:
-                    candidates = [best.code] + [
-                        c.code for c in others
-                        if fs.sign_flip_p(fs.group_sums(rows[c.code] - rows[best.code], groups),
-                                          4000, rng) >= alpha]
+                    candidates = [best.code] + [c.code for c in others
+                                                if not fs.separated(step_ctx.p_value(c.code),
+                                                                 alpha)]
                 break
         selected.append(best)
         remaining.remove(best)
@@ -420,7 +461,7 @@ def diagnose(
 
     unexplained: list[dict[str, Any]] = []
     if verdict == "none" and base_residual is not None:
-        unexplained = _structure(data, base_residual, vehicle, wheel, n_null, rng,
+        unexplained = fs.structure_scan(data, base_residual, vehicle, wheel, n_null, rng,
                                  structure_alpha, min_relative_gain)
         if unexplained:
             verdict = "outside_catalogue"
@@ -446,8 +487,18 @@ def diagnose(
             "(vehicle and wheel log-scale effects and residuals, "
             + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
                else "residuals permuted within wheels") + "), "
-            "Westfall-Young max-T across the catalogue; margin over the runner-up by a "
-            f"sign-flip test over {np.unique(groups).size} {group_by} groups")
+            "Westfall-Young max-T across the catalogue; margin over the runner-up "
+            + {"sign_flip": f"by a sign-flip test over {np.unique(groups).size} {group_by} "
+                            "groups",
+               "bootstrap": f"against {n_null} datasets carrying the runner-up's fitted "
+                            "effect and resampled nuisance",
+               "combined": f"against {n_null} datasets carrying the runner-up's fitted "
+                           "effect and resampled nuisance and by a sign-flip test over "
+                           f"{np.unique(groups).size} {group_by} groups (Bonferroni)"
+               }[fs.MARGIN_TEST])
+    if expected_progression is not None:
+        test += ("; the baseline grows as the expected progression of "
+                 f"{expected_progression.source} (not linearly in mileage)")
     return Diagnosis(verdict=verdict, findings=tuple(findings), skipped=skipped,
                      n_measurements=data.n, n_groups=int(np.unique(groups).size),
                      group_by=group_by, residuals=frame, covariates=covs, predictions=preds,
@@ -466,33 +517,6 @@ def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
 def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
            rng: np.random.Generator) -> bool:
     return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
-
-
-def _structure(data: cz.FinderData, residual: NDArray[np.float64], vehicle: NDArray[Any],
-               wheel: NDArray[Any], n_null: int, rng: np.random.Generator, alpha: float,
-               min_share: float) -> list[dict[str, Any]]:
-    """Residual structure outside the catalogue (``finder_scoring.structure_scan``)."""
-    factors = fs.structure_factors(data.frame, data.mileage_km)
-    if not factors:
-        return []
-    sw = np.sqrt(data.weights)
-    nm = fs.NuisanceModel.fit(sw * residual, sw * data.phi, vehicle, wheel)
-    draws = nm.draws(n_null, rng).reshape(data.n, 2, n_null)
-    names = list(factors)
-    observed = np.array([float(fs.structure_share(sw * residual, sw * data.phi,
-                                                  factors[f])[0]) for f in names])
-    null = np.vstack([fs.structure_share(draws, sw * data.phi, factors[f]) for f in names])
-    p_raw, p_adj = fs.min_p(observed, null)
-    out: list[dict[str, Any]] = []
-    for i, name in enumerate(names):
-        excess = float(observed[i] - np.median(null[i]))
-        if p_adj[i] <= alpha and excess >= min_share:   # resampling p: reject at <= alpha
-            out.append({"by": name, "share_of_residual": float(observed[i]),
-                        "share_beyond_null": excess, "p_value": float(p_adj[i]),
-                        "levels": fs.level_effects(residual, data.phi, factors[name],
-                                                   REGIONS)})
-    out.sort(key=lambda u: -u["share_beyond_null"])
-    return out
 
 
 _SUBGROUPS = {

@@ -32,6 +32,7 @@ from wearcast.physics.vehicle_wear_simulation import (
 )
 from wearcast.physics.wear_loop import LoopClass
 from wearcast.statistics import hybrid
+from wearcast.statistics.discrepancy_progression import ExpectedProgression
 from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
@@ -244,6 +245,28 @@ def loop_rate_table(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float
                                      "radius_m": radius, "region": region,
                                      "measure": measure, "value": max(rate, 0.0)})
     return pd.DataFrame(rows)
+
+
+def loop_expected_progression(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float,
+                              mileage_scale: float) -> ExpectedProgression:
+    """The progression shape of the loop runs behind ``loop_rate_table`` (same runs, same 20
+    mileages up to ``top_km`` [loop km]): per bogie type, wheelset and region the mean worn
+    area over the least-squares linear growth through the origin, on the fleet's km (loop km
+    / ``mileage_scale``). What a user gets from simulating the route with the wear loop; the
+    finder's null for wear that is as nonlinear as the physics says
+    (``discrepancy_progression``)."""
+    km = np.linspace(0.0, top_km, 21)[1:]
+    areas = {}
+    for bogie in ("motor", "trailer"):
+        for axle, wheelset in ((1, "leading"), (2, "trailing")):
+            sims = runs.get((bogie, axle), ())
+            if not sims:
+                raise ValueError(f"no loop run for the {bogie} bogie's axle {axle}")
+            for region in ("flange", "tread"):
+                areas[(bogie, wheelset, region)] = np.array(
+                    [[loop_wear_area(s, k, region) for k in km] for s in sims]).mean(axis=0)
+    return ExpectedProgression.from_areas(km / mileage_scale, areas,
+                                          source="the wear loop on the same track")
 
 
 def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
