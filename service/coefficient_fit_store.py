@@ -22,7 +22,7 @@ import logging
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -32,6 +32,7 @@ from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.schemas import (
     Axle,
     BogieType,
+    JobStatusOut,
     Side,
     SimulationClassIn,
     SmoothingIn,
@@ -166,13 +167,7 @@ class CoefficientFitIn(Strict):
         return self
 
 
-class CoefficientFitOut(BaseModel):
-    id: int
-    name: str | None
-    status: Literal["queued", "running", "done", "failed", "cancelled"]
-    progress: float
-    message: str | None = None
-    error: str | None = None
+class CoefficientFitOut(JobStatusOut):
     spec: dict[str, Any]
     result: dict[str, Any] | None = None
 

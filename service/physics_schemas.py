@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Discriminator, Field, Tag, field_validator
 
-from wearcast.service.schemas import Filter, ModelIn, Strict, WearLawName
+from wearcast.service.schemas import Filter, JobStatusOut, ModelIn, Strict, WearLawName
 
 #: Largest simulated mileage of a physics model's run [km].
 MAX_SIMULATED_KM = 1_000_000.0
@@ -129,15 +129,9 @@ class PhysicsPredictionOut(BaseModel):
     start_notes: list[str] = Field(default_factory=list)
 
 
-class JobAccepted(BaseModel):
+class JobAccepted(JobStatusOut):
     """202: the work runs as a job; poll ``GET /v1/jobs/{id}`` (``result`` once done)."""
 
-    id: int
     kind: str
-    name: str | None
-    status: Literal["queued", "running", "done", "failed", "cancelled"]
-    progress: float
-    message: str | None = None
-    error: str | None = None
     created_at: dt.datetime | None = None
     result: dict[str, Any] | None = None

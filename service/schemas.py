@@ -674,13 +674,22 @@ class SimulationIn(MeasuredProfilesIn):
         return self
 
 
-class SimulationOut(BaseModel):
+JobStatus = Literal["queued", "running", "done", "failed", "cancelled"]
+
+
+class JobStatusOut(BaseModel):
+    """What every job answer says of the job: id, name, status, progress (0-1), message and
+    error (simulations, coefficient fits, ``/v1/jobs``, the 202 of a physics job)."""
+
     id: int
     name: str | None
-    status: Literal["queued", "running", "done", "failed", "cancelled"]
+    status: JobStatus
     progress: float
     message: str | None = None
     error: str | None = None
+
+
+class SimulationOut(JobStatusOut):
     spec: dict[str, Any]
     created_at: dt.datetime | None = None
     started_at: dt.datetime | None = None

@@ -9,7 +9,7 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Request, Response
-from pydantic import BaseModel, Field
+from pydantic import Field
 from sqlalchemy import select
 
 from wearcast.service import job_store
@@ -17,6 +17,7 @@ from wearcast.service import models_db as db
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import ApiError, NotFound
 from wearcast.service.json_response import json_response
+from wearcast.service.schemas import JobStatusOut
 
 router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]
@@ -30,14 +31,8 @@ JobKind = Literal["simulation", "coefficient_fit", "wear_table", "diagnosis",
 RESULT_KINDS = ("wear_table", "diagnosis", "physics_model", "physics_diagnosis")
 
 
-class JobOut(BaseModel):
-    id: int
+class JobOut(JobStatusOut):
     kind: JobKind
-    name: str | None
-    status: Literal["queued", "running", "done", "failed", "cancelled"]
-    progress: float
-    message: str | None = None
-    error: str | None = None
     owner_key_id: int | None = None
     attempts: int = 0
     cancel_requested: bool = False
