@@ -141,10 +141,22 @@ def run_diagnosis(session: Session, model_id: int, body: DiagnoseIn) -> Diagnosi
     if frame["wheel_id"].nunique() < 2:
         raise Unprocessable("filter", "the finder needs measurements of at least two wheels "
                             "(it scores every cause on wheels it was not fitted on)")
+    expected = None
+    if body.expected_progression is not None:
+        from wearcast.statistics.discrepancy_progression import ExpectedProgression
+
+        given = body.expected_progression
+        try:
+            expected = ExpectedProgression.from_areas(
+                given.mileage_km, {(a.bogie_type, a.wheelset, a.region): a.areas_mm2
+                                   for a in given.areas}, source="request")
+        except ValueError as exc:
+            raise from_value_error(exc) from exc
     try:
         diagnosis = discrepancy.diagnose(
             model, frame, wear_curves, routes, inputs.table, calibration_wheel_ids=cal_wheels,
-            route_attributes=attributes, causes=body.causes, seed=body.seed)
+            route_attributes=attributes, expected_progression=expected, causes=body.causes,
+            seed=body.seed)
     except ValueError as exc:
         raise from_value_error(exc, "filter") from exc
     return DiagnosisRun(diagnosis, model, row, frame["measurement_id"].astype(int).tolist(),

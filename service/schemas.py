@@ -11,7 +11,15 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from wearcast.physics.vocabulary import Axle, BogieType, Direction, RunningMode, Side
+from wearcast.physics.vocabulary import (
+    Axle,
+    BogieType,
+    Direction,
+    Region,
+    RunningMode,
+    Side,
+    Wheelset,
+)
 from wearcast.physics.vocabulary import WearMeasure as Measure
 
 FilterValue = str | int | float | bool | None
@@ -555,6 +563,31 @@ class ReprofilingOut(BaseModel):
 
 # --- diagnosis ----------------------------------------------------------------------------
 
+class ProgressionAreasIn(Strict):
+    bogie_type: BogieType
+    wheelset: Wheelset
+    region: Region
+    areas_mm2: list[float] = Field(min_length=2, max_length=10_000, description=(
+        "simulated wear area at each of mileage_km [mm²]"))
+
+
+class ExpectedProgressionIn(Strict):
+    """The wear-area progression a simulation of the route expects (e.g. a wear-loop
+    simulation's areas per step): the finder's baseline then grows as it does instead of
+    linearly in mileage (``statistics.discrepancy_progression``)."""
+
+    mileage_km: list[float] = Field(min_length=2, max_length=10_000)
+    areas: list[ProgressionAreasIn] = Field(min_length=1, max_length=64)
+
+    @model_validator(mode="after")
+    def _same_lengths(self) -> ExpectedProgressionIn:
+        for i, a in enumerate(self.areas):
+            if len(a.areas_mm2) != len(self.mileage_km):
+                raise ValueError(f"areas[{i}].areas_mm2 has {len(a.areas_mm2)} values for "
+                                 f"{len(self.mileage_km)} mileages")
+        return self
+
+
 class DiagnoseIn(Strict):
     """``POST /v1/models/{id}/diagnose``.
 
@@ -568,6 +601,9 @@ class DiagnoseIn(Strict):
     causes: list[str] | None = Field(default=None, min_length=1, description=(
         "cause codes to try (default: the whole catalogue)"))
     seed: int = Field(default=0, ge=0, description="random seed of the folds and bootstrap")
+    expected_progression: ExpectedProgressionIn | None = Field(default=None, description=(
+        "a simulated wear-area progression of the route per bogie type, wheelset and region "
+        "(hybrid models): the null grows as it does instead of linearly in mileage"))
 
 
 class GainOut(BaseModel):
