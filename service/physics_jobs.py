@@ -17,7 +17,6 @@ from __future__ import annotations
 import logging
 import re
 import time
-import traceback
 from typing import Any
 
 from fastapi import Request
@@ -27,7 +26,7 @@ from sqlalchemy import select
 from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
 from wearcast.service.errors import ApiError
-from wearcast.service.job_store import ACTIVE, JobControl, JobStopped, finish, finite_json
+from wearcast.service.job_store import ACTIVE, JobControl, complete_job
 from wearcast.service.physics_schemas import JobAccepted
 
 log = logging.getLogger(__name__)
@@ -38,26 +37,19 @@ POLL_S = 0.1
 
 def run_physics_job(factory: SessionFactory, job_id: int, spec: dict[str, Any],
                     control: JobControl) -> None:
-    """Run a claimed physics job to its end; never raises for a failing job."""
-    try:
-        control.check()
+    """Run a claimed physics job to its end; never raises for a failing job
+    (``job_store.complete_job``)."""
+    def compute() -> Any:
         if spec["kind"] == "physics_model":
             from wearcast.service.physics_model_store import run_build
 
-            result = run_build(factory, job_id, spec, control)
-        else:
-            from wearcast.service.physics_diagnosis_store import run_diagnosis_job
+            return run_build(factory, job_id, spec, control)
+        from wearcast.service.physics_diagnosis_store import run_diagnosis_job
 
-            result = run_diagnosis_job(factory, job_id, spec, control)
-    except JobStopped as stop:
-        finish(factory, job_id, stop.status, error=stop.reason, message=stop.reason)
-        return
-    except Exception as exc:  # the job reports any failure; it never kills the worker
-        log.warning("%s job %s failed: %s", spec.get("kind"), job_id, traceback.format_exc())
-        finish(factory, job_id, "failed", error=f"{type(exc).__name__}: {exc}",
-               message="failed")
-        return
-    finish(factory, job_id, "done", progress=1.0, result=finite_json(result), message="done")
+        return run_diagnosis_job(factory, job_id, spec, control)
+
+    complete_job(factory, job_id, control, compute, kind=f"{spec.get('kind')} job",
+                 logger=log)
 
 
 def wait_seconds(request: Request) -> float:

@@ -14,7 +14,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
-from wearcast.service import job_store
+from wearcast.service import job_store, wear_table_store
 from wearcast.service.db import SessionFactory
 from wearcast.service.schemas import WearTableComputeIn
 
@@ -23,23 +23,11 @@ log = logging.getLogger(__name__)
 KIND = "wear_table"
 
 
-def check_request(session: Session, body: WearTableComputeIn) -> None:
-    """The checks of ``compute_table_frames`` that need no physics (4xx naming the field)."""
-    from wearcast.service import rail_store, wear_table_store
-    from wearcast.service.measured_wheel_source import requested_wheel
-
-    wear_table_store._presets(body.vehicle, body.friction)
-    if body.rail_id is not None:
-        rail_store.measured_rail(session, body.rail_id)
-    requested_wheel(session, body)
-    wear_table_store._classes(session, body)
-
-
 def submit(session: Session, runner: Any, body: WearTableComputeIn) -> Any:
     """Check the request, store it as a queued job and hand it to the runner (429 naming
     ``job_quota_per_key`` when the key holds its quota). Returns the job row."""
     runner.check_quota(session)
-    check_request(session, body)
+    wear_table_store.check_compute_request(session, body)
     row = job_store.queue_job(session, body.name,
                               {"kind": KIND, "request": body.model_dump(mode="json")},
                               timeout_s=job_store.default_timeout())
@@ -50,8 +38,6 @@ def submit(session: Session, runner: Any, body: WearTableComputeIn) -> Any:
 def run_wear_table_job(factory: SessionFactory, job_id: int, spec: dict[str, Any],
                        on_progress: Any = None, control: Any = None) -> None:
     """Build and store the table of a claimed job; its result names the table."""
-    from wearcast.service import wear_table_store
-
     control = control or job_store.JobControl(factory, job_id, None)
     job_store.set_job(factory, job_id, progress=0.0, message="solving the curving")
 

@@ -227,6 +227,20 @@ def _convergence_field(classes: _Classes, radius_m: float) -> str:
     return "radii" if classes.route_name is None else "route_id"
 
 
+def check_compute_request(session: Session, body: WearTableComputeIn) -> None:
+    """The checks of :func:`compute_table_frames` that need no physics, for a request queued
+    as a job (``wear_table_jobs``): the vehicle preset, a measured rail and wheel, the route
+    or radii (4xx naming the field)."""
+    from wearcast.service import rail_store
+    from wearcast.service.measured_wheel_source import requested_wheel
+
+    _presets(body.vehicle, body.friction)
+    if body.rail_id is not None:
+        rail_store.measured_rail(session, body.rail_id)
+    requested_wheel(session, body)
+    _classes(session, body)
+
+
 def compute_table_frames(session: Session, body: WearTableComputeIn
                          ) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Any]]:
     """Run the physics core for a compute request: (validated table, raw contacts, spec).

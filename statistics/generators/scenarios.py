@@ -224,26 +224,38 @@ def loop_wear_area(sim: Any, loop_km: float, region: str) -> float:
     return float(np.trapezoid(w[sel], sim.y_mm[sel]))
 
 
-def loop_rate_table(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float) -> pd.DataFrame:
-    """The curve-radius table of the loop's own wear rates: per bogie type and axle (``runs``:
-    the loop runs of that position) and region the least-squares rate through the origin of the
-    mean worn area over 20 mileages up to ``top_km`` [mm^2 per 1,000 km], on every rail and
-    under both measure names (one track geometry: the route's measure is then that rate)."""
+def _loop_mean_areas(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float
+                     ) -> tuple[NDArray, dict[tuple[str, str, str], NDArray]]:
+    """(20 mileages up to ``top_km`` [loop km], the mean worn area of the runs of each
+    (bogie type, wheelset, region) there [mm^2]): what the rate table and the progression of
+    the same runs are both made from."""
     km = np.linspace(0.0, top_km, 21)[1:]
-    rows = []
+    areas = {}
     for bogie in ("motor", "trailer"):
         for axle, wheelset in ((1, "leading"), (2, "trailing")):
             sims = runs.get((bogie, axle), ())
             if not sims:
                 raise ValueError(f"no loop run for the {bogie} bogie's axle {axle}")
             for region in ("flange", "tread"):
-                area = np.array([[loop_wear_area(s, k, region) for k in km] for s in sims])
-                rate = float(np.sum(area.mean(axis=0) * km) / np.sum(km * km)) * 1e3
-                for rail, radius in (("tangent", np.nan), ("high", 500.0), ("low", 500.0)):
-                    for measure in ("tau_max", "t_gamma"):
-                        rows.append({"bogie_type": bogie, "wheelset": wheelset, "rail": rail,
-                                     "radius_m": radius, "region": region,
-                                     "measure": measure, "value": max(rate, 0.0)})
+                areas[(bogie, wheelset, region)] = np.array(
+                    [[loop_wear_area(s, k, region) for k in km] for s in sims]).mean(axis=0)
+    return km, areas
+
+
+def loop_rate_table(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float) -> pd.DataFrame:
+    """The curve-radius table of the loop's own wear rates: per bogie type and axle (``runs``:
+    the loop runs of that position) and region the least-squares rate through the origin of the
+    mean worn area over 20 mileages up to ``top_km`` [mm^2 per 1,000 km], on every rail and
+    under both measure names (one track geometry: the route's measure is then that rate)."""
+    km, areas = _loop_mean_areas(runs, top_km)
+    rows = []
+    for (bogie, wheelset, region), area in areas.items():
+        rate = float(np.sum(area * km) / np.sum(km * km)) * 1e3
+        for rail, radius in (("tangent", np.nan), ("high", 500.0), ("low", 500.0)):
+            for measure in ("tau_max", "t_gamma"):
+                rows.append({"bogie_type": bogie, "wheelset": wheelset, "rail": rail,
+                             "radius_m": radius, "region": region,
+                             "measure": measure, "value": max(rate, 0.0)})
     return pd.DataFrame(rows)
 
 
@@ -255,16 +267,7 @@ def loop_expected_progression(runs: Mapping[tuple[str, int], Sequence[Any]], top
     / ``mileage_scale``). What a user gets from simulating the route with the wear loop; the
     finder's null for wear that is as nonlinear as the physics says
     (``discrepancy_progression``)."""
-    km = np.linspace(0.0, top_km, 21)[1:]
-    areas = {}
-    for bogie in ("motor", "trailer"):
-        for axle, wheelset in ((1, "leading"), (2, "trailing")):
-            sims = runs.get((bogie, axle), ())
-            if not sims:
-                raise ValueError(f"no loop run for the {bogie} bogie's axle {axle}")
-            for region in ("flange", "tread"):
-                areas[(bogie, wheelset, region)] = np.array(
-                    [[loop_wear_area(s, k, region) for k in km] for s in sims]).mean(axis=0)
+    km, areas = _loop_mean_areas(runs, top_km)
     return ExpectedProgression.from_areas(km / mileage_scale, areas,
                                           source="the wear loop on the same track")
 
