@@ -35,7 +35,7 @@ import numpy as np
 from wearcast.statistics.maintenance.fleet_state import fleet_state
 from wearcast.statistics.maintenance.lathe_plan import latest_week, lathe_plan
 from wearcast.statistics.maintenance.limits import FleetLimits
-from wearcast.statistics.maintenance.plan_inputs import plan_wheels
+from wearcast.statistics.maintenance.plan_inputs import diameter_groups, plan_wheels
 from wearcast.statistics.maintenance.synthetic import generate_fleet
 from wearcast.statistics.maintenance.turning import (
     economic_choice,
@@ -75,6 +75,8 @@ def main() -> None:
     parser.add_argument("--vehicles", type=int, default=20)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--weeks", type=int, default=26)
+    parser.add_argument("--no-diameter-groups", action="store_true",
+                        help="plan each wheelset alone (no bogie/vehicle diameter differences)")
     parser.add_argument("--fixed-km", type=float, nargs="+",
                         default=[60_000.0, 100_000.0, 200_000.0])
     args = parser.parse_args()
@@ -95,7 +97,12 @@ def main() -> None:
         profiles[wid] = (y, z, last)
     targets = s1002_targets()
     wheels, unplanned = plan_wheels(state, profiles, targets)
+    groups = () if args.no_diameter_groups else diameter_groups(state)
     t_state = time.perf_counter() - t0
+    over = [s for s in state.diameter_spreads if s.scope != "axle"]
+    print(f"bogie/vehicle diameter differences over their limits at the latest measurements: "
+          f"{len(over)} ({', '.join(s.key for s in over[:6])}{' ...' if len(over) > 6 else ''})"
+          f"; planned {'per wheelset alone' if args.no_diameter_groups else 'within them'}")
     start = today
     deadlines: dict[str, list[dt.date]] = {}
     for w in wheels:
@@ -117,7 +124,8 @@ def main() -> None:
             plan = lathe_plan(wheels, start=start, horizon_weeks=args.weeks,
                               capacity_per_week=capacity, fixed_interval_km=fixed_km,
                               scrap_diameter_mm=limits.scrap_diameter_mm,
-                              new_diameter_mm=limits.new_diameter_mm)
+                              new_diameter_mm=limits.new_diameter_mm,
+                              groups=groups)
             t_plan = time.perf_counter() - t1
             report(plan, {w.wheel_id: w for w in wheels}, truth, true_cross, true_date,
                    start, args.weeks, capacity, fixed_km, targets, t_state, t_plan, unplanned)
@@ -147,6 +155,13 @@ def report(plan, plan_wheel, truth, true_cross, true_date, start, weeks, capacit
           f"({', '.join(w.wheelset for w in plan.at_risk[:8])}"
           f"{' ...' if len(plan.at_risk) > 8 else ''}), of which {len(overdue)} overdue at the "
           f"start (P10 before the end of week 0); {len(unplanned)} wheels unplanned")
+    companions = sum("companion turning" in w.reason or "moved earlier" in w.reason
+                     for w in plan.wheelsets)
+    kept = sum(w.at_risk and "no lathe capacity to keep it" in w.reason
+               for w in plan.wheelsets)
+    print(f"  bogie/vehicle diameter differences: {companions} wheelsets turned as companions "
+          f"or moved earlier to keep them within the limits; {kept} of those at risk are named "
+          f"for a diameter difference the capacity cannot keep")
     print(f"  truth: {len(crossing_inside)} wheelsets cross a limit inside the horizon "
           f"({len(already)} had crossed before its start); of the {len(timely)} not overdue, "
           f"{len(in_time)} turned before their true crossing; turned after it: {len(late)} "
@@ -175,6 +190,7 @@ def report(plan, plan_wheel, truth, true_cross, true_date, start, weeks, capacit
             life = true_cross[wid] - w.turned_at_km
             km_since = min(km_since, life)
             c = turning_cut(Y_TRUTH, w.profile(Y_TRUTH, km_since), target).diameter_loss_mm
+            c += cut.get("matching_loss_mm", 0.0)  # the plan's diameter matching
             plan_mm += c + 2 * w.tread_rate * km_since
             plan_km += km_since
             f_km = min(fixed_km, life)

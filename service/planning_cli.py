@@ -96,6 +96,9 @@ def create(capacity: Annotated[int, typer.Option(help="wheelsets the lathe turns
            fixed_interval_km: Annotated[float, typer.Option(help=(
                "the fixed-mileage policy the plan is compared with [km]"))] = 150_000.0,
            model_id: ModelOption = None, route_id: RouteOption = None,
+           keep_diameter_differences: Annotated[bool, typer.Option(help=(
+               "keep bogie and vehicle diameter differences within the fleet's limits"))]
+           = True,
            fmt: FormatOption = "json", out: OutOption = None) -> None:
     """Compute and store a lathe plan; print it (JSON) or its rows (CSV)."""
     from pydantic import ValidationError
@@ -108,7 +111,8 @@ def create(capacity: Annotated[int, typer.Option(help="wheelsets the lathe turns
         body = PlanIn(fleet_id=fleet_id, capacity_per_week=capacity, horizon_weeks=weeks,
                       start=dt.date.fromisoformat(start) if start else None,
                       fixed_interval_km=fixed_interval_km, model_id=model_id,
-                      route_id=_route(route_id))
+                      route_id=_route(route_id),
+                      keep_diameter_differences=keep_diameter_differences)
     except (ValidationError, ValueError) as exc:
         cli.err.print(f"[red]error[/red] {exc}")
         raise typer.Exit(2) from exc

@@ -44,6 +44,10 @@ class PlanIn(_Strict):
     route_id: int | str | None = None
     target_flange_thicknesses_mm: list[float] = Field(
         default_factory=lambda: [32.5, 31.5, 30.5, 29.5, 28.5], min_length=1, max_length=12)
+    keep_diameter_differences: bool = Field(default=True, description=(
+        "keep each bogie's and vehicle's wheelset diameters within the fleet's limits: deepen "
+        "cuts, add companion turnings in the same week, or turn a bogie's wheelsets together "
+        "(statistics.maintenance.lathe_plan); false plans each wheelset alone"))
     name: str | None = Field(default=None, max_length=200)
 
     def spec(self) -> dict[str, Any]:

@@ -29,7 +29,12 @@ from wearcast.statistics import reprofiling as stat_reprofiling
 from wearcast.statistics.maintenance.fleet_state import FleetState, Remaining, fleet_state
 from wearcast.statistics.maintenance.lathe_plan import lathe_plan
 from wearcast.statistics.maintenance.limits import FLANGE_LIMITS, FleetLimits
-from wearcast.statistics.maintenance.plan_inputs import fleet_rates, plan_wheels, wheel_rates
+from wearcast.statistics.maintenance.plan_inputs import (
+    diameter_groups,
+    fleet_rates,
+    plan_wheels,
+    wheel_rates,
+)
 from wearcast.statistics.maintenance.turning import (
     TargetProfile,
     s1002_targets,
@@ -368,7 +373,9 @@ def create_plan(session: Session, body: PlanIn) -> dict[str, Any]:
                           capacity_per_week=body.capacity_per_week,
                           fixed_interval_km=body.fixed_interval_km,
                           scrap_diameter_mm=state.limits.scrap_diameter_mm,
-                          new_diameter_mm=state.limits.new_diameter_mm, extra_due=extra)
+                          new_diameter_mm=state.limits.new_diameter_mm, extra_due=extra,
+                          groups=diameter_groups(state) if body.keep_diameter_differences
+                          else ())
     except (ValueError, TypeError) as exc:
         raise from_value_error(ValueError(str(exc))) from exc
     result = plan.to_dict()
@@ -411,8 +418,8 @@ def list_plans(session: Session) -> list[dict[str, Any]]:
 
 
 PLAN_CSV_COLUMNS = ["week", "turn_date", "wheelset", "wheel_id", "action", "target",
-                    "diameter_loss_mm", "final_diameter_mm", "deadline", "in_time", "at_risk",
-                    "reason"]
+                    "diameter_loss_mm", "matching_loss_mm", "final_diameter_mm", "deadline",
+                    "in_time", "at_risk", "reason"]
 
 
 def plan_csv(plan: dict[str, Any]) -> str:
@@ -427,6 +434,6 @@ def plan_csv(plan: dict[str, Any]) -> str:
             cut = ws["cuts"].get(wid, {})
             writer.writerow([ws["week"], ws["turn_date"], ws["wheelset"], wid, ws["action"],
                              cut.get("target"), cut.get("diameter_loss_mm"),
-                             ws["final_diameter_mm"], ws["deadline"], ws["in_time"],
-                             ws["at_risk"], ws["reason"]])
+                             cut.get("matching_loss_mm"), ws["final_diameter_mm"],
+                             ws["deadline"], ws["in_time"], ws["at_risk"], ws["reason"]])
     return buffer.getvalue()

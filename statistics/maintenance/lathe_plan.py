@@ -24,11 +24,31 @@ it will have run since its last turning, :func:`turning.projected_profile`) give
 economic target (:func:`turning.economic_choice`); both wheels of the axle are turned to
 the same final diameter, the smaller of the two wheels' diameters after their cuts.
 
+**Bogie and vehicle diameter differences.** A turning lowers a wheelset's diameter, and the
+wheelsets of a bogie (or a vehicle) must stay within the fleet's limit of each other
+(``DiameterGroup``). After the schedule, each group is checked at every week in which one of
+its wheelsets is turned, with every wheelset's diameter at that week's end (turned ones at
+their final diameter, the others worn on at their diameter rate): where a wheelset stands more
+than the limit above the lowest,
+
+* if it is turned in that week, its cut is deepened to the lowest diameter plus the limit;
+* if it is not turned yet (later, or not in this plan), it is brought into that week as a
+  companion turning cut to that diameter, when the week has lathe capacity left; else the
+  week's turnings of the group and the companion move together to the latest earlier week
+  with room for all of them (earlier is always in time);
+* if it was turned in an earlier week, the wheelsets turned in this week move to that earlier
+  week (earlier is always in time), when it has capacity left;
+
+otherwise the wheelset is named at risk with the difference it would leave. A difference
+that already exceeds the limit at the plan's start makes the wheelsets above the lowest plus
+the limit due at once (like an axle's), cut down to it. Rounds repeat until nothing changes.
+
 **Cost against fixed-mileage turning.** Per wheel, one cycle of each policy: the plan turns
 at the kilometres since turning of its planned week, to the economic target; fixed-mileage
 turning turns every ``fixed_interval_km`` (or at the P10 crossing when that comes first) to
-the reference profile. Each cycle costs its cut plus the tread's diameter wear over the
-cycle; the fleet's diameter per 1,000 km and the kilometres from new to scrap diameter follow.
+the reference profile. Each cycle costs its cut (with what matching the diameters within
+the axle, bogie and vehicle adds) plus the tread's diameter wear over the cycle; the fleet's
+diameter per 1,000 km and the kilometres from new to scrap diameter follow.
 """
 
 from __future__ import annotations
@@ -141,6 +161,17 @@ def schedule(deadlines: dict[str, dt.date | None], start: dt.date, weeks: int,
     return out
 
 
+@dataclass(frozen=True)
+class DiameterGroup:
+    """Wheelsets whose running diameters must stay within ``limit_mm`` of each other: the
+    wheelsets of one bogie or of one vehicle (``scope``)."""
+
+    scope: str
+    key: str
+    wheelsets: tuple[str, ...]
+    limit_mm: float
+
+
 @dataclass
 class PolicyCost:
     """Diameter and kilometres of one policy, summed over the wheels it was computed for."""
@@ -226,9 +257,11 @@ def _cycle(wheel: PlanWheel, km_since: float, target: str | None
 
 def lathe_plan(wheels: Sequence[PlanWheel], *, start: dt.date, horizon_weeks: int,
                capacity_per_week: int, fixed_interval_km: float, scrap_diameter_mm: float,
-               new_diameter_mm: float, extra_due: dict[str, str] | None = None) -> LathePlan:
+               new_diameter_mm: float, extra_due: dict[str, str] | None = None,
+               groups: Sequence[DiameterGroup] = ()) -> LathePlan:
     """The plan (module docstring). ``extra_due`` names wheelsets due now for another
-    reason (e.g. an axle's diameter difference), with the reason."""
+    reason (e.g. an axle's diameter difference), with the reason; ``groups`` are the bogies
+    and vehicles whose diameter differences the plan keeps within their limits."""
     if not fixed_interval_km > 0:
         raise ValueError("fixed_interval_km: must be > 0")
     sets: dict[str, list[PlanWheel]] = {}
@@ -245,9 +278,13 @@ def lathe_plan(wheels: Sequence[PlanWheel], *, start: dt.date, horizon_weeks: in
         if extra_due and key in extra_due:
             deadlines[key] = start
             reasons[key] = extra_due[key]
+    caps: dict[str, float] = {}
+    for key, reason, cap in _spreads_at_start(sets, groups):
+        deadlines[key] = start
+        reasons[key] = reason
+        caps[key] = cap
     placed = schedule(deadlines, start, horizon_weeks, capacity_per_week)
-    out: list[WheelsetTurning] = []
-    plan_cost, fixed_cost = PolicyCost(), PolicyCost()
+    turnings: dict[str, WheelsetTurning] = {}
     for key in sorted(sets):
         members = sets[key]
         turning = WheelsetTurning(key, [w.wheel_id for w in members], deadlines[key],
@@ -262,8 +299,15 @@ def lathe_plan(wheels: Sequence[PlanWheel], *, start: dt.date, horizon_weeks: in
         if week is not None:
             turning.week, turning.in_time = week, in_time
             turning.turn_date = start + dt.timedelta(days=7 * week + 6)
-            _cut_wheelset(turning, members, scrap_diameter_mm)
-        out.append(turning)
+            _cut_wheelset(turning, members, scrap_diameter_mm, caps.get(key))
+        turnings[key] = turning
+    if groups:
+        _keep_groups_within(turnings, sets, groups, start, horizon_weeks, capacity_per_week,
+                            scrap_diameter_mm)
+    out = [turnings[key] for key in sorted(sets)]
+    plan_cost, fixed_cost = PolicyCost(), PolicyCost()
+    for turning in out:
+        members = sets[turning.wheelset]
         for w in members:
             if turning.turn_date is not None:
                 km_turn = w.km_since_turning + w.km_run_until(turning.turn_date)
@@ -277,6 +321,8 @@ def lathe_plan(wheels: Sequence[PlanWheel], *, start: dt.date, horizon_weeks: in
             f, f_mm = _cycle(w, km_fixed, w.reference_target)
             if p is None or f is None or not (p_mm == p_mm and f_mm == f_mm):
                 continue
+            # the diameter matching within the axle, bogie and vehicle costs extra
+            p_mm += turning.cuts.get(w.wheel_id, {}).get("matching_loss_mm", 0.0)
             plan_cost.diameter_per_cycle_mm += p_mm
             plan_cost.km_per_cycle += km_turn
             plan_cost.wheels += 1
@@ -288,9 +334,12 @@ def lathe_plan(wheels: Sequence[PlanWheel], *, start: dt.date, horizon_weeks: in
 
 
 def _cut_wheelset(turning: WheelsetTurning, members: Sequence[PlanWheel],
-                  scrap_diameter_mm: float) -> None:
-    """Cuts of both wheels to one final diameter (module docstring, Cut)."""
+                  scrap_diameter_mm: float, cap_mm: float | None = None) -> None:
+    """Cuts of both wheels to one final diameter (module docstring, Cut), at most
+    ``cap_mm`` when a bogie or vehicle diameter difference asks for it."""
     assert turning.turn_date is not None
+    turning.cuts = {}
+    turning.final_diameter_mm = None
     after: dict[str, float] = {}
     for w in members:
         km_since = w.km_since_turning + w.km_run_until(turning.turn_date)
@@ -312,11 +361,127 @@ def _cut_wheelset(turning: WheelsetTurning, members: Sequence[PlanWheel],
     turning.action = "turn"
     if after:
         final = min(after.values())
+        if cap_mm is not None and final > cap_mm:
+            final = cap_mm
         turning.final_diameter_mm = final
         for cut in turning.cuts.values():
             if cut.get("diameter_before_mm") is not None:
-                cut["diameter_loss_mm"] = cut["diameter_before_mm"] - final
+                loss = cut["diameter_before_mm"] - final
+                # what matching the axle's (and the bogie's, vehicle's) diameters adds to
+                # the target's own cut [mm of diameter]
+                cut["matching_loss_mm"] = max(loss - cut["diameter_loss_mm"], 0.0)
+                cut["diameter_loss_mm"] = loss
         if final < scrap_diameter_mm:
             turning.action = "replace"
             turning.reason += (f"; turning would leave {final:.1f} mm, below the scrap "
                                f"diameter {scrap_diameter_mm:g} mm")
+
+
+def _wheelset_diameter(turning: WheelsetTurning, members: Sequence[PlanWheel],
+                       day: dt.date) -> float | None:
+    """The wheelset's running diameter [mm] at the end of ``day``: its final diameter after
+    a turning on or before that day, else its measured one, worn on at the diameter rate
+    (the smaller of its wheels'); None without a measured diameter."""
+    values = []
+    for w in members:
+        if turning.turn_date is not None and turning.turn_date <= day \
+                and turning.final_diameter_mm is not None:
+            km = max((day - turning.turn_date).days, 0) * w.km_per_day
+            values.append(turning.final_diameter_mm - w.diameter_rate_mm_per_km * km)
+        elif w.diameter_mm is not None:
+            values.append(w.diameter_mm - w.diameter_rate_mm_per_km * w.km_run_until(day))
+    return min(values) if values else None
+
+
+def _spreads_at_start(sets: dict[str, list[PlanWheel]], groups: Sequence[DiameterGroup]
+                      ) -> list[tuple[str, str, float]]:
+    """Wheelsets due at once because their group's difference already exceeds its limit at
+    the latest measurements: (wheelset, reason, the diameter [mm] to cut down to)."""
+    out = []
+    for g in groups:
+        diam = {k: min(d for w in sets[k] if (d := w.diameter_mm) is not None)
+                for k in g.wheelsets if k in sets
+                and any(w.diameter_mm is not None for w in sets[k])}
+        if len(diam) < 2:
+            continue
+        floor = min(diam.values())
+        for k, d in sorted(diam.items()):
+            if d > floor + g.limit_mm + 1e-9:
+                out.append((k, f"{g.scope} diameter difference {d - floor:.1f} mm > "
+                            f"{g.limit_mm:g} mm in {g.key}", floor + g.limit_mm))
+    return out
+
+
+def _keep_groups_within(turnings: dict[str, WheelsetTurning], sets: dict[str, list[PlanWheel]],
+                        groups: Sequence[DiameterGroup], start: dt.date, weeks: int,
+                        capacity_per_week: int, scrap_diameter_mm: float) -> None:
+    """Deepen cuts, add companion turnings or move turnings so that no bogie or vehicle
+    exceeds its diameter difference (module docstring); name the rest at risk."""
+    load = [0] * weeks
+    for t in turnings.values():
+        if t.week is not None:
+            load[t.week] += 1
+    flagged: set[tuple[str, str, int]] = set()
+
+    def place(t: WheelsetTurning, week: int, cap: float | None, why: str) -> None:
+        if t.week is not None:
+            load[t.week] -= 1
+        load[week] += 1
+        t.week = week
+        t.turn_date = start + dt.timedelta(days=7 * week + 6)
+        t.in_time = t.deadline is None or t.turn_date < t.deadline
+        t.at_risk = not t.in_time
+        if why:
+            t.reason = why if t.reason == "no limit predicted" else f"{t.reason}; {why}"
+        _cut_wheelset(t, sets[t.wheelset], scrap_diameter_mm, cap)
+
+    for _ in range(4 * len(turnings) + 4):
+        changed = False
+        for g in groups:
+            keys = [k for k in g.wheelsets if k in turnings]
+            for week in sorted({t.week for k in keys if (t := turnings[k]).week is not None}):
+                day = start + dt.timedelta(days=7 * week + 6)
+                diam = {k: d for k in keys
+                        if (d := _wheelset_diameter(turnings[k], sets[k], day)) is not None}
+                if len(diam) < 2:
+                    continue
+                floor = min(diam.values())
+                cap = floor + g.limit_mm
+                for k in sorted(diam, key=lambda k: -diam[k]):
+                    if diam[k] <= cap + 1e-6:
+                        continue
+                    t = turnings[k]
+                    why = (f"{g.scope} diameter difference in {g.key}: "
+                           f"{diam[k] - floor:.1f} mm > {g.limit_mm:g} mm in week {week}")
+                    if t.week == week:
+                        _cut_wheelset(t, sets[k], scrap_diameter_mm, cap)
+                        changed = True
+                    elif (t.week is None or t.week > week) and load[week] < capacity_per_week:
+                        place(t, week, cap, f"companion turning: {why}")
+                        changed = True
+                    elif (t.week is None or t.week > week) and (earlier := next(
+                            (w for w in range(week - 1, -1, -1) if load[w] + len(
+                                moving := [m for m in keys if turnings[m].week == week]) + 1
+                             <= capacity_per_week), None)) is not None:
+                        for m in moving:
+                            place(turnings[m], earlier, None, f"moved earlier: {why}")
+                        place(t, earlier, None, f"companion turning: {why}")
+                        changed = True
+                    elif t.week is not None and t.week < week and load[t.week] + len(
+                            moving := [m for m in keys if turnings[m].week == week]) \
+                            <= capacity_per_week:
+                        for m in moving:
+                            place(turnings[m], t.week, None, f"moved earlier: {why}")
+                        changed = True
+                    elif (k, g.key, week) not in flagged:
+                        flagged.add((k, g.key, week))
+                        t.at_risk = True
+                        t.reason = f"{t.reason}; {why}, no lathe capacity to keep it"
+                    if changed:
+                        break
+                if changed:
+                    break
+            if changed:
+                break
+        if not changed:
+            return

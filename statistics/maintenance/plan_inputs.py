@@ -22,7 +22,7 @@ import numpy as np
 
 from wearcast.physics.profiles.references import S1002_FLANGE_THICKNESS_MM
 from wearcast.statistics.maintenance.fleet_state import FleetState, WheelState
-from wearcast.statistics.maintenance.lathe_plan import PlanWheel
+from wearcast.statistics.maintenance.lathe_plan import DiameterGroup, PlanWheel
 from wearcast.statistics.maintenance.limits import FLANGE_LIMITS
 from wearcast.statistics.maintenance.turning import (
     TargetProfile,
@@ -99,9 +99,30 @@ def plan_wheels(state: FleetState, profiles: Mapping[str, LatestProfile],
             return tuple(turning_options(y, zz, targets, state.limits, rates,
                                          rates["diameter"]))
 
-        wheels.append(PlanWheel(w.wheel_id, f"{w.vehicle_id}/{w.bogie_type}/{w.axle}",
+        wheels.append(PlanWheel(w.wheel_id, wheelset_key(w),
                                 w.measured_on, w.km_per_day, since_latest,
                                 float(p10) if math.isfinite(p10) else math.inf,
                                 float(p50) if math.isfinite(p50) else math.inf,
                                 w.diameter_mm, options_at, rates["diameter"]))
     return wheels, unplanned
+
+
+def wheelset_key(wheel: WheelState) -> str:
+    """The plan's name of a wheel's wheelset: ``vehicle/bogie type/axle``."""
+    return f"{wheel.vehicle_id}/{wheel.bogie_type}/{wheel.axle}"
+
+
+def diameter_groups(state: FleetState) -> list[DiameterGroup]:
+    """The bogies and vehicles of the fleet whose wheelsets' diameters must stay within the
+    fleet's bogie and vehicle diameter-difference limits (groups of two wheelsets or more)."""
+    bogies: dict[str, set[str]] = {}
+    vehicles: dict[str, set[str]] = {}
+    for w in state.wheels:
+        bogies.setdefault(f"{w.vehicle_id}/{w.bogie_type}", set()).add(wheelset_key(w))
+        vehicles.setdefault(w.vehicle_id, set()).add(wheelset_key(w))
+    limits = state.limits
+    return [DiameterGroup(scope, key, tuple(sorted(sets)), limit)
+            for scope, table, limit in (("bogie", bogies, limits.bogie_diameter_difference_mm),
+                                        ("vehicle", vehicles,
+                                         limits.vehicle_diameter_difference_mm))
+            for key, sets in sorted(table.items()) if len(sets) >= 2]

@@ -10,6 +10,7 @@ import pytest
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.maintenance.lathe_plan import (
+    DiameterGroup,
     PlanWheel,
     latest_week,
     lathe_plan,
@@ -63,9 +64,10 @@ def test_schedule_turns_as_late_as_capacity_allows():
     assert sorted(w for w, _ in out.values()) == [2, 3]
 
 
-def _wheel(wid, wheelset, p10_km, km_since=100_000.0, diameter=880.0):
+def _wheel(wid, wheelset, p10_km, km_since=100_000.0, diameter=880.0, wear_scale=1.0):
     y = np.arange(-69.0, 58.0, 0.25)
-    wear = 1.2 * np.exp(-((y + 42) / 4) ** 2) + 0.4 * np.exp(-((y - 5) / 15) ** 2)
+    wear = wear_scale * (1.2 * np.exp(-((y + 42) / 4) ** 2)
+                         + 0.4 * np.exp(-((y - 5) / 15) ** 2))
     targets, limits = s1002_targets(), FleetLimits()
     rates = {"sd": 2e-5, "sh": 5e-6, "qr": 5e-6}
 
@@ -108,3 +110,101 @@ def test_replace_when_below_scrap():
                       fixed_interval_km=80_000, scrap_diameter_mm=840, new_diameter_mm=920)
     assert plan.wheelsets[0].action == "replace"
     assert list(itertools.chain(plan.by_week()))[0]["load"] == 1
+
+
+# --------------------------------------------------------------------------- bogie/vehicle
+
+BOGIE = DiameterGroup("bogie", "V/1", ("V/1/1", "V/1/2"), 5.0)
+
+
+def _plan(wheels, capacity=2, groups=(BOGIE,), weeks=12):
+    return lathe_plan(wheels, start=START, horizon_weeks=weeks, capacity_per_week=capacity,
+                      fixed_interval_km=80_000, scrap_diameter_mm=840, new_diameter_mm=920,
+                      groups=groups)
+
+
+def _diameter_at(plan, wheels, wheelset, day):
+    """Independent of the plan's code: final diameter after the turning, else measured, each
+    worn on at the wheel's diameter rate (1e-5 mm/km at 500 km/day in ``_wheel``)."""
+    t = next(t for t in plan.wheelsets if t.wheelset == wheelset)
+    if t.turn_date is not None and t.turn_date <= day:
+        return t.final_diameter_mm - 1e-5 * 500.0 * (day - t.turn_date).days
+    d = min(w.diameter_mm for w in wheels if w.wheelset == wheelset)
+    return d - 1e-5 * 500.0 * (day - START).days
+
+
+def test_a_turning_that_would_leave_the_bogie_apart_brings_its_partner():
+    wheels = [_wheel("AL", "V/1/1", 10_000), _wheel("AR", "V/1/1", 10_000),
+              _wheel("BL", "V/1/2", 500_000, diameter=884.95),
+              _wheel("BR", "V/1/2", 500_000, diameter=884.95)]
+    alone = {t.wheelset: t for t in _plan(wheels, groups=()).wheelsets}
+    assert alone["V/1/2"].week is None  # its own limit is years away
+    a = alone["V/1/1"]
+    d_b = 884.95 - 1e-5 * 500.0 * (a.turn_date - START).days
+    assert d_b - a.final_diameter_mm > 5.0  # planned alone, the bogie ends 5 mm apart
+    plan = {t.wheelset: t for t in _plan(wheels).wheelsets}
+    a, b = plan["V/1/1"], plan["V/1/2"]
+    assert b.week == a.week and b.in_time and not b.at_risk
+    assert "companion turning" in b.reason and "bogie diameter difference" in b.reason
+    assert b.final_diameter_mm <= a.final_diameter_mm + 5.0 + 1e-9
+    assert b.final_diameter_mm >= a.final_diameter_mm - 5.0 - 1e-9
+    for cut in (*a.cuts.values(), *b.cuts.values()):  # the cut = target's own + matching
+        assert cut["matching_loss_mm"] >= 0.0
+        assert cut["diameter_before_mm"] - cut["diameter_loss_mm"] == pytest.approx(
+            a.final_diameter_mm if cut in a.cuts.values() else b.final_diameter_mm)
+
+
+def test_a_difference_over_the_limit_at_the_start_is_due_at_once():
+    wheels = [_wheel("AL", "V/1/1", 500_000), _wheel("AR", "V/1/1", 500_000),
+              _wheel("BL", "V/1/2", 500_000, diameter=890.0),
+              _wheel("BR", "V/1/2", 500_000, diameter=890.0)]
+    plan = {t.wheelset: t for t in _plan(wheels).wheelsets}
+    b = plan["V/1/2"]
+    assert b.week == 0 and b.at_risk  # overdue: the limit is already exceeded
+    assert "bogie diameter difference 10.0 mm > 5 mm" in b.reason
+    assert plan["V/1/1"].week is None  # the smaller wheelset needs no turning
+    assert _diameter_at(plan_obj := _plan(wheels), wheels, "V/1/2", b.turn_date) - \
+        _diameter_at(plan_obj, wheels, "V/1/1", b.turn_date) <= 5.0 + 1e-6
+
+
+def test_without_capacity_for_the_partner_it_is_named_at_risk():
+    wheels = [_wheel("AL", "V/1/1", 10_000), _wheel("AR", "V/1/1", 10_000),
+              _wheel("BL", "V/1/2", 500_000, diameter=884.95),
+              _wheel("BR", "V/1/2", 500_000, diameter=884.95)]
+    plan = {t.wheelset: t for t in _plan(wheels, capacity=1).wheelsets}
+    b = plan["V/1/2"]
+    assert b.week is None and b.at_risk
+    assert "no lathe capacity to keep it" in b.reason and "V/1" in b.reason
+
+
+def test_groups_stay_within_their_limits_whenever_capacity_allows():
+    rng = np.random.default_rng(11)
+    companions = 0
+    for _ in range(10):
+        wheels, groups = [], []
+        for v in range(2):
+            base = float(rng.uniform(870, 900))
+            sets = []
+            for bogie in (1, 2):
+                for axle in (1, 2):
+                    key = f"V{v}/{bogie}/{axle}"
+                    sets.append(key)
+                    p10 = float(rng.choice([6_000, 20_000, 40_000, 400_000]))
+                    d = base + float(rng.choice([-2.45, 2.45]))  # spreads of 0 or 4.9 mm
+                    scale = float(rng.uniform(0.5, 8.0))  # diameter cuts ~0.2 to 0.7 mm
+                    wheels += [_wheel(key + s, key, p10, diameter=d, wear_scale=scale)
+                               for s in "LR"]
+                groups.append(DiameterGroup("bogie", f"V{v}/{bogie}",
+                                            tuple(sets[-2:]), 5.0))
+            groups.append(DiameterGroup("vehicle", f"V{v}", tuple(sets), 10.0))
+        plan = _plan(wheels, capacity=8, groups=groups)
+        assert not plan.at_risk
+        companions += sum("companion turning" in t.reason or "moved earlier" in t.reason
+                          for t in plan.wheelsets)
+        for t in plan.wheelsets:
+            if t.turn_date is None:
+                continue
+            for g in groups:
+                d = [_diameter_at(plan, wheels, k, t.turn_date) for k in g.wheelsets]
+                assert max(d) - min(d) <= g.limit_mm + 1e-6, (g, t.week)
+    assert companions > 0  # the fleets do ask for companion turnings
