@@ -31,7 +31,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import measurement_store, model_store, route_store
 from wearcast.service import models_db as db
-from wearcast.service.errors import Unprocessable, from_value_error
+from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.statistics import discrepancy, discrepancy_report, hybrid
 from wearcast.statistics.causes import CATALOGUE
@@ -51,6 +51,7 @@ class DiagnosisRun:
     row: db.Model
     measurement_ids: list[int]
     excluded: dict[str, int]
+    expected_progression: dict[str, Any] | None = None
 
 
 def _covariates(session: Session, ids: list[int]) -> pd.DataFrame:
@@ -142,6 +143,8 @@ def run_diagnosis(session: Session, model_id: int, body: DiagnoseIn) -> Diagnosi
         raise Unprocessable("filter", "the finder needs measurements of at least two wheels "
                             "(it scores every cause on wheels it was not fitted on)")
     expected = None
+    if body.expected_progression_simulations is not None:
+        expected = progression_of_simulations(session, body.expected_progression_simulations)
     if body.expected_progression is not None:
         from wearcast.statistics.discrepancy_progression import ExpectedProgression
 
@@ -160,7 +163,37 @@ def run_diagnosis(session: Session, model_id: int, body: DiagnoseIn) -> Diagnosi
     except ValueError as exc:
         raise from_value_error(exc, "filter") from exc
     return DiagnosisRun(diagnosis, model, row, frame["measurement_id"].astype(int).tolist(),
-                        {k: v for k, v in excluded.items() if v})
+                        {k: v for k, v in excluded.items() if v},
+                        None if expected is None else expected.describe())
+
+
+def progression_of_simulations(session: Session, ids: list[int]) -> Any:
+    """The expected progression of stored, finished wear-loop simulations (404 for an unknown
+    id, 422 for one not done)."""
+    from wearcast.statistics.discrepancy_progression import (
+        SimulatedWheel,
+        progression_from_simulations,
+    )
+
+    wheels = []
+    for sim_id in dict.fromkeys(ids):
+        row = session.get(db.Simulation, sim_id)
+        if row is None or "kind" in (row.spec or {}):
+            raise NotFound("expected_progression_simulations",
+                           f"no simulation with id {sim_id}")
+        if row.status != "done" or not row.result:
+            raise Unprocessable("expected_progression_simulations",
+                                f"simulation {sim_id} is {row.status}, not done")
+        res, spec = row.result, row.spec
+        wheels.append(SimulatedWheel(str(spec.get("bogie_type", "trailer")),
+                                     int(spec.get("axle", 1)), np.asarray(res["y_mm"], float),
+                                     np.asarray(res["profiles_mm"], float),
+                                     np.asarray(res["mileage_km"], float)))
+    source = "wear-loop simulations " + ", ".join(str(i) for i in dict.fromkeys(ids))
+    try:
+        return progression_from_simulations(wheels, source)
+    except ValueError as exc:
+        raise from_value_error(exc, "expected_progression_simulations") from exc
 
 
 def save_extension(session: Session, run: DiagnosisRun, name: str
@@ -236,7 +269,7 @@ def diagnosis_out(session: Session, model_id: int, run: DiagnosisRun,
         selected=d["selected"], runner_up=d["runner_up"], margin=d["margin"],
         margin_p_value=d["margin_p_value"], candidates=d["candidates"],
         unexplained=d["unexplained"], nuisance=d["nuisance"], null_test=d["null_test"],
-        excluded=run.excluded,
+        excluded=run.excluded, expected_progression=run.expected_progression,
         saved_model=None if saved is None else model_store.model_out(session, saved),
         save_reason=save_reason)
 

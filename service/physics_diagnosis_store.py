@@ -56,9 +56,10 @@ def catalogue(state: dict[str, Any]) -> tuple[Any, ...]:
 def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> int:
     """Validate a physics diagnosis and queue it; the job id."""
     model = store.load(session, model_id)
-    if body.expected_progression is not None:
-        raise Unprocessable("expected_progression", "a physics model's diagnosis simulates the "
-                            "progression itself; this field is for hybrid models")
+    for field in ("expected_progression", "expected_progression_simulations"):
+        if getattr(body, field) is not None:
+            raise Unprocessable(field, "a physics model's diagnosis simulates the progression "
+                                "itself; this field is for hybrid models")
     names = [c.name for c in catalogue(model.state)]
     if body.causes is not None:
         for i, code in enumerate(body.causes):

@@ -604,6 +604,19 @@ class DiagnoseIn(Strict):
     expected_progression: ExpectedProgressionIn | None = Field(default=None, description=(
         "a simulated wear-area progression of the route per bogie type, wheelset and region "
         "(hybrid models): the null grows as it does instead of linearly in mileage"))
+    expected_progression_simulations: list[int] | None = Field(
+        default=None, min_length=1, max_length=32, description=(
+            "ids of finished wear-loop simulations of the route (POST /v1/simulations, one per "
+            "bogie type and axle, e.g. both sides): the expected progression is derived from "
+            "their wear areas (statistics.discrepancy_progression.progression_from_simulations)"))
+
+    @model_validator(mode="after")
+    def _one_progression(self) -> DiagnoseIn:
+        if self.expected_progression is not None and \
+                self.expected_progression_simulations is not None:
+            raise ValueError("give expected_progression or expected_progression_simulations, "
+                             "not both")
+        return self
 
 
 class GainOut(BaseModel):
@@ -649,6 +662,9 @@ class DiagnosisOut(BaseModel):
     null_test: str = ""
     excluded: dict[str, int] = Field(default_factory=dict, description=(
         "measurements left out, by reason"))
+    expected_progression: dict[str, Any] | None = Field(default=None, description=(
+        "the null's expected progression when one was given: its source and the factor "
+        "g = A / (k s) per bogie type/wheelset/region at its mileages; null: linear in mileage"))
     saved_model: ModelOut | None = None
     save_reason: str | None = Field(default=None, description="why save_as saved nothing")
 

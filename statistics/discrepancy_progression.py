@@ -34,7 +34,7 @@ total exponent (expected plus departure) for the linear hybrid model.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.vocabulary import REGIONS
+from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, REGIONS
 
 Array = NDArray[np.float64]
 WHEELSETS = ("leading", "trailing")
@@ -134,6 +134,61 @@ class ExpectedProgression:
         """JSON-able summary: the source and g at the grid per key."""
         return {"source": self.source, "mileage_km": [float(v) for v in self.mileage_km],
                 "factors": {"/".join(k): [float(v) for v in g] for k, g in self.factors.items()}}
+
+
+@dataclass(frozen=True)
+class SimulatedWheel:
+    """One wheel's wear-loop run (``physics.wear_simulation.WearSimulation``): its bogie
+    type and axle (1 leads in the reference direction), lateral grid y [mm], profiles z after
+    each step [mm] (row 0 the initial one) and the mileage of each row [km]."""
+
+    bogie_type: str
+    axle: int
+    y_mm: Array
+    profiles_mm: Array
+    mileage_km: Array
+
+    def region_areas_mm2(self, mileage_km: Array) -> dict[str, Array]:
+        """Worn area of each region at ``mileage_km`` [mm^2]: the vertical wear
+        z_initial - z, linear between steps, integrated over the region (flange
+        y < ``REGION_SPLIT_Y_MM``, tread y >= it), as the measured areas are."""
+        y = np.asarray(self.y_mm, dtype=float)
+        z = np.asarray(self.profiles_mm, dtype=float)
+        m = np.asarray(self.mileage_km, dtype=float)
+        if z.ndim != 2 or z.shape != (m.size, y.size) or m.size < 2 or np.any(np.diff(m) <= 0):
+            raise ValueError("simulation: needs profiles (steps x points) at >= 2 increasing "
+                             "mileages")
+        wear = z[0] - z
+        out: dict[str, Array] = {}
+        for region in REGIONS:
+            sel = y < REGION_SPLIT_Y_MM if region == "flange" else y >= REGION_SPLIT_Y_MM
+            per_step = np.trapezoid(wear[:, sel], y[sel], axis=1)
+            out[region] = np.interp(mileage_km, m, per_step)
+        return out
+
+
+def progression_from_simulations(wheels: Sequence[SimulatedWheel], source: str,
+                                 n_points: int = 20) -> ExpectedProgression:
+    """The expected progression of wear-loop runs of the route: per bogie type, wheelset
+    (axle 1 leading, 2 trailing) and region the mean worn area of its runs (e.g. the left
+    and right wheels) at ``n_points`` mileages up to the shortest run's end, through
+    :meth:`ExpectedProgression.from_areas`."""
+    if not wheels:
+        raise ValueError("simulations: needs at least one wear-loop run")
+    top = min(float(np.asarray(w.mileage_km)[-1]) for w in wheels)
+    if not top > 0:
+        raise ValueError("simulations: a run covers no mileage")
+    grid = np.linspace(0.0, top, n_points + 1)[1:]
+    groups: dict[tuple[str, str], list[dict[str, Array]]] = {}
+    for w in wheels:
+        if w.axle not in (1, 2):
+            raise ValueError(f"simulations: axle must be 1 or 2, got {w.axle!r}")
+        wheelset = WHEELSETS[w.axle - 1]
+        groups.setdefault((w.bogie_type, wheelset), []).append(w.region_areas_mm2(grid))
+    areas: dict[tuple[str, str, str], Array] = {
+        (bogie, wheelset, str(region)): np.mean([a[region] for a in runs], axis=0)
+        for (bogie, wheelset), runs in groups.items() for region in REGIONS}
+    return ExpectedProgression.from_areas(grid, areas, source=source)
 
 
 def exponent_offset(log_factor: Array, centred_log_s: Array) -> Array:

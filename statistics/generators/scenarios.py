@@ -32,7 +32,7 @@ from wearcast.physics.vehicle_wear_simulation import (
 )
 from wearcast.physics.wear_loop import LoopClass
 from wearcast.statistics import hybrid
-from wearcast.statistics.discrepancy_progression import ExpectedProgression
+from wearcast.statistics.discrepancy_progression import ExpectedProgression, SimulatedWheel
 from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
@@ -219,9 +219,8 @@ def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),
 
 def loop_wear_area(sim: Any, loop_km: float, region: str) -> float:
     """Worn area of one loop run's region at a loop mileage (held at its end) [mm^2]."""
-    w = sim.wear_at(min(loop_km, sim.mileage_km[-1]))
-    sel = sim.y_mm >= -30.0 if region == "tread" else sim.y_mm < -30.0
-    return float(np.trapezoid(w[sel], sim.y_mm[sel]))
+    wheel = SimulatedWheel("", 1, sim.y_mm, sim.profiles_mm, sim.mileage_km)
+    return float(wheel.region_areas_mm2(np.array([loop_km]))[region][0])
 
 
 def _loop_mean_areas(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float

@@ -14,7 +14,11 @@ import numpy as np
 import pytest
 
 from wearcast.statistics.discrepancy import diagnose
-from wearcast.statistics.discrepancy_progression import ExpectedProgression
+from wearcast.statistics.discrepancy_progression import (
+    ExpectedProgression,
+    SimulatedWheel,
+    progression_from_simulations,
+)
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import scenarios
 from wearcast.statistics.generators import twin_effects as te
@@ -105,3 +109,50 @@ def test_a_departure_from_the_expected_progression_is_named_with_the_total_expon
     beta = f.evidence["intervals"]["beta_tread"]
     assert beta["value"] == pytest.approx(0.8, abs=0.03), beta
     assert f.extension["parameters"]["beta_tread"] == pytest.approx(beta["value"])
+
+
+def _run(bogie, axle, beta, depth_mm=1.0, flange_share=0.5):
+    """A wear-loop-like run whose worn areas grow as s^beta: a flange bump (y < -30) and a
+    tread bump (y >= -30) of known areas at the last step."""
+    y = np.linspace(-70.0, 60.0, 521)
+    s = np.linspace(0.0, 40_000.0, 9)
+    shape_f = flange_share * np.exp(-((y + 40.0) / 3.0) ** 2)
+    shape_t = (1.0 - flange_share) * np.exp(-((y - 5.0) / 8.0) ** 2)
+    growth = (s / s[-1]) ** beta
+    profiles = -depth_mm * growth[:, None] * (shape_f + shape_t)[None, :]
+    return SimulatedWheel(bogie, axle, y, profiles, s)
+
+
+def test_simulated_areas_are_the_integrated_wear_of_each_region():
+    run = _run("motor", 1, 1.0)
+    areas = run.region_areas_mm2(np.array([20_000.0, 40_000.0, 50_000.0]))
+    flange = 0.5 * 3.0 * np.sqrt(np.pi)  # integral of the flange bump at the end [mm^2]
+    tread = 0.5 * 8.0 * np.sqrt(np.pi)
+    assert areas["flange"] == pytest.approx([flange / 2, flange, flange], rel=1e-3)
+    assert areas["tread"] == pytest.approx([tread / 2, tread, tread], rel=1e-3)  # end held
+
+
+def test_progression_from_simulations_recovers_the_power_law():
+    runs = [_run(b, a, 0.7) for b in ("motor", "trailer") for a in (1, 2)]
+    runs.append(_run("motor", 1, 0.7, depth_mm=3.0))  # the other side: averaged, same shape
+    expected = progression_from_simulations(runs, "test")
+    grid = np.asarray(expected.mileage_km)
+    assert grid[-1] == pytest.approx(40_000.0) and grid.size == 20
+    # the runs' wear is linear between their steps (every 5,000 km): s^0.7 interpolated
+    steps = np.linspace(0.0, 40_000.0, 9)
+    area = np.interp(grid, steps, steps ** 0.7)
+    k = np.sum(area * grid) / np.sum(grid ** 2)  # least-squares slope through the origin
+    for key, g in expected.factors.items():
+        assert g == pytest.approx(area / (k * grid), rel=1e-6), key
+    assert g[0] > 1.3 and g[-1] < 0.95  # sublinear: above the straight line early
+    linear = progression_from_simulations([_run("motor", 2, 1.0)], "linear")
+    assert linear.factors[("motor", "trailing", "flange")] == pytest.approx(1.0)
+    assert set(linear.factors) == {("motor", "trailing", r) for r in ("flange", "tread")}
+
+
+def test_progression_from_simulations_refuses_bad_runs():
+    with pytest.raises(ValueError, match="simulations"):
+        progression_from_simulations([], "none")
+    bad = _run("motor", 3, 1.0)
+    with pytest.raises(ValueError, match="axle"):
+        progression_from_simulations([bad], "bad")
