@@ -45,7 +45,7 @@ linear-theory check: Boocock (1969), Wickens (2003).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,6 +54,7 @@ from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import Bound, fastsim, fastsim_forces
 
 # the contact table lives in curving_table; its names are re-exported for the table's users
+from wearcast.physics.curving_contacts import pipeline_contacts
 from wearcast.physics.curving_table import GAUGE_MM as GAUGE_MM
 from wearcast.physics.curving_table import TAPE_CIRCLE_HALF_SPACING_MM, vehicle_contact_table
 from wearcast.physics.curving_table import ContactTable as ContactTable
@@ -284,8 +285,12 @@ def _wheel_loads(vehicle: BogieVehicle, a_unb) -> NDArray:
 
 
 def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
-                    return_contacts: bool = False, creep_grid: int | None = None):
-    """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...)."""
+                    return_contacts: bool = False, creep_grid: int | None = None,
+                    contacts: _Contacts | None = None):
+    """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...).
+
+    ``contacts``: the contacts of the state q from elsewhere (the pipeline's,
+    ``curving_contacts``) instead of the table's."""
     kappa = np.asarray(kappa, dtype=float)
     a_unb = np.asarray(a_unb, dtype=float)
     ws = q[..., :10].reshape(q.shape[:-1] + (2, 5))
@@ -296,7 +301,8 @@ def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb,
     yb = q[..., 10]
     psib = q[..., 11] * 1e-3
     r0 = table.nominal_radius_m
-    c = _contacts(table, y, psi, e, d, kappa, r0, vehicle.friction, creep_grid)
+    c = (_contacts(table, y, psi, e, d, kappa, r0, vehicle.friction, creep_grid)
+         if contacts is None else contacts)
     lat, vert, yaw, pitch = _wheelset_loads(c)
     am = vehicle.semi_wheelbase_m
     x = np.array([am, -am])
@@ -341,6 +347,28 @@ def _initial_state(vehicle: BogieVehicle, table: ContactTable) -> NDArray:
 
 
 # --------------------------------------------------------------------------------------------
+# Contacts from the contact pipeline at the equilibrium pose
+# --------------------------------------------------------------------------------------------
+
+def _pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_grid: int
+                 ) -> tuple[_Contacts, NDArray, NDArray, dict[int, str]]:
+    """The pipeline's contacts (``curving_contacts``) at the states q (m, 12) with parameters
+    (m, >= 2): (contacts, peak pressures [MPa], ok (m,), errors per row)."""
+    m = q.shape[0]
+    ws = q[:, :10].reshape(m, 2, 5)
+    y, d = ws[..., 0], ws[..., 3:5]
+    loads = np.broadcast_to(_wheel_loads(vehicle, params[:, 1])[:, None, :], (m, 2, 2))
+    pc = pipeline_contacts(table.track, TAPE_CIRCLE_HALF_SPACING_MM - table.rail_offset_mm,
+                           _centre_shift(table, y, d), ws[..., 1] * 1e-3, _roll(table, y, d),
+                           1.0 + ws[..., 2] * 1e-3, loads, params[:, 0], vehicle.friction,
+                           SHEAR_MODULUS_MPA, creep_grid)
+    c = _Contacts(pc.normal_n, pc.angle_rad, pc.xi, pc.eta, pc.phi_per_mm, pc.fx_n, pc.fy_n,
+                  pc.mz_nmm, pc.a_mm, pc.b_mm, pc.radius_m, pc.wheel_y_mm, pc.rail_y_mm,
+                  pc.lateral_mm)
+    return c, pc.peak_pressure_mpa, pc.ok, pc.errors
+
+
+# --------------------------------------------------------------------------------------------
 # Results
 # --------------------------------------------------------------------------------------------
 
@@ -363,6 +391,14 @@ class CurvingResult:
     residual norm of the scaled equilibrium and the solver ``state`` (scaled unknowns, used to
     continue from this solution); ``creep_grid`` the FASTSIM grid of the equilibrium's creep
     forces (None: the saturation law, ``contact.creep``).
+
+    ``pipeline`` (with ``contact_pipeline=True``, else None): the contacts of the one contact
+    pipeline (``curving_contacts``) at this equilibrium's pose of every wheel, same shape and
+    signs as above, keyed ``normal_n``, ``angle_rad``, ``wheel_y_mm``, ``rail_y_mm``,
+    ``lateral_mm``, ``radius_m``, ``xi``, ``eta``, ``phi_per_mm``, ``fx_n``, ``fy_n``,
+    ``mz_nmm``, ``a_mm``, ``b_mm``, ``peak_pressure_mpa``, ``tau_max_mpa``, ``t_gamma_n``,
+    ``in_contact``; ``pipeline_residual_norm`` the scaled bogie equilibrium residual with the
+    pipeline's forces in place of the table's (how far they are from balancing the state).
     """
 
     radius_m: float
@@ -398,6 +434,8 @@ class CurvingResult:
     residual_norm: float
     state: NDArray
     creep_grid: int | None = None
+    pipeline: dict[str, NDArray] | None = None
+    pipeline_residual_norm: float = float("nan")
 
     @property
     def high_rail_side(self) -> str | None:
@@ -464,8 +502,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
                   speed_m_s: float | None = None, direction: str = "left",
                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_m_s: float = 30.0,
                   table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                  fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
-                  ) -> CurvingResult:
+                  fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID,
+                  contact_pipeline: bool = False) -> CurvingResult:
     """Quasi-static curving of a two-axle bogie (module docstring).
 
     Parameters
@@ -484,6 +522,7 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     fastsim_grid : FASTSIM grid n (n x n) for tau_max on the final state
     creep_grid : FASTSIM grid of the equilibrium's creep forces, None for the saturation law
         (:func:`solve_curving_cases_or_none`)
+    contact_pipeline : contacts from the contact pipeline (:func:`solve_curving_cases_or_none`)
 
     Returns
     -------
@@ -496,18 +535,19 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     case = curve_case(radius_m, cant_mm, speed_m_s, direction, unbalanced_acceleration_m_s2,
                       vehicle.traction_torque_nm, tangent_speed_m_s)
     return solve_curving_cases(vehicle, [case], [(radius_m, direction, cant_mm)], table, tol,
-                               fastsim_grid, creep_grid)[0]
+                               fastsim_grid, creep_grid, contact_pipeline)[0]
 
 
 def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
                         labels: list[tuple[float | None, str, float]] | None = None,
                         table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                        fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
-                        ) -> list[CurvingResult]:
+                        fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID,
+                        contact_pipeline: bool = False) -> list[CurvingResult]:
     """:func:`solve_curving_cases_or_none` that raises CurvingConvergenceError naming the
     first case that did not converge."""
     results = solve_curving_cases_or_none(vehicle, cases, labels, table, tol, fastsim_grid,
-                                          skip_failed=False, creep_grid=creep_grid)
+                                          skip_failed=False, creep_grid=creep_grid,
+                                          contact_pipeline=contact_pipeline)
     return [r for r in results if r is not None]
 
 
@@ -517,7 +557,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                 tol: float = DEFAULT_TOLERANCE, fastsim_grid: int = 20,
                                 skip_failed: bool = True,
                                 initial_states: list[NDArray | None] | None = None,
-                                creep_grid: int | None = DEFAULT_CREEP_GRID
+                                creep_grid: int | None = DEFAULT_CREEP_GRID,
+                                contact_pipeline: bool = False
                                 ) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
@@ -545,6 +586,12 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         (Powell hybrid as fallback); a case that does not converge with FASTSIM fails like one
         that does not converge at all. None: the saturation law's equilibrium (faster; its
         forces are up to ~0.5 mu Fn off under large spin, ``contact.creep``)
+    contact_pipeline : also evaluate the one contact pipeline at each equilibrium's pose
+        (``CurvingResult.pipeline``, ``curving_contacts``; 0.1-0.5 s per wheel); a case at which
+        the pipeline fails fails like one that does not converge. The equilibrium and the
+        contacts that feed wear stay the table's: the pipeline's forces do not balance the
+        table's equilibrium (``pipeline_residual_norm``), and a correction of the equilibrium
+        to them did not converge (README, known gaps)
 
     Returns
     -------
@@ -601,6 +648,33 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     norm = np.linalg.norm(res, axis=-1)
     wear = contact_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
                                  c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
+    pipeline: list[dict[str, NDArray] | None] = [None] * n
+    pipeline_norm = np.full(n, np.nan)
+    if contact_pipeline and np.any(ok):
+        rows = np.nonzero(ok)[0]
+        cp, peak, ok_p, errors = _pipeline_at(q[rows], vehicle, table, p_end[rows],
+                                              DEFAULT_CREEP_GRID if creep_grid is None
+                                              else creep_grid)
+        res_p = _bogie_residual(q[rows], vehicle, table, p_end[rows, 0], p_end[rows, 1],
+                                p_end[rows, 2], contacts=cp)
+        wear_p = contact_wear_measures(cp.xi, cp.eta, cp.phi_per_mm, cp.a_mm, cp.b_mm,
+                                       cp.normal_n, cp.fx_n, cp.fy_n, cp.mz_nmm,
+                                       vehicle.friction, fastsim_grid)
+        for j, row in enumerate(rows.tolist()):
+            if not ok_p[j]:
+                if not skip_failed:
+                    kappa = cases[row].curvature_per_m
+                    raise CurvingConvergenceError(
+                        f"contact pipeline failed at the equilibrium pose: {errors[j]}",
+                        np.inf if kappa == 0 else 1.0 / kappa, float(norm[row]))
+                ok[row] = False
+                continue
+            pipeline[row] = {**{f.name: getattr(cp, f.name)[j] for f in fields(_Contacts)},
+                             "peak_pressure_mpa": peak[j],
+                             "tau_max_mpa": wear_p["tau_max_mpa"][j],
+                             "t_gamma_n": wear_p["t_gamma_n"][j],
+                             "in_contact": wear_p["in_contact"][j]}
+            pipeline_norm[row] = float(np.linalg.norm(res_p[j]))
     results: list[CurvingResult | None] = []
     for k, (case, (radius_m, direction, cant_mm)) in enumerate(zip(cases, labels, strict=True)):
         if not ok[k]:
@@ -624,7 +698,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
             tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
             in_contact=wear["in_contact"][k], residual_norm=float(norm[k]),
-            state=q[k].copy(), creep_grid=creep_grid))
+            state=q[k].copy(), creep_grid=creep_grid, pipeline=pipeline[k],
+            pipeline_residual_norm=float(pipeline_norm[k])))
     return results
 
 

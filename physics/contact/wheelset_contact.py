@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact.creepages import rigid_creepages
 from wearcast.physics.contact.fastsim import Bound, fastsim
 from wearcast.physics.contact.geometry import (
     ContactPatches,
@@ -191,44 +192,6 @@ def contact_creepages(table: ContactTable, side: str, speed_m_s: float,
     return rigid_creepages(side, speed_m_s, angular_velocity_rad_s, table.shift_mm,
                            table.yaw_rad, table.roll_rad, table.height_mm, nominal_radius_mm,
                            point, p.contact_angle_rad)
-
-
-def rigid_creepages(side: str, speed_m_s: float, angular_velocity_rad_s: ArrayLike,
-                    shift_mm: ArrayLike, yaw_rad: ArrayLike, roll_rad: ArrayLike,
-                    height_mm: ArrayLike, nominal_radius_mm: float, point_mm: ArrayLike,
-                    contact_angle_rad: ArrayLike
-                    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """Rigid-body creepages (xi, eta, phi [1/mm]) of one wheel at given contact points.
-
-    ``point_mm`` (3, N): the contact point (x, y, z) in the track frame [mm] with the axle
-    centre at (0, shift, r0 + height); ``contact_angle_rad`` (N,) delta there; pose arrays
-    (N,) or scalars.  Conventions and formulas: ``contact_creepages`` (module docstring).
-    """
-    if side not in ("left", "right"):
-        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
-    if speed_m_s <= 0:
-        raise ValueError("speed_m_s must be positive")
-    sign = 1.0 if side == "left" else -1.0
-    point = np.asarray(point_mm, dtype=float)
-    shape = point.shape[1:]
-    psi = np.broadcast_to(np.asarray(yaw_rad, dtype=float), shape)
-    roll = np.broadcast_to(np.asarray(roll_rad, dtype=float), shape)
-    omega = np.broadcast_to(np.asarray(angular_velocity_rad_s, dtype=float), shape)
-    speed = speed_m_s * 1000.0  # mm/s
-    # unit axle vector (track frame, x forward, y left, z up), as geometry._points
-    axle = np.stack([-np.sin(psi), np.cos(psi) * np.cos(roll), np.cos(psi) * np.sin(roll)])
-    centre = np.stack([np.zeros(shape), np.broadcast_to(np.asarray(shift_mm, dtype=float), shape),
-                       nominal_radius_mm + np.broadcast_to(np.asarray(height_mm, dtype=float),
-                                                           shape)])
-    v_wheel = omega * np.cross(axle, point - centre, axis=0)
-    v_wheel[0] += speed
-    delta = np.broadcast_to(np.asarray(contact_angle_rad, dtype=float), shape)
-    e_s = np.stack([np.zeros(shape), sign * np.cos(delta), -np.sin(delta)])
-    e_n = np.stack([np.zeros(shape), sign * np.sin(delta), np.cos(delta)])
-    xi = -v_wheel[0] / speed
-    eta = -np.sum(v_wheel * e_s, axis=0) / speed
-    phi = -omega * np.sum(sign * axle * e_n, axis=0) / speed
-    return xi, eta, phi
 
 
 def _stack(table: ContactTable, side: str, name: str) -> _FloatArray:
