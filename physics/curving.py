@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import Bound, fastsim, fastsim_forces
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 
 # the contact table lives in curving_table; its names are re-exported for the table's users
 from wearcast.physics.curving_contacts import pipeline_contacts
@@ -73,8 +74,8 @@ from wearcast.physics.wear_measures import tau_max as wear_tau_max
 CANT_BASE_MM = 1500.0
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm]: the vocabulary's.
 FLANGE_SPLIT_Y_MM = REGION_SPLIT_Y_MM
-#: Shear modulus of wheel and rail steel [MPa].
-SHEAR_MODULUS_MPA = 82_000.0
+#: Shear modulus of wheel and rail steel [MPa] (``contact.hertz``).
+SHEAR_MODULUS_MPA = STEEL_SHEAR_MODULUS_MPA
 #: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
 DEFAULT_TOLERANCE = 1e-6
 #: Traction bound of the FASTSIM solution tau_max is read from: the elliptic bound mu p(x, y) has

@@ -23,9 +23,9 @@ import numpy as np
 
 from wearcast.physics.contact.fastsim import Bound
 from wearcast.physics.contact.geometry import WheelsetTrack
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import wheel_locus
 from wearcast.physics.contact.wheel_rail import LoadedWheel, loaded_wheel_contact
-from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA
 
 
 @dataclass(frozen=True)
@@ -87,7 +87,7 @@ class PoseContact:
 
 def contact_at_poses(track: WheelsetTrack, side: str, poses: Sequence[Pose], *,
                      speed_m_s: float = 2.0, mu: float = 0.3,
-                     shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
+                     shear_modulus_mpa: float = STEEL_SHEAR_MODULUS_MPA,
                      poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
                      bound: Bound = "parabolic") -> list[PoseContact]:
     """Loaded contact of the ``side`` wheel of ``track`` at each pose (module docstring).

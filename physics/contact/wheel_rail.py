@@ -19,8 +19,15 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
    method "auto" a pose still unsettled after 10 rounds finishes with the coarse BEM for
    every patch, since a patch at the Hertz criterion's threshold can flip between the two).
 
-Signs as ``wheelset_contact``: per wheel in its own (mirrored for the right wheel) frame,
-forces on the rail, F_s towards the wheel's field side.
+Signs of the results (per wheel, in that wheel's local frame; the right wheel's frame is the
+mirror image of the left one so that both wheels are described alike): y_wheel and delta as
+``geometry`` (delta < 0 on tread and flange), forces ON THE RAIL, F_s positive towards the
+wheel's field side; the lateral track force on the rail ``lateral_force_n`` =
+sum (F_s cos delta - F_n sin delta) is positive outwards (a flanging wheel pushes its rail
+out). With these signs the left wheel at shift +y and yaw +psi is CONTACT's (unmirrored) right
+wheel at y_ws = y, yaw psi, quantity by quantity; CONTACT prints its left wheel in the track
+frame, i.e. our right wheel with y_wheel, delta, eta, phi and F_s negated
+(``benchmarks/manchester_contact.py``).
 """
 
 from __future__ import annotations
@@ -33,9 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.creepages import rigid_creepages
 from wearcast.physics.contact.fastsim import Bound, fastsim
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
 from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
-from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA
 
 _FloatArray = NDArray[np.float64]
 
@@ -126,7 +133,7 @@ def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approac
 def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                          wheel_load_n: ArrayLike = 10_000.0, speed_m_s: float = 2.0,
                          angular_velocity_rad_s: ArrayLike | None = None, mu: float = 0.3,
-                         shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
+                         shear_modulus_mpa: float = STEEL_SHEAR_MODULUS_MPA,
                          poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
                          bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 40,
                          track_curvature_per_m: ArrayLike = 0.0) -> list[LoadedWheel]:
