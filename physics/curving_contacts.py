@@ -7,10 +7,14 @@ their normal and creep forces, creepages and the wear measures -- comes from the
 pipeline of ``contact.pose_contact`` (the one checked against CONTACT's Manchester results:
 locus -> patches merged or split by the interpenetration region -> non-Hertzian normal contact
 -> FASTSIM) evaluated at the curving's pose of each wheel: the wheelset's centre shift, yaw,
-roll, rolling ratio, the track curvature and the wheel's vertical load. On a flange the
-table's vertical approach loads the gap minimum near the root (contact angle 30-50 deg) where
-the pipeline's conformal root-flank patch lies up the flank (66-70 deg); the table places the
-wheelset, the pipeline says where and how it touches (``benchmarks/curving_flange_vs_geometry.py``).
+roll, rolling ratio, the track curvature and the wheel's vertical load -- the table's
+equilibrium pose, or the equilibrium of the pipeline's own forces
+(``curving._pipeline_equilibrium``).
+At the table's pose on a flange the table loads the gap minimum near the root (contact angle
+30-50 deg) where the pipeline's patch lies up the flank (66-70 deg), and the pipeline's forces
+do not balance the state; at the equilibrium of the pipeline's forces (a smaller roll) its
+flange patch is centred on the root too, within 0.1-0.5 mm of the table's
+(``benchmarks/curving_flange_vs_geometry.py``).
 
 Conventions: the pipeline reports each wheel in its own frame with CONTACT's signs (forces on
 the rail, creepages rail minus wheel, delta < 0 on tread and flange); the curving reports
