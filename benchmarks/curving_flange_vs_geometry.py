@@ -19,8 +19,9 @@ pipeline's forces are from balancing the curving's state. The second block solve
 equilibrium with the pipeline's forces (``pipeline_equilibrium=True``, Broyden from the table's
 equilibrium) and compares its flange contact with the table's contact, and shows the unloaded
 first touch at that pose (``contact.locus``, the same roll) with the range of wheel y where the
-gap is within 10 um of it: on the conformal root-flank region that range spans millimetres, so
-the first-touch point is no reference for a loaded patch there.
+gap is within 10 um of it (up to 6.7 mm on the conformal root-flank region): under a
+patch's approach of ~0.1 mm the loaded patch spans root and flank, so the first-touch point is
+no reference for it there.
 
 Run: ``.venv/bin/python benchmarks/curving_flange_vs_geometry.py [--flange-smoothing MM]``
 (about 3 min, mostly the second block's pipeline equilibria; the option builds the curving

@@ -74,8 +74,9 @@ def test_equilibrium_with_the_pipelines_forces_puts_the_flange_contact_where_the
     # (Broyden from the table's) takes the wheelset 0.3 mm back with a roll of -0.7 mrad, where
     # the pipeline's loaded flange patch is centred on the root (measured -35.97 mm, 50.8 deg;
     # residual 2.5e-4), 0.10 mm from the table's (-36.07 mm, 49.4 deg). The unloaded first
-    # touch at that pose is no reference: root and flank lie within 10 um of gap over several
-    # mm (benchmarks/curving_flange_vs_geometry.py, second block).
+    # touch at that pose (-38.6 mm) is no reference for the loaded patch: its approach (~0.1 mm)
+    # exceeds the gap differences between flank and root, so the patch spans both and its
+    # centre lies on the root (benchmarks/curving_flange_vs_geometry.py, second block).
     trailer = vehicle_preset("manchester", "trailer")
     res = cv.solve_curving(trailer, 150.0, cant_mm=0.0, contact_pipeline=True,
                            pipeline_equilibrium=True)
