@@ -377,6 +377,8 @@ def _pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_gr
 PIPELINE_TOLERANCE = 1e-3
 #: Most Broyden iterations of ``_pipeline_equilibrium``.
 PIPELINE_MAX_ITERATIONS = 40
+#: Largest Broyden step in any scaled unknown of ``_pipeline_equilibrium`` (mm, mrad, 1e-3).
+PIPELINE_MAX_STEP = 1.0
 #: Residual rows of the wheels' vertical loads (state layout above).
 _VERTICAL_ROWS = [3, 4, 8, 9]
 
@@ -433,6 +435,9 @@ def _pipeline_equilibrium(q, vehicle: BogieVehicle, table: ContactTable, params,
             dx = np.linalg.solve(jac[act], -f[act][..., None])[..., 0]
         except np.linalg.LinAlgError:
             break
+        # a step of at most PIPELINE_MAX_STEP in every scaled unknown (mm, mrad, 1e-3): far
+        # from the table's equilibrium Broyden's Jacobian is not to be trusted
+        dx *= np.minimum(1.0, PIPELINE_MAX_STEP / np.max(np.abs(dx), axis=-1))[:, None]
         x_new = q[act] + dx
         _, _, ok_n, _, f_new = _pipeline_residual(x_new, vehicle, table, params[act], grid,
                                                   creep_grid)
