@@ -3,6 +3,11 @@ wheelsets and sides, tread and flange, tau_max and T-gamma) on one core, and the
 (seed 003 Table 3's classes, Minuetto motor and trailer bogies; issue 11's target 0.5 s).
 
 Run: ``.venv/bin/python benchmarks/bench_wear_tables.py`` (target: under 2 s warm).
+
+The last lines time the Aosta route's curving solves (both bogie types, as the table solves
+them) without and with the contact pipeline at each equilibrium pose
+(``curving.solve_curving_cases(..., contact_pipeline=True)``, ``CurvingResult.pipeline``), in
+the same run: the extra cost of issue 11's one contact pipeline.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wearcast.physics import curving  # noqa: E402
+from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
 from wearcast.physics.wear_tables import wear_table_for_route  # noqa: E402
 from wearcast.statistics.generators.fleet_twin import aosta_route  # noqa: E402
 
@@ -62,6 +68,29 @@ def aosta() -> None:
           f"{min(times):5.2f} s  median {np.median(times):5.2f} s  (target 0.5 s)")
 
 
+def aosta_pipeline_cost() -> None:
+    """The Aosta classes' curving without and with the contact pipeline (warm, best of 2)."""
+    route = aosta_route()
+    best: dict[bool, float] = {}
+    for pipeline in (False, True):
+        times = []
+        for _ in range(2):
+            t0 = time.perf_counter()
+            for kind in ("motor", "trailer"):
+                vehicle = vehicle_preset("minuetto", kind)
+                cases = [curving.curve_case(
+                    c.radius_m, c.cant_mm if c.radius_m is not None else 0.0,
+                    None if c.speed_kmh is None else c.speed_kmh / 3.6, "left",
+                    torque_nm=vehicle.traction_torque_nm) for c in route.classes]
+                curving.solve_curving_cases(vehicle, cases, contact_pipeline=pipeline)
+            times.append(time.perf_counter() - t0)
+        best[pipeline] = min(times)
+    print(f"  aosta curving ({len(route.classes)} classes x motor, trailer): table contacts "
+          f"{best[False]:5.2f} s, with the contact pipeline at each pose {best[True]:5.2f} s "
+          f"(x{best[True] / best[False]:.1f})")
+
+
 if __name__ == "__main__":
     main()
     aosta()
+    aosta_pipeline_cost()

@@ -2,19 +2,22 @@
 
 For the 21 cases of ``reference/contact-benchmark/mbench_a22_{left,right}.inp`` (lateral
 shift 0-10 mm with yaw 0-24 mrad, 10 kN vertical force per wheel, V = 2000 mm/s with the
-case's prescribed pitch rate, G = 82 GPa, nu = 0.28, mu = 0.3) this runs
-``physics.contact.wheelset_contact`` (rigid geometry + Hertz load sharing with the vertical
-equilibrium F_n cos delta + F_s sin delta = W + FASTSIM 40x40, parabolic bound) and prints per
-wheel and per range of shifts (tread 0-4.5 mm, flange root 5-6 mm, flange 6.5-10 mm, by where
-CONTACT's right wheel touches) the max and RMS deviation wearcast - CONTACT of the contact
-position, contact angle, F_n, xi, eta, phi, F_x, F_s (lateral, in the contact plane), p_max
-and the lateral track force F_Y; forces also relative (F_n, p_max to CONTACT's value; creep
-forces to mu F_n).  Both profile sources of ``manchester_geometry.py`` are run.
+case's prescribed pitch rate, G = 82 GPa, nu = 0.28, mu = 0.3) this runs the one contact
+pipeline (``physics.contact.pose_contact.contact_at_poses``: locus with the roll solved ->
+patches merged or split by the interpenetration region -> non-Hertzian normal contact, method
+"auto" -> FASTSIM 40x40, parabolic bound, with the vertical equilibrium
+F_n cos delta + F_s sin delta = W) and prints per wheel and per range of shifts (tread
+0-4.5 mm, flange root 5-6 mm, flange 6.5-10 mm, by where CONTACT's right wheel touches) the max
+and RMS deviation wearcast - CONTACT of the contact position, contact angle, F_n, xi, eta, phi,
+F_x, F_s (lateral, in the contact plane), p_max and the lateral track force F_Y; forces also
+relative (F_n, p_max to CONTACT's value; creep forces to mu F_n).  Both profile sources of
+``manchester_geometry.py`` are run.
 
-Conventions: ``wheelset_contact.in_contact_convention`` maps our results onto CONTACT's
-printed signs (CONTACT's right wheel = our left wheel at shift +y_ws, yaw +psi).
-CONTACT solves the exact non-Hertzian problem with one patch per wheel; we use Hertz ellipses
-at rigid contact points (two patches in two-point contact; the heavier one is compared).
+Conventions (:func:`in_contact_convention`): CONTACT's (unmirrored) right wheel is our left
+wheel at shift +y_ws, yaw +psi, quantity by quantity; CONTACT prints its left wheel in the
+track frame, i.e. our right wheel with y_w, delta, eta, phi, F_s and F_Y negated. Patch
+quantities are those of the patch carrying the largest normal force (CONTACT reports one patch
+per wheel in A-2.2), F_Y and F_Z sums over the patches.
 
 Usage: ``.venv/bin/python benchmarks/manchester_contact.py [path/to/reference]``
 """
@@ -32,10 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from manchester_geometry import mbench_wheelset  # noqa: E402
 
 from wearcast.physics.contact.geometry import WheelsetTrack, s1002_60e1  # noqa: E402
-from wearcast.physics.contact.wheelset_contact import (  # noqa: E402
-    in_contact_convention,
-    wheelset_contact,
-)
+from wearcast.physics.contact.pose_contact import Pose, PoseContact, contact_at_poses  # noqa: E402
 
 DEFAULT_REFERENCE = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
 
@@ -55,6 +55,45 @@ QUANTITIES = (
 )
 REGIMES = (("tread 0-4.5", 0.0, 4.5), ("root 5-6", 5.0, 6.0), ("flange 6.5-10", 6.5, 10.0))
 MU = 0.3
+#: Columns of :func:`in_contact_convention` (names as the A-2.2 reference CSVs).
+CONTACT_COLUMNS = ("ycp_w_mm", "delta_rad", "cksi", "ceta", "cphi_per_mm", "Fn_N", "Fx_N",
+                   "Fs_N", "pmax_Nmm2", "FY_rail_N", "FZ_rail_N")
+
+
+def a22_contacts(wt: WheelsetTrack, shifts_mm: np.ndarray, yaws_rad: np.ndarray,
+                 angular_velocity_rad_s: np.ndarray | float | None = None,
+                 wheel_load_n: float = 10_000.0, speed_m_s: float = 2.0, mu: float = MU,
+                 method: str = "auto") -> dict[str, list[PoseContact]]:
+    """The pipeline's contacts of both wheels (``left``, ``right``: ours) at the A-2.2 poses,
+    roll solved, the axle at the given angular velocity [rad/s] (default V / r0)."""
+    shifts = np.asarray(shifts_mm, dtype=float)
+    yaws = np.broadcast_to(np.asarray(yaws_rad, dtype=float), shifts.shape)
+    nominal = speed_m_s * 1000.0 / wt.nominal_radius_mm
+    omega = (np.full(shifts.shape, nominal) if angular_velocity_rad_s is None
+             else np.broadcast_to(np.asarray(angular_velocity_rad_s, dtype=float), shifts.shape))
+    poses = [Pose(float(y), float(p), None, wheel_load_n, float(w / nominal))
+             for y, p, w in zip(shifts, yaws, omega, strict=True)]
+    return {side: contact_at_poses(wt, side, poses, speed_m_s=speed_m_s, mu=mu, method=method)
+            for side in ("left", "right")}
+
+
+def in_contact_convention(contacts: dict[str, list[PoseContact]], contact_wheel: str
+                          ) -> dict[str, np.ndarray]:
+    """Results of one wheel as CONTACT prints them for a wheelset at y_ws = shift, yaw = yaw
+    (module docstring); arrays (N,) keyed by ``CONTACT_COLUMNS``."""
+    if contact_wheel not in ("left", "right"):
+        raise ValueError(f"contact_wheel must be 'left' or 'right', not {contact_wheel!r}")
+    ours = contacts["left"] if contact_wheel == "right" else contacts["right"]
+    sign = 1.0 if contact_wheel == "right" else -1.0
+    rows = []
+    for pc in ours:
+        p = pc.loaded.dominant
+        rows.append((sign * p.normal.centre_y_wheel_mm, sign * p.contact_angle_rad, p.xi,
+                     sign * p.eta, sign * p.phi_per_mm, p.normal_force_n, p.fx_n, sign * p.fs_n,
+                     p.normal.peak_pressure_mpa, sign * pc.loaded.lateral_force_n,
+                     pc.loaded.vertical_force_n))
+    table = np.array(rows, dtype=float).reshape(len(rows), len(CONTACT_COLUMNS))
+    return {name: table[:, k] for k, name in enumerate(CONTACT_COLUMNS)}
 
 
 def pitch_rates(inp: Path) -> np.ndarray:
@@ -70,9 +109,7 @@ def deviations(wt: WheelsetTrack, bench: Path) -> pd.DataFrame:
     omega = pitch_rates(bench / "mbench_a22_right.inp")
     if not np.allclose(omega, pitch_rates(bench / "mbench_a22_left.inp")):
         raise ValueError("left and right .inp prescribe different pitch rates")
-    result = wheelset_contact(wt, right["y_ws_mm"].to_numpy(), right["yaw_rad"].to_numpy(),
-                              wheel_load_n=10_000.0, speed_m_s=2.0,
-                              angular_velocity_rad_s=omega, mu=MU)
+    result = a22_contacts(wt, right["y_ws_mm"].to_numpy(), right["yaw_rad"].to_numpy(), omega)
     for wheel in ("right", "left"):
         ref = pd.read_csv(bench / f"mbench_a22_{wheel}_ref.csv")
         ours = in_contact_convention(result, wheel)
@@ -127,13 +164,12 @@ def main(reference: Path = DEFAULT_REFERENCE) -> None:
             print(f"\n-- {wheel} wheel --")
             print(grid.to_string())
     wt = s1002_60e1()
-    shifts = np.linspace(-10.0, 10.0, 201)
-    wheelset_contact(wt, [0.0])
+    shifts = np.linspace(-10.0, 10.0, 21)
+    a22_contacts(wt, [0.0], [0.0])
     start = time.perf_counter()
-    result = wheelset_contact(wt, shifts, yaw_rad=0.0024 * shifts / 1.0)
+    a22_contacts(wt, shifts, 0.0024 * shifts)
     elapsed = time.perf_counter() - start
-    print(f"\nwheelset_contact, 201 shifts x 2 wheels: {elapsed * 1e3:.0f} ms "
-          f"({result.iterations} normal/creep rounds)")
+    print(f"\ncontact pipeline, 21 shifts x 2 wheels: {elapsed * 1e3:.0f} ms")
 
 
 if __name__ == "__main__":

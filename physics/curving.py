@@ -45,15 +45,17 @@ linear-theory check: Boocock (1969), Wickens (2003).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import Bound, fastsim, fastsim_forces
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 
 # the contact table lives in curving_table; its names are re-exported for the table's users
+from wearcast.physics.curving_contacts import pipeline_contacts
 from wearcast.physics.curving_table import GAUGE_MM as GAUGE_MM
 from wearcast.physics.curving_table import TAPE_CIRCLE_HALF_SPACING_MM, vehicle_contact_table
 from wearcast.physics.curving_table import ContactTable as ContactTable
@@ -72,8 +74,8 @@ from wearcast.physics.wear_measures import tau_max as wear_tau_max
 CANT_BASE_MM = 1500.0
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm]: the vocabulary's.
 FLANGE_SPLIT_Y_MM = REGION_SPLIT_Y_MM
-#: Shear modulus of wheel and rail steel [MPa].
-SHEAR_MODULUS_MPA = 82_000.0
+#: Shear modulus of wheel and rail steel [MPa] (``contact.hertz``).
+SHEAR_MODULUS_MPA = STEEL_SHEAR_MODULUS_MPA
 #: Default tolerance on the scaled equilibrium residual (see ``solve_curving``).
 DEFAULT_TOLERANCE = 1e-6
 #: Traction bound of the FASTSIM solution tau_max is read from: the elliptic bound mu p(x, y) has
@@ -284,8 +286,12 @@ def _wheel_loads(vehicle: BogieVehicle, a_unb) -> NDArray:
 
 
 def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
-                    return_contacts: bool = False, creep_grid: int | None = None):
-    """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...)."""
+                    return_contacts: bool = False, creep_grid: int | None = None,
+                    contacts: _Contacts | None = None):
+    """Scaled equilibrium residual of the bogie; q (..., 12), parameters (...).
+
+    ``contacts``: the contacts of the state q from elsewhere (the pipeline's,
+    ``curving_contacts``) instead of the table's."""
     kappa = np.asarray(kappa, dtype=float)
     a_unb = np.asarray(a_unb, dtype=float)
     ws = q[..., :10].reshape(q.shape[:-1] + (2, 5))
@@ -296,7 +302,8 @@ def _bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb,
     yb = q[..., 10]
     psib = q[..., 11] * 1e-3
     r0 = table.nominal_radius_m
-    c = _contacts(table, y, psi, e, d, kappa, r0, vehicle.friction, creep_grid)
+    c = (_contacts(table, y, psi, e, d, kappa, r0, vehicle.friction, creep_grid)
+         if contacts is None else contacts)
     lat, vert, yaw, pitch = _wheelset_loads(c)
     am = vehicle.semi_wheelbase_m
     x = np.array([am, -am])
@@ -341,6 +348,120 @@ def _initial_state(vehicle: BogieVehicle, table: ContactTable) -> NDArray:
 
 
 # --------------------------------------------------------------------------------------------
+# Contacts from the contact pipeline at the equilibrium pose
+# --------------------------------------------------------------------------------------------
+
+def _pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_grid: int
+                 ) -> tuple[_Contacts, NDArray, NDArray, dict[int, str]]:
+    """The pipeline's contacts (``curving_contacts``) at the states q (m, 12) with parameters
+    (m, >= 2): (contacts, peak pressures [MPa], ok (m,), errors per row)."""
+    m = q.shape[0]
+    ws = q[:, :10].reshape(m, 2, 5)
+    y, d = ws[..., 0], ws[..., 3:5]
+    loads = np.broadcast_to(_wheel_loads(vehicle, params[:, 1])[:, None, :], (m, 2, 2))
+    pc = pipeline_contacts(table.track, TAPE_CIRCLE_HALF_SPACING_MM - table.rail_offset_mm,
+                           _centre_shift(table, y, d), ws[..., 1] * 1e-3, _roll(table, y, d),
+                           1.0 + ws[..., 2] * 1e-3, loads, params[:, 0], vehicle.friction,
+                           SHEAR_MODULUS_MPA, creep_grid)
+    c = _Contacts(pc.normal_n, pc.angle_rad, pc.xi, pc.eta, pc.phi_per_mm, pc.fx_n, pc.fy_n,
+                  pc.mz_nmm, pc.a_mm, pc.b_mm, pc.radius_m, pc.wheel_y_mm, pc.rail_y_mm,
+                  pc.lateral_mm)
+    return c, pc.peak_pressure_mpa, pc.ok, pc.errors
+
+
+#: Scaled residual (as DEFAULT_TOLERANCE) at which the equilibrium with the pipeline's forces
+#: counts as found (``_pipeline_equilibrium``): 1e-3 of the static wheel load, 50 N on a 50 kN
+#: wheel. The pipeline's forces are only piecewise smooth in the pose (patches merge and split,
+#: Hertz and the coarse BEM take turns, its normal / tangential coupling settles to 1e-4 of the
+#: load), so a tighter tolerance is not reached.
+PIPELINE_TOLERANCE = 1e-3
+#: Most Broyden iterations of ``_pipeline_equilibrium``.
+PIPELINE_MAX_ITERATIONS = 40
+#: Largest Broyden step in any scaled unknown of ``_pipeline_equilibrium`` (mm, mrad, 1e-3).
+PIPELINE_MAX_STEP = 1.0
+#: Residual rows of the wheels' vertical loads (state layout above).
+_VERTICAL_ROWS = [3, 4, 8, 9]
+
+
+def _pipeline_residual(q, vehicle: BogieVehicle, table: ContactTable, params, grid: int,
+                       creep_grid: int | None):
+    """The bogie residual with the pipeline's contact forces at the states q (m, 12).
+
+    The pipeline carries each wheel's prescribed vertical load by construction, so the vertical
+    rows keep the table's equations: they fix the approaches d, which only set the roll.
+    Returns (contacts, peak pressures, ok, errors, residual (m, 12))."""
+    c, peak, ok, errors = _pipeline_at(q, vehicle, table, params, grid)
+    res = _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2],
+                          contacts=c)
+    res_t = _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2],
+                            creep_grid=creep_grid)
+    res[:, _VERTICAL_ROWS] = res_t[:, _VERTICAL_ROWS]
+    return c, peak, ok, errors, res
+
+
+def _pipeline_equilibrium(q, vehicle: BogieVehicle, table: ContactTable, params, grid: int,
+                          creep_grid: int | None) -> NDArray:
+    """Equilibrium states (m, 12) of the bogie with the pipeline's contact forces.
+
+    Broyden's ("good") method on ``_pipeline_residual`` from the table's equilibria q, the
+    initial Jacobian the table's (forward differences): each iteration is one pipeline
+    evaluation of the rows not yet converged; a step that raises the residual is cut to 0.3.
+    A plain defect correction with the table's Jacobian oscillates: the pipeline's forces
+    respond 2-4 times as stiffly to the state (its conformal patches are larger than the
+    table's Hertz ellipses). Returns per row the state of the smallest residual found (rows
+    where the pipeline fails keep theirs; the caller reports them).
+    """
+    q = np.array(q, dtype=float)
+    m, n = q.shape
+
+    def table_res(qq, pp):
+        return _bogie_residual(qq, vehicle, table, pp[:, 0], pp[:, 1], pp[:, 2],
+                               creep_grid=creep_grid)
+
+    steps = 1e-6 * np.maximum(1.0, np.abs(q))
+    states = q[:, None, :] + np.concatenate([np.zeros((m, 1, n)),
+                                             steps[:, :, None] * np.eye(n)], axis=1)
+    r_all = table_res(states.reshape(-1, n), np.repeat(params, n + 1, axis=0)).reshape(
+        m, n + 1, n)
+    jac = np.swapaxes((r_all[:, 1:] - r_all[:, :1]) / steps[:, :, None], 1, 2)
+    _, _, ok, _, f = _pipeline_residual(q, vehicle, table, params, grid, creep_grid)
+    norm = np.linalg.norm(f, axis=-1)
+    best_q, best_norm = q.copy(), norm.copy()
+    for _ in range(PIPELINE_MAX_ITERATIONS):
+        act = np.nonzero(ok & ~(best_norm < PIPELINE_TOLERANCE))[0]
+        if act.size == 0:
+            break
+        try:
+            dx = np.linalg.solve(jac[act], -f[act][..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            break
+        # a step of at most PIPELINE_MAX_STEP in every scaled unknown (mm, mrad, 1e-3): far
+        # from the table's equilibrium Broyden's Jacobian is not to be trusted
+        dx *= np.minimum(1.0, PIPELINE_MAX_STEP / np.max(np.abs(dx), axis=-1))[:, None]
+        x_new = q[act] + dx
+        _, _, ok_n, _, f_new = _pipeline_residual(x_new, vehicle, table, params[act], grid,
+                                                  creep_grid)
+        worse = ok_n & (np.linalg.norm(f_new, axis=-1) > norm[act])
+        if np.any(worse):
+            w = np.nonzero(worse)[0]
+            x_new[w] = q[act[w]] + 0.3 * dx[w]
+            _, _, ok_w, _, f_w = _pipeline_residual(x_new[w], vehicle, table, params[act[w]],
+                                                    grid, creep_grid)
+            ok_n[w], f_new[w] = ok_w, f_w
+        ok[act] = ok_n
+        s_step = x_new - q[act]
+        y_step = f_new - f[act]
+        denom = np.maximum(np.sum(s_step * s_step, axis=-1), 1e-300)
+        jac[act] += (np.einsum("ki,kj->kij", y_step - np.einsum("kij,kj->ki", jac[act], s_step),
+                               s_step) / denom[:, None, None])
+        q[act], f[act] = x_new, f_new
+        norm[act] = np.linalg.norm(f_new, axis=-1)
+        better = act[ok_n & (norm[act] < best_norm[act])]
+        best_q[better], best_norm[better] = q[better], norm[better]
+    return best_q
+
+
+# --------------------------------------------------------------------------------------------
 # Results
 # --------------------------------------------------------------------------------------------
 
@@ -363,6 +484,17 @@ class CurvingResult:
     residual norm of the scaled equilibrium and the solver ``state`` (scaled unknowns, used to
     continue from this solution); ``creep_grid`` the FASTSIM grid of the equilibrium's creep
     forces (None: the saturation law, ``contact.creep``).
+
+    ``pipeline`` (with ``contact_pipeline=True``, else None): the contacts of the one contact
+    pipeline (``curving_contacts``) at this equilibrium's pose of every wheel, same shape and
+    signs as above, keyed ``normal_n``, ``angle_rad``, ``wheel_y_mm``, ``rail_y_mm``,
+    ``lateral_mm``, ``radius_m``, ``xi``, ``eta``, ``phi_per_mm``, ``fx_n``, ``fy_n``,
+    ``mz_nmm``, ``a_mm``, ``b_mm``, ``peak_pressure_mpa``, ``tau_max_mpa``, ``t_gamma_n``,
+    ``in_contact``, and the pose it was evaluated at: ``state`` (as ``state``),
+    ``wheelset_shift_mm``, ``wheelset_roll_rad``, ``wheelset_yaw_rad`` (2,) (the table's, or
+    with ``pipeline_equilibrium`` the equilibrium of the pipeline's forces);
+    ``pipeline_residual_norm`` the scaled bogie equilibrium residual there with the pipeline's
+    forces in place of the table's (the vertical rows the table's).
     """
 
     radius_m: float
@@ -398,6 +530,8 @@ class CurvingResult:
     residual_norm: float
     state: NDArray
     creep_grid: int | None = None
+    pipeline: dict[str, NDArray] | None = None
+    pipeline_residual_norm: float = float("nan")
 
     @property
     def high_rail_side(self) -> str | None:
@@ -464,7 +598,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
                   speed_m_s: float | None = None, direction: str = "left",
                   unbalanced_acceleration_m_s2: float = 0.58, tangent_speed_m_s: float = 30.0,
                   table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                  fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
+                  fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID,
+                  contact_pipeline: bool = False, pipeline_equilibrium: bool = False
                   ) -> CurvingResult:
     """Quasi-static curving of a two-axle bogie (module docstring).
 
@@ -484,6 +619,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     fastsim_grid : FASTSIM grid n (n x n) for tau_max on the final state
     creep_grid : FASTSIM grid of the equilibrium's creep forces, None for the saturation law
         (:func:`solve_curving_cases_or_none`)
+    contact_pipeline, pipeline_equilibrium : contacts from the contact pipeline, at the
+        table's equilibrium or at the pipeline's own (:func:`solve_curving_cases_or_none`)
 
     Returns
     -------
@@ -496,18 +633,22 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     case = curve_case(radius_m, cant_mm, speed_m_s, direction, unbalanced_acceleration_m_s2,
                       vehicle.traction_torque_nm, tangent_speed_m_s)
     return solve_curving_cases(vehicle, [case], [(radius_m, direction, cant_mm)], table, tol,
-                               fastsim_grid, creep_grid)[0]
+                               fastsim_grid, creep_grid, contact_pipeline,
+                               pipeline_equilibrium)[0]
 
 
 def solve_curving_cases(vehicle: BogieVehicle, cases: list[CurveCase],
                         labels: list[tuple[float | None, str, float]] | None = None,
                         table: ContactTable | None = None, tol: float = DEFAULT_TOLERANCE,
-                        fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID
+                        fastsim_grid: int = 20, creep_grid: int | None = DEFAULT_CREEP_GRID,
+                        contact_pipeline: bool = False, pipeline_equilibrium: bool = False
                         ) -> list[CurvingResult]:
     """:func:`solve_curving_cases_or_none` that raises CurvingConvergenceError naming the
     first case that did not converge."""
     results = solve_curving_cases_or_none(vehicle, cases, labels, table, tol, fastsim_grid,
-                                          skip_failed=False, creep_grid=creep_grid)
+                                          skip_failed=False, creep_grid=creep_grid,
+                                          contact_pipeline=contact_pipeline,
+                                          pipeline_equilibrium=pipeline_equilibrium)
     return [r for r in results if r is not None]
 
 
@@ -517,7 +658,9 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                 tol: float = DEFAULT_TOLERANCE, fastsim_grid: int = 20,
                                 skip_failed: bool = True,
                                 initial_states: list[NDArray | None] | None = None,
-                                creep_grid: int | None = DEFAULT_CREEP_GRID
+                                creep_grid: int | None = DEFAULT_CREEP_GRID,
+                                contact_pipeline: bool = False,
+                                pipeline_equilibrium: bool = False
                                 ) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
@@ -545,6 +688,18 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         (Powell hybrid as fallback); a case that does not converge with FASTSIM fails like one
         that does not converge at all. None: the saturation law's equilibrium (faster; its
         forces are up to ~0.5 mu Fn off under large spin, ``contact.creep``)
+    contact_pipeline : also evaluate the one contact pipeline at each equilibrium's pose
+        (``CurvingResult.pipeline``, ``curving_contacts``; 0.1-0.5 s per wheel); a case at which
+        the pipeline fails fails like one that does not converge. The equilibrium and the
+        contacts that feed wear stay the table's: at the table's pose the pipeline's forces
+        leave up to 1.7 wheel loads unbalanced on a flange (``pipeline_residual_norm``;
+        ``benchmarks/curving_flange_vs_geometry.py``)
+    pipeline_equilibrium : with ``contact_pipeline``, evaluate the pipeline at the equilibrium
+        of ITS forces instead of the table's (``_pipeline_equilibrium``: Broyden's method from
+        the table's equilibrium; 20-40 pipeline evaluations, ~20 s per operating point);
+        ``CurvingResult.pipeline`` then also holds that equilibrium's pose. A point that does
+        not reach ``PIPELINE_TOLERANCE`` keeps its best state and reports its residual
+        (``pipeline_residual_norm``); the table's results are unchanged either way
 
     Returns
     -------
@@ -601,6 +756,40 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     norm = np.linalg.norm(res, axis=-1)
     wear = contact_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
                                  c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
+    pipeline: list[dict[str, NDArray] | None] = [None] * n
+    pipeline_norm = np.full(n, np.nan)
+    if contact_pipeline and np.any(ok):
+        rows = np.nonzero(ok)[0]
+        grid = DEFAULT_CREEP_GRID if creep_grid is None else creep_grid
+        q_p = q[rows]
+        if pipeline_equilibrium:
+            q_p = _pipeline_equilibrium(q_p, vehicle, table, p_end[rows], grid, creep_grid)
+        cp, peak, ok_p, errors, res_p = _pipeline_residual(q_p, vehicle, table, p_end[rows],
+                                                           grid, creep_grid)
+        wear_p = contact_wear_measures(cp.xi, cp.eta, cp.phi_per_mm, cp.a_mm, cp.b_mm,
+                                       cp.normal_n, cp.fx_n, cp.fy_n, cp.mz_nmm,
+                                       vehicle.friction, fastsim_grid)
+        ws_p = q_p[:, :10].reshape(-1, 2, 5)
+        pose = {"state": q_p,
+                "wheelset_shift_mm": _centre_shift(table, ws_p[..., 0], ws_p[..., 3:5]),
+                "wheelset_roll_rad": _roll(table, ws_p[..., 0], ws_p[..., 3:5]),
+                "wheelset_yaw_rad": ws_p[..., 1] * 1e-3}
+        for j, row in enumerate(rows.tolist()):
+            if not ok_p[j]:
+                if not skip_failed:
+                    kappa = cases[row].curvature_per_m
+                    raise CurvingConvergenceError(
+                        f"contact pipeline failed at the equilibrium pose: {errors[j]}",
+                        np.inf if kappa == 0 else 1.0 / kappa, float(norm[row]))
+                ok[row] = False
+                continue
+            pipeline[row] = {**{f.name: getattr(cp, f.name)[j] for f in fields(_Contacts)},
+                             "peak_pressure_mpa": peak[j],
+                             "tau_max_mpa": wear_p["tau_max_mpa"][j],
+                             "t_gamma_n": wear_p["t_gamma_n"][j],
+                             "in_contact": wear_p["in_contact"][j],
+                             **{name: v[j] for name, v in pose.items()}}
+            pipeline_norm[row] = float(np.linalg.norm(res_p[j]))
     results: list[CurvingResult | None] = []
     for k, (case, (radius_m, direction, cant_mm)) in enumerate(zip(cases, labels, strict=True)):
         if not ok[k]:
@@ -624,7 +813,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
             tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
             in_contact=wear["in_contact"][k], residual_norm=float(norm[k]),
-            state=q[k].copy(), creep_grid=creep_grid))
+            state=q[k].copy(), creep_grid=creep_grid, pipeline=pipeline[k],
+            pipeline_residual_norm=float(pipeline_norm[k])))
     return results
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import gaussian_filter1d
 
-from wearcast.physics.contact.geometry import rigid_wheel_gap
+from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import candidate_slots
@@ -79,7 +79,8 @@ class ContactTable:
     Wheel columns on ``wheel_y_mm``: height z [mm] and slope dz/dy. ``rail_offset_mm`` maps
     wheel y to rail y (y_rail = y_wheel + offset + shift). Hertz constants under 1 N for
     log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
-    ``hertz_b1`` [mm].
+    ``hertz_b1`` [mm]. ``track``: the wheelset on its track the table was built from (the
+    contact pipeline evaluates the curving's contacts on it, ``curving_contacts``).
     """
 
     shift_mm: NDArray[np.float64]
@@ -96,6 +97,7 @@ class ContactTable:
     hertz_approach1: NDArray[np.float64]
     hertz_a1: NDArray[np.float64]
     hertz_b1: NDArray[np.float64]
+    track: WheelsetTrack
 
     def rigid_rise(self, shift_mm: ArrayLike) -> NDArray[np.float64]:
         """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
@@ -441,7 +443,7 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
                          rail_offset_mm=offset,
                          nominal_radius_m=wheel_radius_m, smoothing_mm=sigma,
                          hertz_log_ratio=log_ratio,
-                         hertz_approach1=app1, hertz_a1=a1, hertz_b1=b1)
+                         hertz_approach1=app1, hertz_a1=a1, hertz_b1=b1, track=track)
 
 
 @lru_cache(maxsize=16)

@@ -31,6 +31,9 @@ from scipy.special import ellipe, ellipk
 STEEL_YOUNG_MPA = 210_000.0
 #: Poisson's ratio of wheel and rail steel.
 STEEL_POISSON = 0.28
+#: Shear modulus of wheel and rail steel [MPa] (CONTACT's GG in the Manchester benchmark; E / (2
+#: (1 + nu)) = 82.0 GPa).
+STEEL_SHEAR_MODULUS_MPA = 82_000.0
 
 _M_SERIES = 1e-4  # below this elliptic parameter the small-m series replace the quotients
 

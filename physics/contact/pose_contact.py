@@ -23,9 +23,9 @@ import numpy as np
 
 from wearcast.physics.contact.fastsim import Bound
 from wearcast.physics.contact.geometry import WheelsetTrack
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import wheel_locus
 from wearcast.physics.contact.wheel_rail import LoadedWheel, loaded_wheel_contact
-from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA
 
 
 @dataclass(frozen=True)
@@ -37,12 +37,17 @@ class Pose:
     roll_rad : roll [rad], positive when the left wheel rises; None solves it (both wheels
         touching their rails)
     wheel_load_n : vertical force of the wheel on its rail [N]
+    rolling_ratio : axle angular velocity over V / r0 (1: rolling at the nominal radius)
+    track_curvature_per_m : curvature of the track [1/m], + to the left (0: tangent track;
+        the creepages of a quasi-statically curving wheelset, ``creepages``)
     """
 
     shift_mm: float
     yaw_rad: float = 0.0
     roll_rad: float | None = None
     wheel_load_n: float = 10_000.0
+    rolling_ratio: float = 1.0
+    track_curvature_per_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -82,14 +87,15 @@ class PoseContact:
 
 def contact_at_poses(track: WheelsetTrack, side: str, poses: Sequence[Pose], *,
                      speed_m_s: float = 2.0, mu: float = 0.3,
-                     shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
+                     shear_modulus_mpa: float = STEEL_SHEAR_MODULUS_MPA,
                      poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
                      bound: Bound = "parabolic") -> list[PoseContact]:
     """Loaded contact of the ``side`` wheel of ``track`` at each pose (module docstring).
 
     Poses with a prescribed roll lower the wheel onto its own rail at that roll (as CONTACT
     treats the wheels one at a time); the others solve the roll with both wheels touching.
-    The axle turns at V / r0 (no pitch-rate creepage beyond the rolling radius difference).
+    The axle turns at ``rolling_ratio`` V / r0 of each pose (1: no pitch-rate creepage beyond
+    the rolling radius difference); the creepages, velocity ratios, do not depend on V.
 
     Raises ``NoContactError`` (a ``ValueError`` "field: reason") when the wheel cannot touch
     its rail at some pose, ``ValueError`` for bad arguments.
@@ -108,8 +114,12 @@ def contact_at_poses(track: WheelsetTrack, side: str, poses: Sequence[Pose], *,
         rolls = None if solved else np.array([poses[k].roll_rad for k in rows], dtype=float)
         locus = wheel_locus(track, shifts, side, yaw_rad=yaws, roll_rad=rolls)
         loads = np.array([poses[k].wheel_load_n for k in rows], dtype=float)
+        omegas = (np.array([poses[k].rolling_ratio for k in rows], dtype=float)
+                  * speed_m_s * 1000.0 / track.nominal_radius_mm)
+        kappas = np.array([poses[k].track_curvature_per_m for k in rows], dtype=float)
         loaded = loaded_wheel_contact(locus, track.nominal_radius_mm, wheel_load_n=loads,
-                                      speed_m_s=speed_m_s, mu=mu,
+                                      speed_m_s=speed_m_s, angular_velocity_rad_s=omegas,
+                                      track_curvature_per_m=kappas, mu=mu,
                                       shear_modulus_mpa=shear_modulus_mpa, poisson=poisson,
                                       method=method, n_grid=n_grid, bound=bound)
         for j, k in enumerate(rows):

@@ -6,8 +6,9 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
 2. patches merged or split by the interpenetration region and the normal problem carrying
    the vertical wheel load W (``normal_contact.wheel_normal_contact``, BEM / Kik-Piotrowski /
    Hertz);
-3. rigid creepages at each patch's reference point (``wheelset_contact.rigid_creepages``,
-   CONTACT's convention: rail minus wheel velocity over V);
+3. rigid creepages at each patch's reference point (``creepages.rigid_creepages``,
+   CONTACT's convention: rail minus wheel velocity over V; on a curve with the track frame's
+   turning rate V kappa);
 4. creep forces from FASTSIM (``fastsim.fastsim``, CONTACT's discretisation and combined
    flexibility) on the patch's equivalent ellipse (a, b from the patch: b half its lateral
    extent, a = area / (pi b)) with its normal force;
@@ -18,8 +19,15 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
    method "auto" a pose still unsettled after 10 rounds finishes with the coarse BEM for
    every patch, since a patch at the Hertz criterion's threshold can flip between the two).
 
-Signs as ``wheelset_contact``: per wheel in its own (mirrored for the right wheel) frame,
-forces on the rail, F_s towards the wheel's field side.
+Signs of the results (per wheel, in that wheel's local frame; the right wheel's frame is the
+mirror image of the left one so that both wheels are described alike): y_wheel and delta as
+``geometry`` (delta < 0 on tread and flange), forces ON THE RAIL, F_s positive towards the
+wheel's field side; the lateral track force on the rail ``lateral_force_n`` =
+sum (F_s cos delta - F_n sin delta) is positive outwards (a flanging wheel pushes its rail
+out). With these signs the left wheel at shift +y and yaw +psi is CONTACT's (unmirrored) right
+wheel at y_ws = y, yaw psi, quantity by quantity; CONTACT prints its left wheel in the track
+frame, i.e. our right wheel with y_wheel, delta, eta, phi and F_s negated
+(``benchmarks/manchester_contact.py``).
 """
 
 from __future__ import annotations
@@ -30,10 +38,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact.creepages import rigid_creepages
 from wearcast.physics.contact.fastsim import Bound, fastsim
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
 from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
-from wearcast.physics.contact.wheelset_contact import BENCHMARK_SHEAR_MODULUS_MPA, rigid_creepages
 
 _FloatArray = NDArray[np.float64]
 
@@ -96,8 +105,8 @@ class LoadedWheel:
 
 def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approach: float,
                 speed_m_s: float, omega: float, nominal_radius_mm: float, mu: float,
-                shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound
-                ) -> list[LoadedPatch]:
+                shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound,
+                curvature_per_m: float = 0.0) -> list[LoadedPatch]:
     if not patches:
         return []
     point = np.array([[p.region.x_track_mm for p in patches],
@@ -107,7 +116,7 @@ def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approac
     xi, eta, phi = rigid_creepages(locus.side, speed_m_s, omega, locus.shift_mm[row],
                                    locus.yaw_rad[row], locus.roll_rad[row],
                                    locus.height_mm[row] - approach, nominal_radius_mm, point,
-                                   delta)
+                                   delta, curvature_per_m)
     fn = np.array([p.normal_force_n for p in patches])
     loaded = fn > 0
     a = np.where(loaded, [p.a_mm for p in patches], 1.0)
@@ -124,10 +133,10 @@ def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approac
 def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                          wheel_load_n: ArrayLike = 10_000.0, speed_m_s: float = 2.0,
                          angular_velocity_rad_s: ArrayLike | None = None, mu: float = 0.3,
-                         shear_modulus_mpa: float = BENCHMARK_SHEAR_MODULUS_MPA,
+                         shear_modulus_mpa: float = STEEL_SHEAR_MODULUS_MPA,
                          poisson: float = 0.28, method: str = "auto", n_grid: int = 40,
-                         bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 40
-                         ) -> list[LoadedWheel]:
+                         bound: Bound = "parabolic", rtol: float = 1e-4, max_rounds: int = 40,
+                         track_curvature_per_m: ArrayLike = 0.0) -> list[LoadedWheel]:
     """Loaded contact of one wheel for every pose of its locus (module docstring).
 
     Parameters
@@ -142,6 +151,8 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
     n_grid, bound : FASTSIM grid and traction bound
     rtol, max_rounds : convergence of the normal / tangential coupling (normal forces,
         relative to W or the largest patch force if larger); RuntimeError if not reached
+    track_curvature_per_m : curvature kappa of the track [1/m] (+ to the left), scalar or (N,):
+        the creepages of a wheelset curving quasi-statically (``creepages``); 0 tangent track
     """
     n = locus.gap_mm.shape[0]
     loads = np.broadcast_to(np.asarray(wheel_load_n, dtype=float), (n,))
@@ -149,6 +160,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
         omegas = np.full(n, speed_m_s * 1000.0 / nominal_radius_mm)
     else:
         omegas = np.broadcast_to(np.asarray(angular_velocity_rad_s, dtype=float), (n,))
+    kappas = np.broadcast_to(np.asarray(track_curvature_per_m, dtype=float), (n,))
     young = 2.0 * shear_modulus_mpa * (1.0 + poisson)
     out = []
     for row in range(n):
@@ -170,7 +182,8 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
             guess = normal.approach_mm
             loaded = _tangential(single, 0, normal.patches, normal.approach_mm,
                                  speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
-                                 shear_modulus_mpa, poisson, n_grid, bound)
+                                 shear_modulus_mpa, poisson, n_grid, bound,
+                                 float(kappas[row]))
             forces = [p.normal_force_n for p in loaded]
             new = [p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0 for p in loaded]
             if ratios is not None and rounds > 3 and len(ratios[0]) == len(new):
