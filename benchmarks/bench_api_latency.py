@@ -26,7 +26,27 @@ and the wear-area picture — drawn once, then answered from the server's pictur
 
 ``--client raw`` (a minimal asyncio HTTP/1.1 client) spends far less CPU than httpx, so on a
 small machine its figures measure the server rather than the client. The header names the
-client, the workers and the machine's load average, which every figure depends on.
+machine (CPU model and cores from ``/proc/cpuinfo``), the client, the workers and the
+machine's load average, which every figure depends on.
+
+Closed and open loop. The default run is a *closed loop*: each of the ``--clients`` clients
+sends its next request as soon as its answer arrives, so the server is saturated and, by
+Little's law, the mean latency is clients / throughput — with 32 clients a p50 under 5 ms
+would need more than 6,400 answers per second, i.e. under 0.3 ms of CPU per request on two
+cores for server and client together. ``--rate R`` adds an *open-loop* run per endpoint:
+requests arrive at R per second in total (Poisson arrivals, seeded) over ``--clients``
+kept-alive raw connections, and each latency is counted from the request's scheduled
+arrival (a request that waits for a free connection or for the server is charged the wait),
+so the figures are the response times 32 clients see at that offered load.
+
+Before/after in one run. ``--baseline-python PY`` starts a second server with another
+interpreter — e.g. ``/work/main/.venv/bin/python``, whose editable install serves another
+checkout's code — on its own fresh database, and measures both servers endpoint by
+endpoint, back to back (rows ``base`` and ``this``), so their ratio is measured under the
+same machine load.
+
+    .venv/bin/python benchmarks/bench_api_latency.py --quick --client raw --endpoints predict \
+        --rate 200 --baseline-python ../../main/.venv/bin/python
 """
 
 from __future__ import annotations
@@ -61,19 +81,20 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def start_server(data_dir: Path, port: int, workers: int, log: Path
-                 ) -> subprocess.Popen[bytes]:
-    """Migrate the database, then serve it with ``workers`` uvicorn processes."""
+def start_server(data_dir: Path, port: int, workers: int, log: Path,
+                 python: str = sys.executable) -> subprocess.Popen[bytes]:
+    """Migrate the database, then serve it with ``workers`` uvicorn processes of the
+    interpreter ``python`` (access log off: the figures measure the service, not its log)."""
     env = dict(os.environ, WEARCAST_DATA_DIR=str(data_dir), WEARCAST_API_KEY=BENCH_KEY,
                WEARCAST_RATE_LIMIT_PER_SECOND="0")
     env.pop("WEARCAST_DATABASE_URL", None)
-    subprocess.run([sys.executable, "-m", "wearcast.service.cli", "migrate"], env=env,
+    subprocess.run([python, "-m", "wearcast.service.cli", "migrate"], env=env,
                    check=True, stdout=subprocess.DEVNULL)
     with log.open("wb") as err:
         return subprocess.Popen(
-            [sys.executable, "-m", "uvicorn", "wearcast.service.cli:serve_app", "--factory",
+            [python, "-m", "uvicorn", "wearcast.service.cli:serve_app", "--factory",
              "--host", "127.0.0.1", "--port", str(port), "--workers", str(workers),
-             "--log-level", "warning"],
+             "--log-level", "warning", "--no-access-log"],
             env=env, stdout=subprocess.DEVNULL, stderr=err)
 
 
@@ -228,6 +249,69 @@ async def fire_raw(base: str, path: str, payloads: list[dict[str, object] | None
     return np.asarray(latencies), time.perf_counter() - start, failures
 
 
+async def fire_open(base: str, path: str, payloads: list[dict[str, object] | None],
+                    clients: int, rate_per_s: float, extra: dict[str, str] | None = None,
+                    expect: int = 200) -> tuple[np.ndarray, float, int]:
+    """Open loop: the requests arrive at ``rate_per_s`` in total (Poisson, seeded) and are
+    sent on the first free of ``clients`` raw connections; each latency [s] runs from the
+    request's scheduled arrival to its answer (waits for a connection included). Returns the
+    latencies, the wall time [s] and the number of answers other than ``expect``."""
+    url = httpx.URL(base)
+    idle: asyncio.Queue[RawConnection] = asyncio.Queue()
+    connections = [RawConnection(url.host, int(url.port or 80)) for _ in range(clients)]
+    for connection in connections:
+        idle.put_nowait(connection)
+    gaps = np.random.default_rng(1).exponential(1.0 / rate_per_s, len(payloads))
+    latencies: list[float] = []
+    failures = 0
+
+    async def one(payload: dict[str, object] | None, due: float) -> None:
+        nonlocal failures
+        connection = await idle.get()
+        try:
+            status = await connection.post(path, payload, extra)
+        finally:
+            idle.put_nowait(connection)
+        latencies.append(time.perf_counter() - due)
+        failures += status != expect
+
+    loop = asyncio.get_running_loop()
+    start = time.perf_counter()
+    due = start
+    tasks = []
+    for payload, gap in zip(payloads, gaps, strict=True):
+        due += float(gap)
+        delay = due - time.perf_counter()
+        if delay > 0:
+            await asyncio.sleep(delay)
+        tasks.append(loop.create_task(one(payload, due)))
+    await asyncio.gather(*tasks)
+    wall = time.perf_counter() - start
+    for connection in connections:
+        await connection.close()
+    return np.asarray(latencies), wall, failures
+
+
+def machine() -> str:
+    """CPU model and logical cores (Linux /proc/cpuinfo), and the memory."""
+    model = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        kib = next(int(line.split()[1]) for line in
+                   Path("/proc/meminfo").read_text().splitlines()
+                   if line.startswith("MemTotal"))
+        memory = f", {kib / 2**20:.0f} GiB"
+    except (OSError, StopIteration, ValueError):
+        memory = ""
+    return f"{model}, {os.cpu_count()} logical cores{memory}"
+
+
 def cpu_seconds(pid: int) -> float:
     """CPU time [s] of a process and its children (Linux /proc; NaN elsewhere)."""
     try:
@@ -293,6 +377,54 @@ def endpoints(base: str, model_id: int, which: str) -> list[Endpoint]:
     return out
 
 
+class Server(NamedTuple):
+    """One served checkout: its label, base URL, process and calibrated model."""
+
+    label: str
+    base: str
+    process: subprocess.Popen[bytes]
+    model_id: int
+
+
+def run_endpoint(server: Server, e: Endpoint, n: int, warmup: int, args: argparse.Namespace
+                 ) -> None:
+    """Cold request, warm-up, the closed-loop run and (``--rate``) the open-loop run of one
+    endpoint on one server; one printed row per run."""
+    base = server.base
+
+    def payloads(k: int) -> list[dict[str, object] | None]:
+        return list(bodies(e.body, k)) if e.body else [None] * k
+
+    first = payloads(1)[0]
+    t_cold = time.perf_counter()
+    if first is None:
+        answer = httpx.get(base + e.path, timeout=120.0, headers={**AUTH, **(e.headers or {})})
+    else:
+        answer = httpx.post(base + e.path, json=first, timeout=120.0, headers=AUTH)
+    assert answer.status_code == e.expect, (e.name, answer.status_code)
+    cold = (time.perf_counter() - t_cold) * 1e3
+    if warmup:
+        asyncio.run(fire(base, e.path, payloads(warmup), args.clients, args.client,
+                         e.headers, e.expect))
+    runs: list[tuple[str, float | None]] = [("closed", None)]
+    if args.rate:
+        runs.append((f"{args.rate:g}/s", args.rate))
+    for mode, rate in runs:
+        server_cpu, client_cpu = cpu_seconds(server.process.pid), own_cpu_seconds()
+        if rate is None:
+            latencies, wall, failures = asyncio.run(
+                fire(base, e.path, payloads(n), args.clients, args.client, e.headers, e.expect))
+        else:
+            latencies, wall, failures = asyncio.run(
+                fire_open(base, e.path, payloads(n), args.clients, rate, e.headers, e.expect))
+        server_cpu = (cpu_seconds(server.process.pid) - server_cpu) / n * 1e3
+        client_cpu = (own_cpu_seconds() - client_cpu) / n * 1e3
+        p50, p95, p99 = np.percentile(latencies, [50, 95, 99]) * 1e3
+        print(f"{server.label:<5} {e.name:<13} {mode:>8} {cold:>8.1f} {p50:>8.1f} {p95:>8.1f} "
+              f"{p99:>8.1f} {n / wall:>8.1f} {failures:>7} {server_cpu:>8.2f} "
+              f"{client_cpu:>8.2f} {os.getloadavg()[0]:>6.2f}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="API latency under load")
     parser.add_argument("--quick", action="store_true", help="200 requests per endpoint")
@@ -306,62 +438,57 @@ def main(argv: list[str] | None = None) -> None:
                         help="httpx.AsyncClient (default) or a minimal asyncio HTTP/1.1 client")
     parser.add_argument("--endpoints", choices=("all", "predict", "gets"), default="all",
                         help="predict and reprofiling, the common GETs, or both (default)")
+    parser.add_argument("--rate", type=float, default=None,
+                        help="also an open-loop run per endpoint: this many requests per "
+                             "second in total over the clients' connections")
+    parser.add_argument("--baseline-python", default=None, metavar="PY",
+                        help="also serve with this interpreter (another checkout's venv) and "
+                             "measure both, endpoint by endpoint")
     args = parser.parse_args(argv)
     n = args.requests or (200 if args.quick else 2_000)
     warmup = args.warmup if args.warmup is not None else 4 * args.clients
+    pythons = [("this", sys.executable)]
+    if args.baseline_python:
+        pythons.insert(0, ("base", args.baseline_python))
     with tempfile.TemporaryDirectory(prefix="wearcast-bench-api-") as tmp:
-        port = free_port()
-        base = f"http://127.0.0.1:{port}"
-        log = Path(tmp) / "server.log"
-        server = start_server(Path(tmp), port, args.workers, log)
+        servers: list[Server] = []
         try:
-            wait_healthy(base, server, log)
-            t0 = time.perf_counter()
-            model_id = prepare(base)
-            print(f"example loaded and model {model_id} calibrated in "
-                  f"{time.perf_counter() - t0:.1f} s; server: {args.workers} uvicorn "
-                  f"worker(s) on a {os.cpu_count()}-CPU machine shared with the client; "
-                  f"{n} timed requests per endpoint after {warmup} untimed, "
-                  f"{args.clients} concurrent clients")
+            for label, python in pythons:
+                port = free_port()
+                base = f"http://127.0.0.1:{port}"
+                log = Path(tmp) / f"server-{label}.log"
+                process = start_server(Path(tmp) / label, port, args.workers, log, python)
+                servers.append(Server(label, base, process, -1))
+                wait_healthy(base, process, log)
+                t0 = time.perf_counter()
+                servers[-1] = servers[-1]._replace(model_id=prepare(base))
+                print(f"{label}: {python}: example loaded and model {servers[-1].model_id} "
+                      f"calibrated in {time.perf_counter() - t0:.1f} s")
+            print(f"machine: {machine()}; server: {args.workers} uvicorn worker(s) sharing "
+                  f"it with the client; {n} timed requests per endpoint after {warmup} "
+                  f"untimed, {args.clients} concurrent clients")
             print(f"client: {args.client}; workers: {args.workers}; clients: {args.clients}; "
                   f"machine load average (1/5/15 min) at the start: {_load()}")
+            print("mode: closed = each client sends its next request on its answer (latency = "
+                  "clients / throughput, Little's law); N/s = open loop at N requests/s")
             print("CPU columns: milliseconds of CPU per request spent by the server processes "
                   "and by the client; load: 1-min load average after the endpoint's run")
-            print(f"{'endpoint':<13} {'cold ms':>8} {'p50 ms':>8} {'p95 ms':>8} {'p99 ms':>8} "
-                  f"{'req/s':>8} {'errors':>7} {'srv CPU':>8} {'cli CPU':>8} {'load':>6}")
-            for e in endpoints(base, model_id, args.endpoints):
-                def payloads(k: int, e: Endpoint = e) -> list[dict[str, object] | None]:
-                    return list(bodies(e.body, k)) if e.body else [None] * k
-
-                first = payloads(1)[0]
-                t_cold = time.perf_counter()
-                if first is None:
-                    answer = httpx.get(base + e.path, timeout=120.0,
-                                       headers={**AUTH, **(e.headers or {})})
-                else:
-                    answer = httpx.post(base + e.path, json=first, timeout=120.0,
-                                        headers=AUTH)
-                assert answer.status_code == e.expect, (e.name, answer.status_code)
-                cold = (time.perf_counter() - t_cold) * 1e3
-                if warmup:
-                    asyncio.run(fire(base, e.path, payloads(warmup), args.clients,
-                                     args.client, e.headers, e.expect))
-                server_cpu, client_cpu = cpu_seconds(server.pid), own_cpu_seconds()
-                latencies, wall, failures = asyncio.run(
-                    fire(base, e.path, payloads(n), args.clients, args.client, e.headers,
-                         e.expect))
-                server_cpu = (cpu_seconds(server.pid) - server_cpu) / n * 1e3
-                client_cpu = (own_cpu_seconds() - client_cpu) / n * 1e3
-                p50, p95, p99 = np.percentile(latencies, [50, 95, 99]) * 1e3
-                print(f"{e.name:<13} {cold:>8.1f} {p50:>8.1f} {p95:>8.1f} {p99:>8.1f} "
-                      f"{n / wall:>8.1f} {failures:>7} {server_cpu:>8.2f} {client_cpu:>8.2f} "
-                      f"{os.getloadavg()[0]:>6.2f}", flush=True)
+            print(f"{'srv':<5} {'endpoint':<13} {'mode':>8} {'cold ms':>8} {'p50 ms':>8} "
+                  f"{'p95 ms':>8} {'p99 ms':>8} {'req/s':>8} {'errors':>7} {'srv CPU':>8} "
+                  f"{'cli CPU':>8} {'load':>6}")
+            plans = [{e.name: e for e in endpoints(s.base, s.model_id, args.endpoints)}
+                     for s in servers]
+            for name in plans[-1]:
+                for server, plan in zip(servers, plans, strict=True):
+                    if name in plan:
+                        run_endpoint(server, plan[name], n, warmup, args)
         finally:
-            server.terminate()
-            try:
-                server.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                server.kill()
+            for server in servers:
+                server.process.terminate()
+                try:
+                    server.process.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    server.process.kill()
 
 
 if __name__ == "__main__":

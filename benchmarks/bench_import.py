@@ -9,8 +9,14 @@ For each size: writes the file under a temporary directory (streamed in chunks; 
 rows is ~3.5 GB), then imports it in a *fresh child process* through the service's import
 function (``wearcast.service.importing.import_upload``, not HTTP) into a fresh SQLite
 database — and with ``--postgres URL`` also into a throw-away database created on that
-server (dropped afterwards) —, and prints profiles/s, points/s and the child's peak RSS
-(``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so each size's memory is measured alone.
+server (dropped afterwards) —, and prints profiles/s, points/s, the child's peak RSS
+(``resource.getrusage(RUSAGE_SELF).ru_maxrss``, so each size's memory is measured alone) and
+its processing workers' largest, and the CPU per profile of the child and of its workers.
+Their sum bounds the rate: cores / CPU per profile is what the import would reach with the
+machine to itself (on a shared machine the measured rate is lower by the others' share).
+``--baseline-python PY`` imports each file also with another interpreter (another
+checkout's venv, e.g. ``/work/main/.venv/bin/python``) right before this one's: before and
+after under the same load.
 ``WEARCAST_IMPORT_WORKERS`` (default: one per CPU; 0 or 1: in the importing process) sets the
 processing pool, as for the service; the header prints it and the machine's load average.
 
@@ -73,23 +79,60 @@ def write_csv(path: Path, n_profiles: int, points: int = POINTS) -> int:
 
 def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None
                 ) -> dict[str, float]:
-    """Import one file into a fresh database (run in a child process)."""
-    from wearcast.service import importing
+    """Import one file into a fresh database (run in a child process).
+
+    Besides the time: this process's peak RSS and CPU seconds, the largest peak RSS of its
+    processing pool's workers, and their summed CPU seconds (the pool is shut down and waited
+    for first, so that ``RUSAGE_CHILDREN`` holds them)."""
+    from wearcast.service import import_pool, importing
     from wearcast.service.db import Database
     from wearcast.service.settings import Settings
 
     settings = Settings(data_dir=work_dir, database_url=database_url or None)
     database = Database(settings)
     database.migrate()
+    own_cpu0 = _cpu(resource.RUSAGE_SELF)
     start = time.perf_counter()
     with database.session_factory() as session, csv_path.open("rb") as stream:
         result = importing.import_upload(session, settings.raw_dir, stream, csv_path.name,
                                          chunk_size=settings.import_chunk_size)
     seconds = time.perf_counter() - start
+    own_cpu = _cpu(resource.RUSAGE_SELF) - own_cpu0
     database.dispose()
-    peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+    pool = getattr(import_pool, "_POOL", None)
+    worker_pids = list(getattr(pool, "_processes", None) or {})
+    worker_peak_kib = max((_peak_rss_kib(pid) for pid in worker_pids), default=0)
+    try:
+        import_pool.discard_pool(wait=True)
+    except TypeError:  # a --baseline-python checkout whose discard_pool cannot wait
+        pool = getattr(import_pool, "_POOL", None)
+        if pool is not None:
+            pool.shutdown(wait=True)
+    own = resource.getrusage(resource.RUSAGE_SELF)
     return {"profiles": result.created, "points": result.points, "seconds": seconds,
-            "peak_rss_mb": peak_kib / 1024.0}
+            "peak_rss_mb": own.ru_maxrss / 1024.0,  # KiB on Linux
+            "worker_peak_rss_mb": worker_peak_kib / 1024.0,
+            "own_cpu_s": own_cpu, "worker_cpu_s": _cpu(resource.RUSAGE_CHILDREN)}
+
+
+def _peak_rss_kib(pid: int) -> int:
+    """Peak RSS [KiB] of a live process (``VmHWM`` of /proc/<pid>/status; 0 if unknown).
+
+    Not ``RUSAGE_CHILDREN``: a spawned worker is forked first, and Linux carries the parent's
+    peak RSS at the fork into the child's ``ru_maxrss`` across its exec."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
+def _cpu(who: int) -> float:
+    """User + system CPU seconds of this process or of its waited-for children."""
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -99,6 +142,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--postgres", metavar="URL", default=None,
                         help="also import into a throw-away database on this PostgreSQL "
                              "server (SQLAlchemy URL of a database the user may CREATE in)")
+    parser.add_argument("--baseline-python", default=None, metavar="PY",
+                        help="also import each file with this interpreter (another "
+                             "checkout's venv), right before this one's")
     parser.add_argument("--child", nargs=3, metavar=("CSV", "DIR", "URL"),
                         help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -108,33 +154,53 @@ def main(argv: list[str] | None = None) -> None:
         return
     sizes = args.sizes or ([1_000, 10_000] if args.quick else [10_000, 100_000])
     workers = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip() or f"{os.cpu_count()}"
-    print(f"import workers: {workers}; {os.cpu_count()} CPUs; load average (1/5/15 min) "
+    cores = os.cpu_count() or 1
+    print(f"machine: {_machine()}; import workers: {workers}; load average (1/5/15 min) "
           f"{'/'.join(f'{v:.2f}' for v in os.getloadavg())}")
-    print(f"{'database':<10} {'profiles':>9} {'file MB':>9} {'write s':>8} {'import s':>9} "
-          f"{'profiles/s':>11} {'points/s':>11} {'peak RSS MB':>12}")
+    print("peak RSS: the importing process / the largest processing worker; CPU ms/profile: "
+          "the importing process + the workers (their start-up included); bound: "
+          f"{cores} cores / that CPU, the rate if the import had the machine to itself")
+    print(f"{'code':<5} {'database':<10} {'profiles':>9} {'file MB':>8} {'import s':>9} "
+          f"{'profiles/s':>11} {'points/s':>11} {'RSS MB':>7} {'wrk MB':>7} "
+          f"{'CPU ms':>7} {'wrk ms':>7} {'bound/s':>8}")
+    pythons = ([("base", args.baseline_python)] if args.baseline_python else []) + [
+        ("this", sys.executable)]
     for n in sizes:
         with tempfile.TemporaryDirectory(prefix="wearcast-bench-") as tmp:
             csv_path = Path(tmp) / f"profiles_{n}.csv"
-            t0 = time.perf_counter()
             size = write_csv(csv_path, n)
-            write_s = time.perf_counter() - t0
             backends = [("sqlite", None)] + ([("postgresql", args.postgres)]
                                              if args.postgres else [])
             for name, server_url in backends:
-                with _database(server_url) as url:
-                    child = subprocess.run(
-                        [sys.executable, __file__, "--child", str(csv_path),
-                         str(Path(tmp) / f"data-{name}"), url],
-                        capture_output=True, text=True, check=False)
-                if child.returncode != 0:
-                    sys.exit(f"import of {n} profiles into {name} failed:\n"
-                             f"{child.stderr[-3000:]}")
-                r = json.loads(child.stdout.strip().splitlines()[-1])
-                assert r["profiles"] == n, r
-                print(f"{name:<10} {n:>9,} {size / 1e6:>9.1f} {write_s:>8.1f} "
-                      f"{r['seconds']:>9.1f} {n / r['seconds']:>11,.0f} "
-                      f"{r['points'] / r['seconds']:>11,.0f} {r['peak_rss_mb']:>12.0f}",
-                      flush=True)
+                for label, python in pythons:
+                    with _database(server_url) as url:
+                        child = subprocess.run(
+                            [python, __file__, "--child", str(csv_path),
+                             str(Path(tmp) / f"data-{name}-{label}"), url],
+                            capture_output=True, text=True, check=False)
+                    if child.returncode != 0:
+                        sys.exit(f"import of {n} profiles into {name} ({label}) failed:\n"
+                                 f"{child.stderr[-3000:]}")
+                    r = json.loads(child.stdout.strip().splitlines()[-1])
+                    assert r["profiles"] == n, r
+                    own_ms = r["own_cpu_s"] / n * 1e3
+                    worker_ms = r["worker_cpu_s"] / n * 1e3
+                    print(f"{label:<5} {name:<10} {n:>9,} {size / 1e6:>8.1f} "
+                          f"{r['seconds']:>9.1f} {n / r['seconds']:>11,.0f} "
+                          f"{r['points'] / r['seconds']:>11,.0f} {r['peak_rss_mb']:>7.0f} "
+                          f"{r['worker_peak_rss_mb']:>7.0f} {own_ms:>7.2f} {worker_ms:>7.2f} "
+                          f"{cores / (own_ms + worker_ms) * 1e3:>8,.0f}", flush=True)
+
+
+def _machine() -> str:
+    """CPU model and logical cores (Linux /proc/cpuinfo)."""
+    try:
+        model = next(line.split(":", 1)[1].strip() for line in
+                     Path("/proc/cpuinfo").read_text().splitlines()
+                     if line.startswith("model name"))
+    except (OSError, StopIteration):
+        model = "unknown CPU"
+    return f"{model}, {os.cpu_count()} logical cores"
 
 
 @contextmanager

@@ -84,6 +84,9 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
               help="load the bundled example fleet when the database is empty")] = False,
           workers: Annotated[int, typer.Option(
               min=1, help="uvicorn worker processes (e.g. one per CPU core)")] = 1,
+          access_log: Annotated[bool, typer.Option(
+              help="log every request (uvicorn's access log); off spares each request "
+                   "a formatted log line")] = True,
           ) -> None:
     """Migrate the database, optionally load the example fleet, and serve the /v1 API.
 
@@ -123,12 +126,12 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
         JobRunner(database, settings).recover(all_running=True, dispatch_all=False)
         database.dispose()
         uvicorn.run("wearcast.service.cli:serve_app", factory=True, host=host, port=port,
-                    workers=workers, timeout_graceful_shutdown=10)
+                    workers=workers, timeout_graceful_shutdown=10, access_log=access_log)
     else:
         database.dispose()
         # migrate=True: the one process serving recovers the jobs of the last run
         uvicorn.run(create_app(settings, migrate=True), host=host, port=port,
-                    timeout_graceful_shutdown=10)
+                    timeout_graceful_shutdown=10, access_log=access_log)
 
 
 @app.command()

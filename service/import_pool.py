@@ -67,12 +67,13 @@ def worker_pool() -> ProcessPoolExecutor | None:
         return _POOL
 
 
-def discard_pool() -> None:
-    """Shut the worker pool down (a broken pool, or the service stopping)."""
+def discard_pool(wait: bool = False) -> None:
+    """Shut the worker pool down (a broken pool, or the service stopping); with ``wait``,
+    until its processes have exited (e.g. for a benchmark to read their resource use)."""
     global _POOL
     with _POOL_LOCK:
         if _POOL is not None:
-            _POOL.shutdown(wait=False, cancel_futures=True)
+            _POOL.shutdown(wait=wait, cancel_futures=True)
         _POOL = None
 
 

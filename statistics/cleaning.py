@@ -124,7 +124,7 @@ def clean_profile(
 
     # --- point order and zig-zags ---
     dy = np.diff(y)
-    forward = float(np.mean(dy > 0.0))
+    forward = np.count_nonzero(dy > 0.0) / dy.size
     if max(forward, 1.0 - forward) >= 0.8:
         y_run = y if forward >= 0.5 else -y
         # a point is part of a back-and-forth if it lies behind the farthest point reached so
@@ -145,9 +145,12 @@ def clean_profile(
 
     # --- duplicates and too-close points: one mean point per lateral bin ---
     bins = np.floor((y - y[0]) / min_spacing_mm).astype(np.int64)
-    starts = np.flatnonzero(np.r_[True, bins[1:] != bins[:-1]])
+    new_bin = np.empty(bins.size, dtype=bool)  # (np.r_ costs more than the comparison)
+    new_bin[0] = True
+    np.not_equal(bins[1:], bins[:-1], out=new_bin[1:])
+    starts = np.flatnonzero(new_bin)
     if starts.size < y.size:
-        counts = np.diff(np.r_[starts, y.size])
+        counts = np.diff(np.append(starts, y.size))
         y = np.add.reduceat(y, starts) / counts
         z = np.add.reduceat(z, starts) / counts
         notes.append(
@@ -162,7 +165,7 @@ def clean_profile(
     off = np.abs((y[1:-1] - y[:-2]) * chord_dz - (z[1:-1] - z[:-2]) * chord_dy)
     spikes = off > spike_mm * np.hypot(chord_dy, chord_dz)
     if spikes.any():
-        keep = np.r_[True, ~spikes, True]
+        keep = np.concatenate(([True], ~spikes, [True]))
         notes.append(f"removed {int(spikes.sum())} spikes (> {spike_mm} mm off their neighbours)")
         y, z = y[keep], z[keep]
 

@@ -83,7 +83,7 @@ def _negative_stretch(grid_y_mm: np.ndarray, wear_mm: np.ndarray
     least NEGATIVE_SPAN_MM wide."""
     below = np.isfinite(wear_mm) & (wear_mm < -NEGATIVE_WEAR_MM)
     best: tuple[float, float, float] | None = None
-    edges = np.flatnonzero(np.diff(np.r_[0, below.astype(int), 0]))
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], below.astype(int), [0]))))
     for start, stop in zip(edges[::2], edges[1::2], strict=True):
         lo, hi = float(grid_y_mm[start]), float(grid_y_mm[stop - 1])
         if hi - lo >= NEGATIVE_SPAN_MM and (best is None or hi - lo > best[1] - best[0]):

@@ -86,3 +86,17 @@ def test_an_unusable_profile_in_a_pooled_chunk_names_its_line_and_writes_nothing
         assert session.scalar(select(func.count()).select_from(db.Measurement)) == 0
         assert session.scalar(select(func.count()).select_from(db.ImportBatch)) == 0
     database.dispose()
+
+
+def test_discarding_the_pool_can_wait_for_its_workers(tmp_path, monkeypatch):
+    data, _ = _csv(N_PROFILES)
+    database, result = _import(tmp_path, "pooled", data, "2", monkeypatch)
+    assert result.created == N_PROFILES
+    pool = import_pool._POOL
+    assert pool is not None
+    processes = list(pool._processes.values())
+    assert processes
+    import_pool.discard_pool(wait=True)
+    assert import_pool._POOL is None
+    assert not any(p.is_alive() for p in processes)
+    database.dispose()

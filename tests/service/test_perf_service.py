@@ -241,3 +241,18 @@ def test_serve_has_a_workers_option_and_workers_do_not_migrate(tmp_path, monkeyp
     worker_app = serve_app()
     assert worker_app.state.database.settings.data_dir == tmp_path
     assert not (tmp_path / "wearcast.sqlite3").exists()  # built lazily, not migrated
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_serve_can_turn_the_access_log_off(tmp_path, monkeypatch, workers):
+    import uvicorn
+
+    calls: list[dict] = []
+    monkeypatch.setattr(uvicorn, "run", lambda *args, **kwargs: calls.append(kwargs))
+    monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
+    monkeypatch.setenv("WEARCAST_API_KEY", "wc_test-key-for-the-access-log-0123")
+    monkeypatch.delenv("WEARCAST_DATABASE_URL", raising=False)
+    for flag, expected in (("--no-access-log", False), ("--access-log", True)):
+        result = CliRunner().invoke(cli_app, ["serve", "--workers", workers, flag])
+        assert result.exit_code == 0, result.output
+        assert calls[-1]["access_log"] is expected

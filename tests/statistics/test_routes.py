@@ -1,4 +1,5 @@
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -51,6 +52,19 @@ def test_route_shares_must_sum_to_one():
     with pytest.raises(ValueError, match="share"):
         Route("r", (c,))
     Route("r", (c, RouteClass(300.0, "left", 80.0, 60.0, 0.5005)))  # within 1e-3
+
+
+def test_route_hash_is_kept_per_object_and_not_pickled():
+    # The hash is computed once per route (cache keys hash the route on every request) and
+    # left out of the pickle: string hashes differ between processes.
+    classes = (RouteClass(None, None, 0, 100, 0.6), RouteClass(300, "right", 90, 60, 0.4))
+    route = Route("r", classes)
+    assert hash(route) == hash(("r", classes)) == hash(Route("r", classes))
+    assert route.__dict__["_hash"] == hash(route)
+    copy = pickle.loads(pickle.dumps(route))
+    assert "_hash" not in copy.__dict__
+    assert copy == route and {route: 1}[copy] == 1
+    assert Route("r", classes) != Route("s", classes)
 
 
 def test_route_round_trips_through_json():
