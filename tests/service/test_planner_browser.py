@@ -196,6 +196,10 @@ def test_fleet_table_sort_filter_wheel_and_plan(server, browser):
             browser.find_elements(By.CSS_SELECTOR, "#plan-wheelsets tbody tr")]
     assert sets == [w["wheelset"] for w in plan["wheelsets"]
                     if w["week"] is not None or w["at_risk"]]
+    reasons = [r.find_element(By.CSS_SELECTOR, 'td[data-col="reason"]').text for r in
+               browser.find_elements(By.CSS_SELECTOR, "#plan-wheelsets tbody tr")]
+    assert reasons == [w["reason"] for w in plan["wheelsets"]
+                       if w["week"] is not None or w["at_risk"]]
     href = browser.find_element(By.ID, "plan-export-csv").get_attribute("href")
     assert httpx.get(href, headers=AUTH).text.startswith("week,turn_date,wheelset")
     # reopen it from the stored-plan list

@@ -319,6 +319,7 @@ function renderPlan(plan) {
       cell(tr, Object.entries(w.cuts).map(([id, c]) =>
         `${id}: ${c.target || "–"} ${fmt(c.diameter_loss_mm)} mm`).join("; "));
       cell(tr, w.in_time ? "yes" : "no");
+      cell(tr, w.reason).dataset.col = "reason";  // e.g. a companion turning for the bogie
       return tr;
     }));
 }
