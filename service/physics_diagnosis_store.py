@@ -195,6 +195,6 @@ def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
         n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
         selected=[d["verdict"]] if d["verdict"] != "none" else [],
         runner_up=ranked[0].cause if ranked else None,
-        null_test="held-out FT/qR error, one-sided test over the held-out groups with "
+        null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
                   "Holm's correction",
         saved_model=saved_model, save_reason=reason)
