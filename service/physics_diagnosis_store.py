@@ -113,6 +113,7 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
     done = [0]
     simulated_km = float(state["simulation"]["mileage_km"])
     route = {"classes": state["resolved_classes"], "km": simulated_km}
+    contacts: dict = {}  # first contact updates shared by the runs (same new profile)
 
     def simulate(params: Any) -> Any:
         params = dict(params)
@@ -125,7 +126,8 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
                              f"run {done[0] + 1}/{n_runs} ({label}): {km:,.0f} km")
 
         sim = store.run_loop(state["vehicle"], route["classes"], state["law"],
-                             state["simulation_spec"], simulated_km, params, progress)
+                             state["simulation_spec"], simulated_km, params, progress,
+                             contact_cache=contacts)
         done[0] += 1
         return sim
 
