@@ -50,13 +50,16 @@ def main() -> None:
     measured = pd.read_csv(measured_csv, comment="#")
     classes = aosta_classes(pd.read_csv(track_csv, comment="#"))
 
+    contacts: dict = {}  # first contact updates shared by the runs (same new profile)
+
     def simulate(params):
         params = dict(params)
         law = params.pop("law", "usfd")
         t0 = time.perf_counter()
         sim = simulate_vehicle_wear("minuetto", classes, law=law, mileage_km=args.km,
                                     depth_per_step_mm=args.step,
-                                    options=VehicleWearOptions(**params))
+                                    options=VehicleWearOptions(**params),
+                                    contact_cache=contacts)
         print(f"  loop run {params or 'null'} law={law}: {len(sim.mileage_km) - 1} steps in "
               f"{time.perf_counter() - t0:.1f} s; FT {sim.mean('sd_mm')[-1]:.2f}, "
               f"qR {sim.mean('qr_mm')[-1]:.2f} mm at {args.km:.0f} km", flush=True)

@@ -95,7 +95,12 @@ def scipy_polish(fun, q0, param, tol):
 def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
     """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
     p_end, each row with its own step (doubled on success, halved on failure). Returns
-    (q, norms, converged)."""
+    (q, norms, converged).
+
+    A row that starts at its end parameters (p_start = p_end: a warm start from an earlier
+    equilibrium) has no path to continue along: every retry would solve the same problem from
+    the same state, so it gets one Newton solve and, if that fails, one Powell-hybrid solve
+    (what the halvings would have repeated, deterministically, up to ``max_halvings`` times)."""
     nb = len(q_start)
     q = np.array(q_start, dtype=float)
     t = np.zeros(nb)
@@ -103,6 +108,7 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
     halvings = np.zeros(nb, dtype=int)
     norm = np.zeros(nb)
     failed = np.zeros(nb, dtype=bool)
+    no_path = np.all(np.asarray(p_start) == np.asarray(p_end), axis=-1)
     while True:
         todo = (t < 1.0 - 1e-12) & ~failed
         if not np.any(todo):
@@ -112,7 +118,8 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
         params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
         q_new, n_new, ok = newton_batch(fun, q[idx], params, tol)
         for k in np.nonzero(~ok)[0]:
-            if halvings[idx[k]] >= max_halvings // 2:  # small steps: let scipy try as well
+            # small steps, or no path at all: let scipy try as well
+            if no_path[idx[k]] or halvings[idx[k]] >= max_halvings // 2:
                 q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol)
                 if ok_s:
                     q_new[k], n_new[k], ok[k] = q_s, n_s, True
@@ -122,5 +129,5 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
         step[idx[~ok]] /= 2.0
         halvings[idx[~ok]] += 1
         norm[idx] = n_new
-        failed[idx[~ok]] = halvings[idx[~ok]] > max_halvings
+        failed[idx[~ok]] = (halvings[idx[~ok]] > max_halvings) | no_path[idx[~ok]]
     return q, norm, ~failed

@@ -54,6 +54,7 @@ from wearcast.physics.wear_loop import (
     WearLoopDivergedError,
     as_loop_classes,
     class_contacts_all_wheels,
+    contact_key,
     law_coefficients,
     wheel_depth_basis,
 )
@@ -213,7 +214,8 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                           tangent_speed_kmh: float = 100.0, fastsim_grid: int = 20,
                           max_steps: int = 400,
                           progress: Callable[[float], None] | None = None,
-                          continue_from: VehicleWearSimulation | None = None
+                          continue_from: VehicleWearSimulation | None = None,
+                          contact_cache: dict | None = None
                           ) -> VehicleWearSimulation:
     """Wear of every wheel of a vehicle over a route of curve classes to ``mileage_km``.
 
@@ -225,6 +227,13 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         (its wheel profiles at its end, its series kept; the first contact solve starts cold):
         a longer run without redoing the first part; ``max_steps`` counts the new steps. The
         wheels, grid, law and options are checked; vehicle and route are the caller's.
+    contact_cache : optional dict shared by several runs (the parameter sets of a diagnosis)
+        that stores each bogie's FIRST contact update (solved from centred wheelsets, no
+        previous contact: a function of the bogie, classes, operating-point options and the
+        exact profile bytes alone) and reuses it in a run whose first update has the same
+        key: runs that differ only in the wear (scale, flange factor, running direction,
+        law) solve the new profile's contact once. Results are identical with and without it
+        (only updates without fallbacks are stored).
     """
     start = time.perf_counter()
     opts = options or VehicleWearOptions()
@@ -274,11 +283,22 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         rates = np.zeros_like(profiles)
         for bi, (bogie, _) in enumerate(bogies):
             mean_z = profiles[bi].mean(axis=0)
-            contacts, fb = class_contacts_all_wheels(
-                bogie, classes, y, mean_z,
-                unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
-                tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
-                previous=previous[bi], patch_width=opts.patch_width, warm_first=True)
+            key = None
+            if contact_cache is not None and previous[bi] is None:
+                key = (contact_key(bogie, classes, 0, "all", unbalanced_acceleration_m_s2,
+                                   tangent_speed_kmh, fastsim_grid, y, opts.patch_width),
+                       mean_z.tobytes())
+            hit = None if key is None or contact_cache is None else contact_cache.get(key)
+            if hit is not None:
+                contacts, fb = hit, 0
+            else:
+                contacts, fb = class_contacts_all_wheels(
+                    bogie, classes, y, mean_z,
+                    unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
+                    tangent_speed_kmh=tangent_speed_kmh, fastsim_grid=fastsim_grid,
+                    previous=previous[bi], patch_width=opts.patch_width, warm_first=True)
+                if key is not None and contact_cache is not None and fb == 0:
+                    contact_cache[key] = contacts
             previous[bi] = contacts
             updates += 1
             fallbacks += fb

@@ -159,9 +159,9 @@ def _grid(spec: tuple[float, float, float]) -> NDArray[np.float64]:
     return np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
 
 
-def _contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, side: str,
-                 unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
-                 fastsim_grid: int, y_mm: NDArray, patch_width: str = "hertz") -> Any:
+def contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, side: str,
+                unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
+                fastsim_grid: int, y_mm: NDArray, patch_width: str = "hertz") -> Any:
     """Everything a contact update depends on besides the profile heights (hashable)."""
     key: tuple[Any, ...] = (vehicle, tuple(classes), axle, side,
                             float(unbalanced_acceleration_m_s2), float(tangent_speed_kmh),
@@ -250,7 +250,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     rail_rates = []
     rail_sides: list[dict[str, NDArray]] = []
     all_contacts: dict[tuple[int, str], ClassContacts] | None = None
-    cache_key = None if contact_cache is None else _contact_key(
+    cache_key = None if contact_cache is None else contact_key(
         veh, classes, axle, side, unbalanced_acceleration_m_s2, tangent_speed_kmh, fastsim_grid,
         y, patch_width) + (rail_from_all_wheels,)
     linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)

@@ -743,6 +743,15 @@ def _add_contact() -> None:
 _add_contact()
 
 
+def _add_physics() -> None:
+    from wearcast.service.physics_cli import physics_app
+
+    app.add_typer(physics_app, name="physics")
+
+
+_add_physics()
+
+
 def main() -> None:
     """Entry point of the ``wearcast`` script."""
     app()

@@ -114,6 +114,7 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
     done = [0]
     simulated_km = float(state["simulation"]["mileage_km"])
     route = {"classes": state["resolved_classes"], "km": simulated_km}
+    contacts: dict = {}  # first contact updates shared by the runs (same new profile)
 
     def simulate(params: Any) -> Any:
         params = dict(params)
@@ -126,7 +127,8 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
                              f"run {done[0] + 1}/{n_runs} ({label}): {km:,.0f} km")
 
         sim = store.run_loop(state["vehicle"], route["classes"], state["law"],
-                             state["simulation_spec"], simulated_km, params, progress)
+                             state["simulation_spec"], simulated_km, params, progress,
+                             contact_cache=contacts)
         done[0] += 1
         return sim
 
@@ -196,6 +198,6 @@ def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
         n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
         selected=[d["verdict"]] if d["verdict"] != "none" else [],
         runner_up=ranked[0].cause if ranked else None,
-        null_test="held-out FT/qR error, one-sided test over the held-out groups with "
+        null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
                   "Holm's correction",
         saved_model=saved_model, save_reason=reason)

@@ -133,10 +133,12 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
 
 def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: dict[str, Any],
              mileage_km: float, params: dict[str, Any] | None = None,
-             progress: Any = None, continue_from: Any = None) -> Any:
+             progress: Any = None, continue_from: Any = None,
+             contact_cache: dict | None = None) -> Any:
     """One whole-vehicle run with a model's options, ``params`` (VehicleWearOptions fields or
     ``law``) replacing them; ``continue_from`` an earlier run to go on from (not with
-    ``step_convergence``, which runs anew)."""
+    ``step_convergence``, which runs anew); ``contact_cache`` shared by the runs of one
+    diagnosis (``simulate_vehicle_wear``: first contact updates solved once)."""
     from wearcast.physics.vehicle_wear_simulation import (
         VehicleWearOptions,
         simulate_vehicle_wear,
@@ -150,7 +152,8 @@ def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: 
     options.update(params)
     kwargs = {"law": law, "mileage_km": float(mileage_km),
               "options": VehicleWearOptions(**options),
-              "max_steps": int(simulation.get("max_steps", 200)), "progress": progress}
+              "max_steps": int(simulation.get("max_steps", 200)), "progress": progress,
+              "contact_cache": contact_cache}
     route = as_loop_classes(classes)
     step = float(simulation.get("depth_per_step_mm", 0.8))
     if simulation.get("step_convergence"):

@@ -363,7 +363,7 @@ class PhysicsModelSummary(BaseModel):
     wear_scale_p90: float
     spread: dict[str, Any] = Field(description="how P10/P90 were derived (method, log_sigma, "
                                    "per-vehicle scales)")
-    rms_mm: float = Field(description="RMS error of the fitted FT/qR points [mm]")
+    rms_mm: float = Field(description="RMS error of the fitted FT/FH/qR points [mm]")
     at_reach: bool = Field(description="the fit ended at the largest scale the run reaches")
     calibrated_on: dict[str, Any] = Field(description=(
         "filter, n_measurements, measurement_ids, vehicles, n_points and the vehicle-averaged "

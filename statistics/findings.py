@@ -54,10 +54,10 @@ class Gain:
 
     before_error, after_error : mean held-out error per measurement in the unit of ``metric``
         (the hybrid finder: log-area working residual squared and summed over both regions,
-        or the wear-curve shape residual [mm²·points]; the physics diagnosis: squared FT and
+        or the wear-curve shape residual [mm²·points]; the physics diagnosis: squared FT, FH and
         qR error [mm²])
     relative : 1 - after / before; ci95_low, ci95_high : bootstrap interval over groups
-    metric : 'log_area', 'wear_curve_shape' or 'ft_qr_squared_error_mm2'
+    metric : 'log_area', 'wear_curve_shape' or 'ft_fh_qr_squared_error_mm2'
     calibrated_error : error of the model exactly as calibrated (hybrid finder, area metric)
     """
 

@@ -11,7 +11,8 @@ parameter theta (the wear scale c is refitted with it), run at a few values of t
 prediction between them is linear in theta (categorical causes: each level). Scoring, as the
 hybrid finder's (``statistics.discrepancy``): folds grouped by vehicle (leave one vehicle out
 when there are fewer than 5 vehicles), the null (c only) and each extension fitted on the
-training vehicles, squared errors of FT and qR [mm^2] on the held-out vehicle; the per-group
+training vehicles, squared errors of the scored series (:data:`SERIES`: FT, FH and qR, each
+where measured) [mm^2] on the held-out vehicle; the per-group
 difference null - extension is tested one-sided (t-test over vehicles, over points when
 there are fewer than 5 vehicles; Holm across the catalogue); the relative gain 1 - after /
 before with a 95 % percentile bootstrap over the same groups. Verdict: among causes with
@@ -41,11 +42,15 @@ from wearcast.statistics.findings import (
     Gain,
     bootstrap_gain_interval,
 )
+from wearcast.statistics.physics_comparison import QUANTITIES
 
 DEFAULT_ALPHA = 0.05
 DEFAULT_MIN_RELATIVE_GAIN = 0.05
-#: Measured column -> simulation quantity.
-SERIES = {"FT_mm": "sd_mm", "QR_mm": "qr_mm"}
+#: Scored series, measured column -> simulation quantity: FT (Sd), FH (Sh) and qR, the one list
+#: of ``statistics.physics_comparison`` (a point missing a quantity is scored on the others).
+SERIES = QUANTITIES
+#: Name of the diagnosis's error metric (``findings.Gain.metric``).
+METRIC = "ft_fh_qr_squared_error_mm2"
 #: How far beyond its end a series is extrapolated (linearly from its last step) [-].
 EXTRAPOLATION = 1.25
 #: Bounds of the fitted wear-coefficient scale c [-].
@@ -134,11 +139,12 @@ class PhysicsDiagnosis(FinderResult):
 
 
 class _Series:
-    """The loop's vehicle-mean series of one parameter set, as functions of mileage."""
+    """The loop's vehicle-mean series of one parameter set, as functions of mileage (the
+    measured columns ``cols`` of :data:`SERIES`)."""
 
-    def __init__(self, sim: Any):
+    def __init__(self, sim: Any, cols: Sequence[str]):
         self.km = np.asarray(sim.mileage_km, dtype=float)
-        self.values = {col: np.asarray(sim.mean(q), dtype=float) for col, q in SERIES.items()}
+        self.values = {col: np.asarray(sim.mean(SERIES[col]), dtype=float) for col in cols}
 
     def at(self, col: str, km: NDArray, strict: bool = True) -> NDArray:
         """Values at mileages; beyond the simulated end, linear from the last step, up to
@@ -203,7 +209,7 @@ def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: N
                 pred = _predict(series, w, float(np.exp(log_c)), km, cols)
             except _OutOfRange:
                 return 1e12
-            return float(np.sum((pred - y) ** 2))
+            return float(np.nansum((pred - y) ** 2))
         coarse = np.array([sse(g) for g in grid])
         k = int(np.argmin(coarse))
         lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
@@ -233,27 +239,30 @@ class ScaleFit:
 
 
 def _measured_points(measured: pd.DataFrame) -> tuple[list[str], pd.DataFrame]:
-    cols = [c for c in SERIES if c in measured]
+    """The scored columns (of :data:`SERIES`, those measured at all) and the points with at
+    least one of them (a missing value is left out of the squared error, not filled)."""
+    cols = [c for c in SERIES if c in measured and measured[c].notna().any()]
     if not cols or "vehicle" not in measured or "distance_km" not in measured:
-        raise ValueError("measured needs vehicle, distance_km and FT_mm and/or QR_mm")
-    return cols, measured.dropna(subset=cols).reset_index(drop=True)
+        raise ValueError(f"measured needs vehicle, distance_km and any of {', '.join(SERIES)}")
+    return cols, measured.dropna(subset=cols, how="all").reset_index(drop=True)
 
 
 def fit_wear_scale(simulation: Any, measured: pd.DataFrame) -> ScaleFit:
-    """Least-squares wear-coefficient scale of one run against measured FT/qR series
+    """Least-squares wear-coefficient scale of one run against measured FT/FH/qR series
     (``measured`` as :func:`diagnose_physics` reads it): the search of the diagnosis's null
     model (log grid over SCALE_BOUNDS, then a bounded refinement)."""
     cols, data = _measured_points(measured)
     if data.empty:
-        raise ValueError("measured has no complete FT_mm/QR_mm point")
+        raise ValueError(f"measured has no point with any of {', '.join(cols)}")
     km = data["distance_km"].to_numpy(float)
     y = data[cols].to_numpy(float)
-    series = _Series(simulation)
+    n = int(np.isfinite(y).sum())
+    series = _Series(simulation, cols)
     _, scale, sse = _fit(_blends(None, {None: series}), km, y, cols)
     far = float(km.max())
     reach = EXTRAPOLATION * float(series.km[-1]) / far if far > 0 else SCALE_BOUNDS[1]
     at_reach = bool(sse >= 1e12 or (far > 0 and scale >= 0.97 * reach))
-    return ScaleFit(float(scale), float(sse), float(np.sqrt(sse / y.size)), int(y.size),
+    return ScaleFit(float(scale), float(sse), float(np.sqrt(sse / n)), n,
                     float(min(reach, SCALE_BOUNDS[1])), at_reach)
 
 
@@ -275,11 +284,13 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
                      n_bootstrap: int = 2000, seed: int = 0) -> PhysicsDiagnosis:
     """Diagnose the physics model against measured vehicle-averaged series.
 
-    simulate : {parameter: value} -> simulation (``mileage_km``, ``mean("sd_mm"|"qr_mm")``);
+    simulate : {parameter: value} -> simulation (``mileage_km``, ``mean(q)`` for the
+        quantities q of :data:`SERIES`: ``sd_mm``, ``sh_mm``, ``qr_mm``);
         called once per parameter set with only the cause's parameter set (empty = null); it
         must simulate far enough for the fitted scales (SCALE_BOUNDS x the largest mileage
         is not required: a scale that needs more is simply not reachable)
-    measured : columns ``vehicle``, ``distance_km`` and ``FT_mm`` and/or ``QR_mm``
+    measured : columns ``vehicle``, ``distance_km`` and any of ``FT_mm``, ``FH_mm``,
+        ``QR_mm`` (each scored where measured)
     """
     cols, data = _measured_points(measured)
     km = data["distance_km"].to_numpy(float)
@@ -291,7 +302,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     group_by = "vehicle" if groups.size >= 5 else "point"
     skipped = dict(NOT_BUILT)
     runs: dict[Any, dict[Any, _Series]] = {}
-    null_runs = {None: _Series(simulate({}))}
+    null_runs = {None: _Series(simulate({}), cols)}
 
     def held_out(cause: PhysicsCause | None, cause_runs: Mapping[Any, _Series]) -> NDArray:
         cands = _blends(cause, cause_runs)
@@ -301,17 +312,19 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
             theta, scale, _ = _fit(cands, km[~test], y[~test], cols)
             chosen = next(c for c in cands if c[0] == theta)
             pred = _predict(chosen[1], chosen[2], scale, km[test], cols, strict=False)
-            err[test] = np.sum((pred - y[test]) ** 2, axis=1)
+            err[test] = np.nansum((pred - y[test]) ** 2, axis=1)
         return err
 
     before = held_out(None, null_runs)
     theta0, scale0, sse0 = _fit(_blends(None, null_runs), km, y, cols)
-    null_fit = {"wear_scale": scale0, "rms_mm": float(np.sqrt(sse0 / y.size))}
+    null_fit = {"wear_scale": scale0,
+                "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols}
     rows = []
     for cause in catalogue:
         try:
             cause_runs = {v: (null_runs[None] if v == cause.null else
-                              _Series(simulate({cause.parameter: v}))) for v in cause.values}
+                              _Series(simulate({cause.parameter: v}), cols))
+                          for v in cause.values}
         except Exception as exc:  # a run that fails leaves the cause unscored, saying why
             skipped[cause.name] = f"the loop failed for this extension: {exc}"
             continue
@@ -336,7 +349,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
         theta, scale, sse = _fit(_blends(cause, runs[cause.name]), km, y, cols)
         findings.append((cause, Gain(float(before.mean()), float(after.mean()), float(rel), lo,
-                                     hi, metric="ft_qr_squared_error_mm2"),
+                                     hi, metric=METRIC),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
                           "null_value": cause.null}, p))
     adj = _holm(pvals) if pvals else np.array([])

@@ -36,7 +36,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from wearcast.statistics.physics_comparison import compare_with_measured
-from wearcast.statistics.physics_diagnosis import ScaleFit, fit_wear_scale
+from wearcast.statistics.physics_diagnosis import SERIES, ScaleFit, fit_wear_scale
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 
 QUANTITIES = ("sd_mm", "sh_mm", "qr_mm")
@@ -206,8 +206,7 @@ def calibrate_scale(series: VehicleSeries, measured: pd.DataFrame) -> Calibratio
     else:
         log_sigma = 0.0
         method = "one vehicle: no spread can be derived (p10 = p50 = p90)"
-    cols = [c for c in ("FT_mm", "FH_mm", "QR_mm") if c in measured and
-            measured[c].notna().any()]
+    cols = [c for c in SERIES if c in measured and measured[c].notna().any()]
     view = ScaledVehicle(series, fit.wear_scale, float(measured["distance_km"].max()))
     comparison = compare_with_measured(view, measured[["vehicle", "distance_km", *cols]]
                                        .dropna(subset=cols))

@@ -135,6 +135,7 @@ def cached_vehicle_simulator(route: Sequence[LoopClass], vehicle: str = "metro_b
     and its wall time [s].
     """
     cache: dict[tuple[tuple[str, Any], ...], VehicleWearSimulation] = {}
+    contacts: dict = {}  # first contact updates shared by the runs
 
     def simulate(params: Mapping[str, Any]) -> VehicleWearSimulation:
         key = tuple(sorted(params.items()))
@@ -143,7 +144,8 @@ def cached_vehicle_simulator(route: Sequence[LoopClass], vehicle: str = "metro_b
             cache[key] = simulate_vehicle_wear(vehicle, route, law=law,
                                                mileage_km=mileage_km,
                                                depth_per_step_mm=depth_per_step_mm,
-                                               options=VehicleWearOptions(**params))
+                                               options=VehicleWearOptions(**params),
+                                               contact_cache=contacts)
             if on_run is not None:
                 on_run(params, time.perf_counter() - start)
         return cache[key]

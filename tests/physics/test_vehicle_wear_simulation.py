@@ -157,3 +157,34 @@ def test_a_run_continues_from_an_earlier_one():
     with pytest.raises(ValueError, match="continue_from"):
         simulate_vehicle_wear("metro_b", ROUTE, law="archard_kth", mileage_km=2000.0,
                               continue_from=short)
+
+
+def test_runs_sharing_a_contact_cache_solve_the_new_profile_once(monkeypatch):
+    # Two runs that differ only in the wear (flange factor): the second reuses the first's
+    # first contact update of each bogie and ends exactly where it ends without the cache.
+    from wearcast.physics import vehicle_wear_simulation as vws
+
+    cache: dict = {}
+    lube = VehicleWearOptions(flange_wear_factor=0.5)
+    plain = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=500.0,
+                                  depth_per_step_mm=STEP, contact_cache=cache)
+    assert len(cache) == 2 and plain.contact_fallbacks == 0  # motor and trailer bogie
+    solves = {"n": 0}
+    real = vws.class_contacts_all_wheels
+
+    def counted(*a, **k):
+        solves["n"] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(vws, "class_contacts_all_wheels", counted)
+    cached = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=500.0,
+                                   depth_per_step_mm=STEP, options=lube, contact_cache=cache)
+    assert solves["n"] == cached.contact_updates - 2 and len(cache) == 2
+    solves["n"] = 0
+    fresh = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=500.0,
+                                  depth_per_step_mm=STEP, options=lube)
+    assert solves["n"] == fresh.contact_updates
+    np.testing.assert_array_equal(cached.mileage_km, fresh.mileage_km)
+    for q in ("sd_mm", "sh_mm", "qr_mm"):
+        np.testing.assert_array_equal(getattr(cached, q), getattr(fresh, q))
+    np.testing.assert_array_equal(cached.profiles_mm, fresh.profiles_mm)

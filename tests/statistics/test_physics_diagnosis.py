@@ -9,7 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wearcast.statistics.physics_diagnosis import CATALOGUE, diagnose_physics
+from wearcast.statistics.physics_diagnosis import (
+    CATALOGUE,
+    SERIES,
+    diagnose_physics,
+    fit_wear_scale,
+)
 
 
 class _Series:
@@ -78,6 +83,59 @@ def test_bad_measurements_are_refused():
         diagnose_physics(_Series, pd.DataFrame({"distance_km": [0.0], "FT_mm": [32.5]}))
     with pytest.raises(ValueError, match="2 vehicles"):
         diagnose_physics(_Series, _measured({}, 1.0, n_vehicles=1))
+
+
+
+class _FlangeHeightSeries(_Series):
+    """As :class:`_Series`, but the flange-wear factor leaves FT and qR alone and moves only
+    the flange height FH (a signature the FT/qR-only scoring could not see)."""
+
+    def __init__(self, params):
+        f = params.get("flange_wear_factor", 1.0)
+        super().__init__({k: v for k, v in params.items() if k != "flange_wear_factor"})
+        m = np.maximum(self.mileage_km - 500.0, 0.0)
+        self.fh = 28.0 + 0.3e-3 * (1.0 - f) * m
+
+    def mean(self, quantity):
+        return self.fh if quantity == "sh_mm" else super().mean(quantity)
+
+
+def _with_fh(measured, params, scale, noise_mm=0.04, seed=5):
+    rng = np.random.default_rng(seed)
+    sim = _FlangeHeightSeries(params)
+    km = measured["distance_km"].to_numpy(float)
+    fh = np.interp(scale * km, sim.mileage_km, sim.fh) + rng.normal(0, noise_mm, km.size)
+    return measured.assign(FH_mm=fh)
+
+
+def test_the_scored_series_are_ft_fh_and_qr():
+    assert SERIES == {"FT_mm": "sd_mm", "FH_mm": "sh_mm", "QR_mm": "qr_mm"}
+
+
+def test_a_cause_seen_only_in_the_flange_height_is_named():
+    # FT and qR are the same at every flange-wear factor: only FH tells them apart.
+    params = {"flange_wear_factor": 0.25}
+    measured = _with_fh(_measured({}, scale=1.3), params, scale=1.3)
+    d = diagnose_physics(_FlangeHeightSeries, measured, n_bootstrap=300)
+    assert d.verdict == "flange_lubrication", d.to_dict()
+    f = d.finding("flange_lubrication")
+    assert f.extension["value"] == pytest.approx(0.25, abs=0.1)
+    assert f.gain.metric == "ft_fh_qr_squared_error_mm2"
+    assert d.null_fit["series"] == ["FT_mm", "FH_mm", "QR_mm"]
+    # Without FH the same data carry no trace of it.
+    blind = diagnose_physics(_FlangeHeightSeries, measured.drop(columns="FH_mm"),
+                             n_bootstrap=300)
+    assert blind.verdict == "none"
+    assert blind.finding("flange_lubrication").gain.relative == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_point_without_flange_height_is_scored_on_the_others():
+    measured = _with_fh(_measured({}, scale=1.3), {"flange_wear_factor": 0.5}, scale=1.3)
+    measured.loc[measured.index[::2], "FH_mm"] = np.nan
+    fit = fit_wear_scale(_FlangeHeightSeries({"flange_wear_factor": 0.5}), measured)
+    assert fit.n_points == int(measured[["FT_mm", "FH_mm", "QR_mm"]].notna().sum().sum())
+    assert fit.wear_scale == pytest.approx(1.3, rel=0.05)
+    assert np.isfinite(fit.rms_mm) and fit.rms_mm < 0.1
 
 
 @pytest.mark.slow

@@ -1,0 +1,85 @@
+"""Continuation of the curving equilibria: warm-started rows are solved once, not repeated.
+
+A row whose continuation starts at its end parameters (the wear loop's warm start from the
+last profile's equilibrium) has no path to halve: its retries would solve the same problem
+from the same state. It gets one damped Newton solve and, if that fails, one Powell-hybrid
+solve; a row continued from other parameters keeps the halvings and the Powell attempts on
+small steps.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wearcast.physics import equilibrium_solvers as es
+
+
+def _counting(monkeypatch):
+    calls = {"newton": 0, "polish": 0}
+    newton, polish = es.newton_batch, es.scipy_polish
+
+    def counted_newton(*a, **k):
+        calls["newton"] += 1
+        return newton(*a, **k)
+
+    def counted_polish(*a, **k):
+        calls["polish"] += 1
+        return polish(*a, **k)
+
+    monkeypatch.setattr(es, "newton_batch", counted_newton)
+    monkeypatch.setattr(es, "scipy_polish", counted_polish)
+    return calls
+
+
+def _no_root(q, p):
+    """q^2 + 1 + p: never zero, so every solve fails."""
+    return q * q + 1.0 + p
+
+
+def test_a_warm_row_without_a_solution_is_tried_once_by_each_solver(monkeypatch):
+    calls = _counting(monkeypatch)
+    p = np.array([[0.5, 0.5]])
+    q, norm, ok = es.continuation_batch(_no_root, np.array([[0.3, -0.2]]), p, p, 1e-9)
+    assert not ok[0] and np.isfinite(norm[0]) and norm[0] > 1.0
+    assert calls == {"newton": 1, "polish": 1}
+
+
+def test_a_continued_row_keeps_its_halvings_and_polish_attempts(monkeypatch):
+    calls = _counting(monkeypatch)
+    q, norm, ok = es.continuation_batch(_no_root, np.array([[0.3, -0.2]]),
+                                        np.zeros((1, 2)), np.array([[0.5, 0.5]]), 1e-9,
+                                        max_halvings=10)
+    assert not ok[0]
+    # 11 failed attempts (halvings 0..10), Powell on the 6 with halvings >= 5
+    assert calls == {"newton": 11, "polish": 6}
+
+
+def test_a_warm_row_newton_misses_is_the_powell_solution_from_the_warm_state(monkeypatch):
+    def fun(q, p):
+        return np.arctan(q - p)
+
+    def newton_fails(fun, q0, params, tol, **kw):
+        return np.array(q0, dtype=float), np.full(len(q0), np.inf), np.zeros(len(q0), bool)
+
+    q0 = np.array([[0.2, -0.2], [0.0, 0.1]])
+    p = np.array([[0.5, -0.25], [0.4, 0.3]])
+    expected = [es.scipy_polish(fun, q0[k], p[k], 1e-9) for k in range(2)]
+    monkeypatch.setattr(es, "newton_batch", newton_fails)
+    q, norm, ok = es.continuation_batch(fun, q0, p, p, 1e-9)
+    assert np.all(ok)
+    for k in range(2):
+        np.testing.assert_array_equal(q[k], expected[k][0])
+        assert norm[k] == expected[k][1]
+
+
+def test_a_warm_row_newton_solves_is_newtons_answer():
+    def fun(q, p):
+        return np.arctan(q - p) + 0.1 * (q - p) ** 3
+
+    q0 = np.array([[0.45, -0.2]])
+    p = np.array([[0.5, -0.25]])
+    q_n, norm_n, ok_n = es.newton_batch(fun, q0, p, 1e-9)
+    q, norm, ok = es.continuation_batch(fun, q0, p, p, 1e-9)
+    assert ok_n[0] and ok[0]
+    np.testing.assert_array_equal(q, q_n)
+    np.testing.assert_allclose(q[0], p[0], atol=1e-8)
