@@ -22,7 +22,9 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics.findings import json_value
-from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
+from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.hybrid_prediction import Prediction, predict
+from wearcast.statistics.hybrid_profiles import profile_at_areas
 from wearcast.statistics.residuals import geometric_basis
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable
@@ -32,7 +34,7 @@ if TYPE_CHECKING:
 
 
 def build_finder_data(*args: Any, **kwargs: Any) -> cz.FinderData:
-    from wearcast.statistics.discrepancy import build_data
+    from wearcast.statistics.discrepancy_data import build_data
 
     return build_data(*args, **kwargs)
 

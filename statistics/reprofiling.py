@@ -33,11 +33,9 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.vocabulary import REGIONS
-from wearcast.statistics.hybrid import (
-    HybridModel,
-    parameters_at_areas,
-    region_rates,
-)
+from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.hybrid_prediction import region_rates
+from wearcast.statistics.hybrid_profiles import parameters_at_areas
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable

@@ -11,7 +11,12 @@ from wearcast.service import importing, measurement_store
 from wearcast.service.deps import SessionDep, SettingsDep
 from wearcast.service.errors import Unprocessable
 from wearcast.service.json_response import json_response
-from wearcast.service.schemas import ImportOut, MeasurementIn, MeasurementOut, MeasurementPage
+from wearcast.service.measurement_schemas import (
+    ImportOut,
+    MeasurementIn,
+    MeasurementOut,
+    MeasurementPage,
+)
 
 router = APIRouter(tags=["measurements"])
 

@@ -38,6 +38,7 @@ from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 from wearcast.statistics.routes import Route, RouteClass
 
 
@@ -92,7 +93,7 @@ def twin_scenario(wear_effects: Sequence[ft.WearEffect] = (),
     """The four-unit twin of ``twin_effects.scenario_config`` (``config`` passed on), its
     profiles processed, calibrated on unit A's motor bogies; ``max_wheels`` keeps the first
     wheels by id."""
-    table = ft.synthetic_wear_table() if table is None else table
+    table = twin_wear_table.synthetic_wear_table() if table is None else table
     cfg = te.scenario_config(seed=seed, wear_effects=tuple(wear_effects),
                              profile_effects=tuple(profile_effects), **config)
     twin = ft.generate_fleet(cfg, table)
@@ -189,11 +190,11 @@ LOOP_TRUTH = fl.LoopTruth(vehicles={"motor": "metro_b", "trailer": "metro_b"},
                           law="archard_kth", n_steps=6, mileage_scale=0.15)
 LOOP_MILEAGES_KM = (15_000.0, 40_000.0, 70_000.0, 100_000.0, 135_000.0, 170_000.0)
 LOOP_MEASURE = "tau_max"   # the loop table carries the loop's rates under both names
-def loop_route(name: str, lubricated: bool = False) -> ft.TwinRoute:
+def loop_route(name: str, lubricated: bool = False) -> twin_routes.TwinRoute:
     classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share in LOOP_CLASSES:
         classes += _loop_classes(radius_m, cant_mm, speed_kmh, share)
-    return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
+    return twin_routes.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
 
 
 def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),

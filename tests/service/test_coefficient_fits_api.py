@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from wearcast.physics.wear_loop import LoopClass
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics.coefficient_fit import make_twin
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 CLASSES = [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
            {"radius_m": 1500, "speed_kmh": 70, "direction": "left", "share": 0.4}]

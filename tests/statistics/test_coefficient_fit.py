@@ -4,14 +4,9 @@ import numpy as np
 import pytest
 
 from wearcast.physics.wear_loop import LoopClass
-from wearcast.statistics.coefficient_fit import (
-    CalibrationProblem,
-    calibrate,
-    comparison_table,
-    make_twin,
-    rmse_mm,
-    run_model,
-)
+from wearcast.statistics.coefficient_fit import CalibrationProblem, calibrate, rmse_mm, run_model
+from wearcast.statistics.coefficient_fit_comparison import comparison_table
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 # Seed 000 Table 1 track bands (reference/published/metro_lines_track_conditions.csv) with one
 # sharp curve added so that a second zone (seizure on the flange) occurs; both directions.

@@ -13,9 +13,9 @@ from wearcast.statistics.coefficient_fit import (
     CalibrationProblem,
     calibrate,
     calibrate_full_loop,
-    make_twin,
     run_model,
 )
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 # Tangent + 1500 m curve, 200 km in two 100 km steps with the contact re-solved every step: the
 # second step's contact sees the worn profile, so the fit needs the outer (feedback) iteration.

@@ -17,13 +17,9 @@ import pytest
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
-from wearcast.statistics import hybrid, reprofiling
-from wearcast.statistics.hybrid import (
-    parameters_at_areas,
-    predict,
-    profile_at_areas,
-    region_rates,
-)
+from wearcast.statistics import hybrid, hybrid_prediction, reprofiling
+from wearcast.statistics.hybrid_prediction import predict, region_rates
+from wearcast.statistics.hybrid_profiles import parameters_at_areas, profile_at_areas
 from wearcast.statistics.profile_parameters import WheelLimits, flange_parameters
 from wearcast.statistics.reprofiling import (
     MILEAGE_ATOL_KM,
@@ -207,7 +203,7 @@ def test_given_weighted_measures_give_the_same_prediction(table):
     model = _model()
     kw = {**KW, "side": "right", "mileage_km": [0.0, 1e5, 3e5]}
     base = predict(model, ROUTE, table, **kw)
-    p_s = hybrid.model_weighted_measures(model, ROUTE, table, bogie_type="motor", axle=1,
+    p_s = hybrid_prediction.model_weighted_measures(model, ROUTE, table, bogie_type="motor", axle=1,
                                          side="right")
     given = predict(model, ROUTE, table, weighted_measures=p_s, **kw)
     assert given.weighted_measure == base.weighted_measure
