@@ -30,7 +30,7 @@ from wearcast.physics.vehicle_wear_simulation import (
     VehicleWearSimulation,
     simulate_vehicle_wear,
 )
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy_progression import ExpectedProgression
 from wearcast.statistics.generators import depot as dp
@@ -126,7 +126,7 @@ def depot_scenario(effects: dp.DepotEffects, seed: int = 0) -> Scenario:
                       cal, fleet)
 
 
-def cached_vehicle_simulator(route: Sequence[LoopClass], vehicle: str = "metro_b", *,
+def cached_vehicle_simulator(route: Sequence[CurveClass], vehicle: str = "metro_b", *,
                              law: str = "usfd", mileage_km: float = 3000.0,
                              depth_per_step_mm: float = 1.0,
                              on_run: Callable[[Mapping[str, Any], float], None] | None = None,
@@ -273,7 +273,7 @@ def loop_expected_progression(runs: Mapping[tuple[str, int], Sequence[Any]], top
                                           source="the wear loop on the same track")
 
 
-def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
+def seed003_classes(table: pd.DataFrame) -> list[CurveClass]:
     """Seed 003 Table 3's statistical track (columns ``R_c_m`` [m, NaN = tangent], ``H_mm``,
     ``V_kmh``, ``p_k_pct``) as loop classes: each curve class in both directions with half its
     share."""
@@ -281,9 +281,9 @@ def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
     columns = [table[c].to_numpy(float) for c in ("R_c_m", "H_mm", "V_kmh", "p_k_pct")]
     for radius, cant, speed, share_pct in zip(*columns, strict=True):
         if not np.isfinite(radius):
-            out.append(LoopClass(None, 0.0, float(speed), share=float(share_pct) / 100.0))
+            out.append(CurveClass(None, 0.0, float(speed), share=float(share_pct) / 100.0))
             continue
         for direction in ("left", "right"):
-            out.append(LoopClass(float(radius), float(cant), float(speed), direction,
+            out.append(CurveClass(float(radius), float(cant), float(speed), direction,
                                  float(share_pct) / 200.0))
     return out
