@@ -42,9 +42,10 @@ def typed(wheelset):
 
 
 def test_centred_tread_contact(typed):
-    # reference/README.md + mbench_a22_right_ref.csv, y = 0: pmax = 338.3 MPa, Fn = 9997 N,
-    # Fs = -253.6 N (spin), FZ = 10000 N.  CONTACT's conformal patch is non-Hertzian and its
-    # reference point lies 1.35 mm inboard of our rigid point (Hertz ellipse at one point):
+    # CONTACT's Manchester case result mbench_a22_right_ref.csv, y = 0: pmax = 338.3 MPa,
+    # Fn = 9997 N, Fs = -253.6 N (spin), FZ = 10000 N.  CONTACT's conformal patch is
+    # non-Hertzian and its reference point lies 1.35 mm inboard of our rigid point (Hertz
+    # ellipse at one point):
     # measured 355 MPa (+5 %), Fs -202 N.
     right, _ = typed
     assert right.loc[0.0, "pmax_Nmm2"] == pytest.approx(338.3, rel=0.08)
