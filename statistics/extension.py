@@ -45,7 +45,7 @@ class ExtendedModel:
 
     ``rate_factors`` gives the per-region multiplier of the base model's rate for one wheel
     (its covariates); ``for_wheel`` returns a plain HybridModel whose c_s carries that factor,
-    so ``hybrid.predict`` and ``reprofiling.reprofiling_mileage`` work unchanged;
+    so ``hybrid_prediction.predict`` and ``reprofiling.reprofiling_mileage`` work unchanged;
     ``predict`` adds the mileage dependence of ``nonlinear_progression``.
     """
 
@@ -124,7 +124,8 @@ class ExtendedModel:
     def predict(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
                 axle: int, side: str, mileage_km: Any,
                 covariates: Mapping[str, Any] | None = None) -> Prediction:
-        """``hybrid.predict`` with the extension (areas A = k s, or k s_ref (s/s_ref)^beta)."""
+        """``hybrid_prediction.predict`` with the extension (areas A = k s, or
+        k s_ref (s/s_ref)^beta)."""
         m = self.for_wheel(route, table, bogie_type=bogie_type, axle=axle, side=side,
                            covariates=covariates)
         out = predict(m, route, table, bogie_type=bogie_type, axle=axle, side=side,

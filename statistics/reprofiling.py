@@ -416,7 +416,7 @@ def reprofiling_mileage(
         (default: new profile)
     horizon_km : search horizon [km]; beyond it the limit counts as not reached
     n_grid : points of the geometric search grid before the refinement
-    weighted_measures : P_s per region if known already (see ``hybrid.region_rates``)
+    weighted_measures : P_s per region if known already (see ``hybrid_prediction.region_rates``)
     start_parameters : measured ``sd_mm``, ``sh_mm``, ``qr_mm`` [mm] of the start state; the
         prediction starts from them (module docstring); past a limit: 0 km remaining
 
