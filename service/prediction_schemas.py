@@ -17,15 +17,31 @@ from wearcast.service.route_schemas import RouteSpec
 from wearcast.service.schema_base import MAX_MILEAGE_KM, Strict
 
 
+def check_one_route(body: Any) -> None:
+    """A request names its route by ``route_id`` or gives it inline (``route``), not both;
+    neither: a physics model runs on its own route, a hybrid model answers 422 route_id."""
+    if body.route_id is not None and body.route is not None:
+        raise ValueError("give either route_id or route (exactly one)")
+
+
+def check_wheel_start(body: Any) -> None:
+    """A request starts from at most one of ``wheel_id``, ``measurement_id``, ``profile``,
+    and without a stored one (``wheel_id``/``measurement_id``) gives the wheel's position."""
+    starts = [body.wheel_id, body.measurement_id, body.profile]
+    if sum(v is not None for v in starts) > 1:
+        raise ValueError("give at most one of wheel_id, measurement_id, profile")
+    stored = body.wheel_id is not None or body.measurement_id is not None
+    if not stored and None in (body.bogie_type, body.axle, body.side):
+        raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+
+
 class RouteRef(Strict):
     route_id: int | str | None = None
     route: RouteSpec | None = None
 
     @model_validator(mode="after")
     def _one_route(self) -> RouteRef:
-        # neither: a physics model runs on its own route; a hybrid model answers 422 route_id
-        if self.route_id is not None and self.route is not None:
-            raise ValueError("give either route_id or route (exactly one)")
+        check_one_route(self)
         return self
 
 
@@ -49,12 +65,7 @@ class PredictIn(RouteRef):
 
     @model_validator(mode="after")
     def _start(self) -> PredictIn:
-        starts = [self.wheel_id, self.measurement_id, self.profile]
-        if sum(v is not None for v in starts) > 1:
-            raise ValueError("give at most one of wheel_id, measurement_id, profile")
-        stored = self.wheel_id is not None or self.measurement_id is not None
-        if not stored and None in (self.bogie_type, self.axle, self.side):
-            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+        check_wheel_start(self)
         return self
 
     @property

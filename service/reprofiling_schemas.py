@@ -12,6 +12,7 @@ from wearcast.physics.vocabulary import (
     BogieType,
     Side,
 )
+from wearcast.service.prediction_schemas import check_one_route, check_wheel_start
 from wearcast.service.profile_schemas import MeasuredProfileIn
 from wearcast.service.route_schemas import RouteSpec
 from wearcast.service.schema_base import Strict
@@ -38,15 +39,8 @@ class ReprofilingIn(Strict):
 
     @model_validator(mode="after")
     def _check(self) -> ReprofilingIn:
-        # neither: a physics model runs on its own route; a hybrid model answers 422 route_id
-        if self.route_id is not None and self.route is not None:
-            raise ValueError("give either route_id or route (exactly one)")
-        starts = [self.wheel_id, self.measurement_id, self.profile]
-        if sum(v is not None for v in starts) > 1:
-            raise ValueError("give at most one of wheel_id, measurement_id, profile")
-        stored = self.wheel_id is not None or self.measurement_id is not None
-        if not stored and None in (self.bogie_type, self.axle, self.side):
-            raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+        check_one_route(self)
+        check_wheel_start(self)
         return self
 
 
