@@ -31,7 +31,7 @@ from wearcast.statistics.coefficient_fit_twin import make_twin
 
 SEED_000_PSO_S = 212.0  # seed 000 Table 2, line 1, 50,000 km
 CLASSES = [CurveClass(r, 0.0, v, d, s / 2) for r, s, v in ((1500.0, 75, 70), (700.0, 22, 60),
-                                                          (250.0, 3, 30))
+                                                           (250.0, 3, 30))
            for d in ("left", "right")]
 TRUE_K = (3e-4, 33e-4, 7e-4, 330e-4)
 BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4), (300e-4, 400e-4))

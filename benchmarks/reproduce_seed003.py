@@ -184,8 +184,8 @@ def complete_classes(segments: pd.DataFrame) -> list[CurveClass]:
     for r in segments.itertuples():
         tangent = pd.isna(r.radius_m) or not np.isfinite(r.radius_m)
         out.append(CurveClass(None if tangent else float(r.radius_m), float(r.cant_mm),
-                             float(r.speed_kmh), "left" if tangent else str(r.direction),
-                             r.length_m / total))
+                              float(r.speed_kmh), "left" if tangent else str(r.direction),
+                              r.length_m / total))
     return out
 
 

@@ -250,7 +250,7 @@ def load_inputs(session: Session, model_id: int, route_id: int | str | None,
 
 
 def request_covariates(inputs: ModelInputs, route: RouteInputs,
-                given: dict[str, Any] | None) -> dict[str, Any] | None:
+                       given: dict[str, Any] | None) -> dict[str, Any] | None:
     """The covariates an extended model reads: the route's attributes overlaid with the
     request's (None for a plain model, which reads none)."""
     if not isinstance(inputs.model, ExtendedModel):

@@ -157,8 +157,8 @@ def wear_area_job(session: Session, model_id: int, *, route_id: int | str,
     top = max_mileage_km or max(200_000.0, 1.15 * float(measured["mileage_km"].max())
                                 if not measured.empty else 0.0)
     prediction = prediction_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
-                                            side=side,
-                                            mileage_km=np.linspace(0.0, top, 41).tolist())
+                                                 side=side,
+                                                 mileage_km=np.linspace(0.0, top, 41).tolist())
     who = wheel_id or f"{bogie_type} bogie, axle {axle}, {side}"
     title = f"model {loaded.row.name!r} on route {row.name if row else 'inline'}: {who}"
     return PictureJob(wear_area_figure, (prediction, measured), {"title": title, "fmt": fmt})
@@ -184,7 +184,7 @@ def profile_job(session: Session, model_id: int, *, route_id: int | str,
     loaded = model_loading.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
     prediction = prediction_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
-                                            side=side, mileage_km=[mileage_km])
+                                                 side=side, mileage_km=[mileage_km])
     keys = (row.name, str(row.id)) if row else ()
     measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id, keys)
     curves, labels = [], []

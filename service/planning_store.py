@@ -159,7 +159,7 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
         out = {}
         try:
             model = model_loading.wheel_model(inputs.model, route.route, inputs.table,
-                                            covariates=dict(route.attributes), **position)
+                                              covariates=dict(route.attributes), **position)
             measures = model_loading.weighted_measures(inputs, route.route, **position)
             for name in FLANGE_LIMITS:
                 key = {"sd": "sd_min_mm", "sh": "sh_max_mm", "qr": "qr_min_mm"}[name]

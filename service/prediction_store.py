@@ -55,8 +55,9 @@ def run_prediction(loaded: LoadedModel | ModelInputs, route: Route, *, bogie_typ
         plain = wheel_model(model, route, loaded.table, bogie_type=bogie_type, axle=axle,
                             side=side, covariates=covariates)
         return hybrid_prediction.predict(plain, route, loaded.table, bogie_type=bogie_type,
-                              axle=axle, side=side, mileage_km=mileage_km,
-                              start_areas_mm2=start_areas_mm2, weighted_measures=measures)
+                                         axle=axle, side=side, mileage_km=mileage_km,
+                                         start_areas_mm2=start_areas_mm2,
+                                         weighted_measures=measures)
     except ValueError as exc:
         raise statistics_error(exc) from exc
 

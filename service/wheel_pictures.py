@@ -210,7 +210,7 @@ def wheel_parameter_job(session: Session, model_id: int, *, wheel_id: str,
     corridor = None
     if not answer["crossed_limits"]:
         corridor = reprofiling_store.parameter_corridor(inputs, route, body, start,
-                                                  np.linspace(0.0, top, 61))
+                                                        np.linspace(0.0, top, 61))
     measured = _wheel_measured(session, wheel_id)
     title = (f"wheel {wheel_id}: model {model_id} on route {route.name}; reprofiling "
              + ("now (" + ", ".join(f"{k} past by {v:.2f} mm" for k, v in

@@ -330,7 +330,7 @@ def diagnose(
                 s = scored[code]
                 s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
         eligible = [c for c in remaining if is_named(scored[c.code], alpha, min_relative_gain,
-                                                   groups, n_boot, rng)]
+                                                     groups, n_boot, rng)]
         if not eligible:
             break
         best = max(eligible, key=lambda c: scored[c.code].gain)
@@ -358,7 +358,7 @@ def diagnose(
 
     names = [c.code for c in selected]
     if shape_cause is not None and is_named(scored[shape_cause.code], alpha, min_relative_gain,
-                                          groups, n_boot, rng):
+                                            groups, n_boot, rng):
         names.append(shape_cause.code)
     if names:   # the verdict is the named cause with the largest relative gain
         top = max(names, key=lambda c: scored[c].gain)
@@ -382,7 +382,7 @@ def diagnose(
     for code in scored:
         covariate_codes(scored[code].cause, data)
     findings = scored_findings(data, scored, selected, names, vehicle, chosen, n_boot, groups,
-                         alpha, min_relative_gain, rng)
+                               alpha, min_relative_gain, rng)
     order = {c: i for i, c in enumerate(names)}
     findings.sort(key=lambda f: (order.get(f.cause, len(order)), -f.gain.relative))
     preds: dict[str, list[list[float]]] = {}

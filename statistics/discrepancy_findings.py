@@ -47,7 +47,7 @@ def _gain_interval(s: Scored, groups: NDArray[Any], n_boot: int,
 
 
 def is_named(s: Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
-           rng: np.random.Generator) -> bool:
+             rng: np.random.Generator) -> bool:
     return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
 
 
@@ -65,9 +65,9 @@ _SUBGROUPS = {
 
 
 def scored_findings(data: cz.FinderData, scored: Mapping[str, Scored], selected: Sequence[cz.Cause],
-              names: Sequence[str], vehicle: NDArray[Any], chosen: Sequence[cz.Cause],
-              n_boot: int, groups: NDArray[Any], alpha: float, min_gain: float,
-              rng: np.random.Generator) -> list[Finding]:
+                    names: Sequence[str], vehicle: NDArray[Any], chosen: Sequence[cz.Cause],
+                    n_boot: int, groups: NDArray[Any], alpha: float, min_gain: float,
+                    rng: np.random.Generator) -> list[Finding]:
     everything = np.ones(data.n, dtype=bool)
     joint: dict[str, cz.Cause] = {}
     if selected:

@@ -161,7 +161,7 @@ async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
     cached = None
     if body.wheel_id is None and body.measurement_id is None:  # stored starts: always read
         cached = model_loading.cached_inputs(_database_url(request), model_id, body.route_id,
-                                           body.route)
+                                             body.route)
     if cached is None:
         return await run_in_threadpool(_predict_loading, request, model_id, body)
     start = wheel_start.wheel_start(None, body) if body.profile is not None else None
@@ -179,7 +179,7 @@ async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> R
     cached = None
     if body.wheel_id is None and body.measurement_id is None:  # stored states: always read
         cached = model_loading.cached_inputs(_database_url(request), model_id, body.route_id,
-                                           body.route)
+                                             body.route)
     if cached is None:
         return await run_in_threadpool(_reprofiling_loading, request, model_id, body)
     start = wheel_start.wheel_start(None, body)

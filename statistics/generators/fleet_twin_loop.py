@@ -92,7 +92,7 @@ class LoopFleetTwin:
 
 def _loop_classes(route: TwinRoute) -> list[CurveClass]:
     return [CurveClass(c.radius_m, c.cant_mm, c.speed_kmh, cast(Direction, c.direction or "left"),
-                      c.share)
+                       c.share)
             for c in route.classes]
 
 

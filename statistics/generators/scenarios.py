@@ -285,5 +285,5 @@ def seed003_classes(table: pd.DataFrame) -> list[CurveClass]:
             continue
         for direction in ("left", "right"):
             out.append(CurveClass(float(radius), float(cant), float(speed), direction,
-                                 float(share_pct) / 200.0))
+                                  float(share_pct) / 200.0))
     return out

@@ -24,7 +24,7 @@ def twin():
     # Tangent + 1500 m: only KTH zone 1 occurs; 200 km in 100 km steps (twin of seed 000's
     # fit-at-one-mileage, predict-at-another; short so that the test is fast).
     classes = [CurveClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
-                         c["share"]) for c in CLASSES]
+                          c["share"]) for c in CLASSES]
     return make_twin("metro_b", classes, (TRUE_K1, 35e-4, 5e-4, 350e-4), 200.0, 400.0, 100.0)
 
 
@@ -129,7 +129,7 @@ TAU_0_MPA = 100.0
 @pytest.fixture(scope="module")
 def tau_twin():
     classes = [CurveClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
-                         c["share"]) for c in CLASSES]
+                          c["share"]) for c in CLASSES]
     return make_twin("metro_b", classes, (TRUE_C_TAU,), 200.0, 400.0, 100.0, law="tau_max",
                      tau_threshold_mpa=TAU_0_MPA)
 

@@ -30,7 +30,7 @@ ROUTE = {"name": "curvy", "classes": [
     {"radius_m": None, "speed_kmh": 100, "share": 0.7}]}
 LOOP_ROUTE = [CurveClass(250.0, 100.0, 60.0, "left", 0.15),
               CurveClass(250.0, 100.0, 60.0, "right", 0.15), CurveClass(None, 0.0, 100.0,
-                                                                      share=0.7)]
+                                                                        share=0.7)]
 RUN_KM = 2000.0
 SCALE = 1.2
 MODEL = {"kind": "physics", "name": "loop", "vehicle": "metro_b", "route_id": "curvy",

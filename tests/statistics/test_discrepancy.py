@@ -105,9 +105,9 @@ def test_traction_extension_predicts_motor_treads_faster():
     trailer = ext.predict(route, helpers.TABLE, bogie_type="trailer", axle=1, side="left",
                           mileage_km=[100_000.0])
     base_m = hybrid_prediction.predict(model, route, helpers.TABLE, bogie_type="motor", axle=1,
-                            side="left", mileage_km=[100_000.0])
+                                       side="left", mileage_km=[100_000.0])
     base_t = hybrid_prediction.predict(model, route, helpers.TABLE, bogie_type="trailer", axle=1,
-                            side="left", mileage_km=[100_000.0])
+                                       side="left", mileage_km=[100_000.0])
     ratio_ext = motor.tread_area_mm2[1, 0] / trailer.tread_area_mm2[1, 0]
     ratio_base = base_m.tread_area_mm2[1, 0] / base_t.tread_area_mm2[1, 0]
     m = diagnosis.finding("traction").extension["parameters"]["tread_multiplier_motor"]
@@ -133,7 +133,7 @@ def test_wear_measure_extension_is_a_plain_hybrid_model():
     ext = apply_extension(model, diagnosis.finding("wear_measure"))
     assert isinstance(ext, hybrid.HybridModel) and ext.measure == "t_gamma"
     out = hybrid_prediction.predict(ext, routes["metro"], helpers.TABLE, bogie_type="motor", axle=1,
-                         side="right", mileage_km=[50_000.0])
+                                    side="right", mileage_km=[50_000.0])
     assert np.all(np.isfinite(out.tread_area_mm2))
 
 

@@ -148,7 +148,7 @@ def test_weighted_measure_mirror_symmetry(radius, share, mode, axle):
 
     def route(direction):
         return twin_routes.TwinRoute("r", (RouteClass(radius, direction, 50.0, 60.0, share),
-                                  RouteClass(None, None, 0.0, 80.0, 1.0 - share)))
+                                           RouteClass(None, None, 0.0, 80.0, 1.0 - share)))
 
     def p(r, axle, side, region, mode):
         return weighted_wear_measure(r, table, bogie_type="motor", axle=axle, side=side,

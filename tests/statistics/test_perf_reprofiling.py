@@ -204,7 +204,7 @@ def test_given_weighted_measures_give_the_same_prediction(table):
     kw = {**KW, "side": "right", "mileage_km": [0.0, 1e5, 3e5]}
     base = predict(model, ROUTE, table, **kw)
     p_s = hybrid_prediction.model_weighted_measures(model, ROUTE, table, bogie_type="motor", axle=1,
-                                         side="right")
+                                                    side="right")
     given = predict(model, ROUTE, table, weighted_measures=p_s, **kw)
     assert given.weighted_measure == base.weighted_measure
     np.testing.assert_array_equal(given.z_mm, base.z_mm)
