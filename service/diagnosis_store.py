@@ -29,12 +29,13 @@ import pandas as pd
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
-from wearcast.service import json_values, measurement_store, model_loading, model_store, route_store
+from wearcast.service import measurement_store, model_loading, model_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.service.errors import Unprocessable, from_value_error
 from wearcast.statistics import discrepancy, discrepancy_report, extension, hybrid
 from wearcast.statistics.causes import CATALOGUE
+from wearcast.statistics.json_values import json_value
 
 #: Columns of ``calibration_frame`` that are not covariates the finder should see twice.
 _STANDARD = {"measurement_id", "wheel_id", "vehicle_id", "bogie_type", "axle", "side",
@@ -198,7 +199,7 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
                 "(wearcast.statistics.extension.correct_profile / correct_wear_curves) "
                 "before comparing or recalibrating, and fix the instrument.")
     parent = run.row
-    state = json_values.jsonable(extended.to_dict())
+    state = json_value(extended.to_dict(), infinity_as_text=True)
     measure = extended.measure if isinstance(extended, hybrid.HybridModel) else parent.measure
     spec = {"derived_from": parent.id, "cause": finding.cause,
             "calibration": parent.spec.get("calibration", {}),

@@ -26,10 +26,10 @@ from wearcast.service import (
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
 from wearcast.service.errors import NotFound, Unprocessable
-from wearcast.service.json_values import jsonable
 from wearcast.service.model_loading import get_model_row, statistics_error
 from wearcast.service.model_schemas import ModelIn, ModelOut
 from wearcast.statistics import hybrid
+from wearcast.statistics.json_values import json_value
 
 
 def create_model(session: Session, body: ModelIn) -> db.Model:
@@ -60,7 +60,8 @@ def create_model(session: Session, body: ModelIn) -> db.Model:
         raise statistics_error(exc, "calibration.route_id") from exc
     row = db.Model(name=body.name, measure=body.measure, running_mode=body.running_mode,
                    wear_table_id=body.wear_table_id, route_id=route_row.id,
-                   spec=body.model_dump(mode="json"), state=jsonable(model.to_dict()))
+                   spec=body.model_dump(mode="json"),
+                   state=json_value(model.to_dict(), infinity_as_text=True))
     session.add(row)
     session.flush()
     used = frame["measurement_id"].astype(int).tolist()

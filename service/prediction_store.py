@@ -17,7 +17,6 @@ import orjson
 from sqlalchemy.orm import Session
 
 from wearcast.service.cache import LruCache
-from wearcast.service.json_values import finite_list_or_none, finite_or_none
 from wearcast.service.model_loading import (
     LoadedModel,
     ModelInputs,
@@ -37,6 +36,7 @@ from wearcast.service.prediction_schemas import (
 from wearcast.service.wheel_start import WheelStart, wheel_start
 from wearcast.statistics import hybrid_prediction
 from wearcast.statistics.extension import ExtendedModel
+from wearcast.statistics.json_values import finite_list_or_none, finite_or_none
 from wearcast.statistics.routes import Route
 
 

@@ -13,7 +13,6 @@ import numpy as np
 import orjson
 from sqlalchemy.orm import Session
 
-from wearcast.service.json_values import finite_or_none
 from wearcast.service.model_loading import (
     ModelInputs,
     RouteInputs,
@@ -28,6 +27,7 @@ from wearcast.service.wheel_start import WheelStart, wheel_start
 from wearcast.statistics import hybrid
 from wearcast.statistics import reprofiling as stat_reprofiling
 from wearcast.statistics.extension import ExtendedModel
+from wearcast.statistics.json_values import finite_or_none
 
 
 class _Position(TypedDict):

@@ -75,12 +75,9 @@ from wearcast.statistics.discrepancy_findings import (
 from wearcast.statistics.discrepancy_progression import (
     ExpectedProgression,
 )
-from wearcast.statistics.findings import (
-    FinderResult,
-    Finding,
-    json_value,
-)
+from wearcast.statistics.findings import FinderResult, Finding
 from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.json_values import json_value
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 

@@ -21,10 +21,10 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
-from wearcast.statistics.findings import json_value
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.hybrid_prediction import Prediction, predict
 from wearcast.statistics.hybrid_profiles import profile_at_areas
+from wearcast.statistics.json_values import json_value
 from wearcast.statistics.residuals import geometric_basis
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.hybrid import QUANTILES, HybridModel
 from wearcast.statistics.hybrid_profiles import profile_at_areas
+from wearcast.statistics.json_values import finite_list_or_none
 from wearcast.statistics.route_measure import (
     UnknownBogieTypeError,
     check_choice,
@@ -30,10 +31,6 @@ from wearcast.statistics.route_measure import (
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_rates import normal_quantile
 from wearcast.statistics.wear_tables import WearTable
-
-
-def _nan_to_none(values: np.ndarray) -> list[float | None]:
-    return [float(v) if math.isfinite(v) else None for v in np.asarray(values, dtype=float)]
 
 
 @dataclass(frozen=True)
@@ -77,9 +74,9 @@ class Prediction:
             "grid_y_mm": self.grid_y_mm.tolist(),
             "wear_mm": self.wear_mm.tolist(),
             "z_mm": self.z_mm.tolist(),
-            "sd_mm": _nan_to_none(self.sd_mm),
-            "sh_mm": _nan_to_none(self.sh_mm),
-            "qr_mm": _nan_to_none(self.qr_mm),
+            "sd_mm": finite_list_or_none(self.sd_mm),
+            "sh_mm": finite_list_or_none(self.sh_mm),
+            "qr_mm": finite_list_or_none(self.qr_mm),
             "extrapolated": self.extrapolated.tolist(),
             "start_areas_mm2": dict(self.start_areas_mm2),
         }

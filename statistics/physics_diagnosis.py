@@ -35,12 +35,7 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
-from wearcast.statistics.findings import (
-    FinderResult,
-    Finding,
-    Gain,
-    bootstrap_gain_interval,
-)
+from wearcast.statistics.findings import FinderResult, Finding, Gain, bootstrap_gain_interval
 
 DEFAULT_ALPHA = 0.05
 DEFAULT_MIN_RELATIVE_GAIN = 0.05
