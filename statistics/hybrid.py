@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
+from wearcast.statistics.frames import check_frame
 from wearcast.statistics.hybrid_profiles import (
     PARAMETER_MAX_Y_MM,
     ParameterKernel,
@@ -251,15 +252,9 @@ def calibrate(
     """
     check_choice(measure, WEAR_MEASURES, "measure")
     check_choice(running_mode, RUNNING_MODES, "running_mode")
-    if not isinstance(measurements, pd.DataFrame):
-        raise ValueError("measurements: must be a pandas DataFrame")
-    need = [c for c in MEASUREMENT_COLUMNS if c not in measurements.columns]
-    if "route" in need and isinstance(route_by_wheel, Route):
-        need.remove("route")
-    if need:
-        raise ValueError(f"{need[0]}: column missing from measurements")
-    if measurements.empty:
-        raise ValueError("measurements: no rows")
+    check_frame(measurements, [c for c in MEASUREMENT_COLUMNS
+                               if c != "route" or not isinstance(route_by_wheel, Route)],
+                field="measurements", what="measurements")
     wt = compile_wear_table(table)
     if measure not in wt.measures:
         raise ValueError(f"measure: the wear table has no {measure!r} rows")
