@@ -7,9 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from wearcast.physics.vocabulary import (
-    RunningMode,
-)
+from wearcast.physics.vocabulary import RunningMode
 from wearcast.physics.vocabulary import WearMeasure as Measure
 from wearcast.service.schema_base import Filter, Strict
 

@@ -7,9 +7,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from wearcast.physics.vocabulary import (
-    Direction,
-)
+from wearcast.physics.vocabulary import Direction
 from wearcast.service.schema_base import Strict
 
 

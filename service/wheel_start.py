@@ -15,9 +15,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable
-from wearcast.service.prediction_schemas import (
-    PredictIn,
-)
+from wearcast.service.prediction_schemas import PredictIn
 from wearcast.service.reprofiling_schemas import ReprofilingIn
 
 

@@ -72,9 +72,7 @@ from wearcast.statistics.discrepancy_findings import (
     is_named,
     scored_findings,
 )
-from wearcast.statistics.discrepancy_progression import (
-    ExpectedProgression,
-)
+from wearcast.statistics.discrepancy_progression import ExpectedProgression
 from wearcast.statistics.findings import FinderResult, Finding
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.json_values import json_value

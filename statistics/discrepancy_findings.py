@@ -17,9 +17,7 @@ from numpy.typing import NDArray
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.findings import Finding, Gain, bootstrap_gain_interval
-from wearcast.statistics.residuals import (
-    residual_structure,
-)
+from wearcast.statistics.residuals import residual_structure
 
 
 @dataclass

@@ -18,9 +18,7 @@ from wearcast.statistics.profile_parameters import (
     BatchGrid,
     flange_parameters_batch,
 )
-from wearcast.statistics.wear_states import (
-    interpolation_weights,
-)
+from wearcast.statistics.wear_states import interpolation_weights
 
 if TYPE_CHECKING:
     from wearcast.statistics.hybrid import HybridModel
