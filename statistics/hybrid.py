@@ -25,9 +25,9 @@ from numpy.typing import ArrayLike
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
+from wearcast.statistics import hybrid_profiles
 from wearcast.statistics.frames import check_frame
 from wearcast.statistics.hybrid_profiles import (
-    PARAMETER_MAX_Y_MM,
     ParameterKernel,
     ParameterSurface,
 )
@@ -160,7 +160,7 @@ class HybridModel:
         whole grid when its flank points are not inside that part.
         """
         y = self.grid_y_mm
-        prefix = np.flatnonzero(y <= PARAMETER_MAX_Y_MM)
+        prefix = np.flatnonzero(y <= hybrid_profiles.PARAMETER_MAX_Y_MM)
         j = int(np.searchsorted(y, 0.0, side="right")) - 1
         tape = [c for c in (j, j + 1) if prefix.size and prefix[-1] < c < y.size]
         cols = np.concatenate([prefix, np.asarray(tape, dtype=int)]).astype(int)

@@ -152,7 +152,7 @@ def test_every_request_computes_its_answer(example, monkeypatch):
         calls["reprofiling"] += 1
         return real_reprofiling(*args, **kwargs)
 
-    monkeypatch.setattr(hybrid, "predict", counting_predict)
+    monkeypatch.setattr(hybrid_prediction, "predict", counting_predict)
     monkeypatch.setattr(reprofiling, "reprofiling_mileage", counting_reprofiling)
     body = {"route_id": "metro", "mileage_km": [80_000.0], **POSITION}
     first = client.post(f"/v1/models/{model_id}/predict", json=body).json()

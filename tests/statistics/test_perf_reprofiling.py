@@ -17,7 +17,7 @@ import pytest
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
-from wearcast.statistics import hybrid, hybrid_prediction, reprofiling
+from wearcast.statistics import hybrid_prediction, hybrid_profiles, reprofiling
 from wearcast.statistics.hybrid_prediction import predict, region_rates
 from wearcast.statistics.hybrid_profiles import parameters_at_areas, profile_at_areas
 from wearcast.statistics.profile_parameters import WheelLimits, flange_parameters
@@ -118,7 +118,7 @@ def test_parameters_without_whole_profiles_are_exact(table, monkeypatch):
     np.testing.assert_array_equal(extra, full[3])
     np.testing.assert_allclose(params, full[2], atol=1e-9, equal_nan=True)
     # with a prefix that stops before the flank every profile takes the whole-grid path
-    monkeypatch.setattr(hybrid, "PARAMETER_MAX_Y_MM", -45.0)
+    monkeypatch.setattr(hybrid_profiles, "PARAMETER_MAX_Y_MM", -45.0)
     fresh = _model()
     assert fresh.parameter_columns.size < model.parameter_columns.size
     np.testing.assert_allclose(parameters_at_areas(fresh, fa, ta)[0], full[2], atol=1e-9,
