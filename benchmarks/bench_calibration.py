@@ -11,7 +11,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from wearcast.statistics.hybrid import calibrate, predict
+from wearcast.statistics.hybrid import calibrate
+from wearcast.statistics.hybrid_prediction import predict
 from wearcast.statistics.reprofiling import reprofiling_mileage
 from wearcast.statistics.route_measure import weighted_wear_measure
 from wearcast.statistics.routes import Route, RouteClass

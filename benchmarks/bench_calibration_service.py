@@ -27,7 +27,7 @@ def main() -> None:
     from wearcast.service import demo, importing, model_store
     from wearcast.service import models_db as db
     from wearcast.service.db import Database
-    from wearcast.service.schemas import ModelIn
+    from wearcast.service.model_schemas import ModelIn
     from wearcast.service.settings import Settings
 
     n_profiles = int(sys.argv[1]) if len(sys.argv) > 1 else 20_000

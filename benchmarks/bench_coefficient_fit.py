@@ -24,17 +24,14 @@ import argparse
 
 import pandas as pd
 
-from wearcast.physics.wear_loop import LoopClass
-from wearcast.statistics.coefficient_fit import (
-    CalibrationProblem,
-    calibrate_full_loop,
-    comparison_table,
-    make_twin,
-)
+from wearcast.physics.vocabulary import CurveClass
+from wearcast.statistics.coefficient_fit import CalibrationProblem, calibrate_full_loop
+from wearcast.statistics.coefficient_fit_comparison import comparison_table
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 SEED_000_PSO_S = 212.0  # seed 000 Table 2, line 1, 50,000 km
-CLASSES = [LoopClass(r, 0.0, v, d, s / 2) for r, s, v in ((1500.0, 75, 70), (700.0, 22, 60),
-                                                          (250.0, 3, 30))
+CLASSES = [CurveClass(r, 0.0, v, d, s / 2) for r, s, v in ((1500.0, 75, 70), (700.0, 22, 60),
+                                                           (250.0, 3, 30))
            for d in ("left", "right")]
 TRUE_K = (3e-4, 33e-4, 7e-4, 330e-4)
 BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4), (300e-4, 400e-4))

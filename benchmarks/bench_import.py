@@ -34,7 +34,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -210,20 +209,13 @@ def _database(server_url: str | None) -> Iterator[str]:
     if server_url is None:
         yield ""
         return
-    from sqlalchemy import create_engine, text
-    from sqlalchemy.engine import make_url
+    from sqlalchemy import create_engine
 
-    url = make_url(server_url)
-    admin = create_engine(url, isolation_level="AUTOCOMMIT")
-    name = f"wearcast_bench_{uuid.uuid4().hex[:12]}"
-    with admin.connect() as connection:
-        connection.execute(text(f'CREATE DATABASE "{name}"'))
-    try:
-        yield url.set(database=name).render_as_string(hide_password=False)
-    finally:
-        with admin.connect() as connection:
-            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        admin.dispose()
+    from wearcast.service.db import scratch_database
+
+    with scratch_database(create_engine(server_url, isolation_level="AUTOCOMMIT"),
+                          "wearcast_bench") as database_url:
+        yield database_url
 
 
 if __name__ == "__main__":

@@ -13,16 +13,17 @@ import time
 
 import numpy as np
 
-from wearcast.physics.wear_loop import LoopClass, WearSteps, simulate_wear
+from wearcast.physics.vocabulary import CurveClass
+from wearcast.physics.wear_loop import WearSteps, simulate_wear
 
 
-def classes(n: int) -> list[LoopClass]:
+def classes(n: int) -> list[CurveClass]:
     """n - 1 curves 200-3000 m (cant falling 150 -> 40 mm, alternating direction) + tangent."""
     radii = np.geomspace(200.0, 3000.0, n - 1)
     cants = np.linspace(150.0, 40.0, n - 1)
-    out = [LoopClass(float(r), float(c), None, "left" if i % 2 == 0 else "right", 1.0)
+    out = [CurveClass(float(r), float(c), None, "left" if i % 2 == 0 else "right", 1.0)
            for i, (r, c) in enumerate(zip(radii, cants, strict=True))]
-    return out + [LoopClass(None, share=float(n - 1))]
+    return out + [CurveClass(None, share=float(n - 1))]
 
 
 def main() -> None:

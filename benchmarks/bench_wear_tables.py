@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from wearcast.physics import curving  # noqa: E402
 from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
 from wearcast.physics.wear_tables import wear_table_for_route  # noqa: E402
-from wearcast.statistics.generators.fleet_twin import aosta_route  # noqa: E402
+from wearcast.statistics.generators.twin_routes import aosta_route  # noqa: E402
 
 
 def thirty_classes() -> tuple[list[float | None], list[float]]:

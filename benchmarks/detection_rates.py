@@ -55,6 +55,7 @@ from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import scenarios as sc
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_wear_table
 from wearcast.statistics.generators.scenarios import (
     LOOP_MEASURE,
     LOOP_MILEAGES_KM,
@@ -62,7 +63,7 @@ from wearcast.statistics.generators.scenarios import (
     loop_config,
 )
 
-TABLE = ft.synthetic_wear_table()
+TABLE = twin_wear_table.synthetic_wear_table()
 
 
 def _diagnosis(scenario: sc.Scenario) -> Any:

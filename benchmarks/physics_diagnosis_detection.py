@@ -13,15 +13,15 @@ interval low end, Holm p, fitted value and scale).
 
 from __future__ import annotations
 
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics.generators.scenarios import (
     cached_vehicle_simulator,
     measured_vehicle_series,
 )
 from wearcast.statistics.physics_diagnosis import PhysicsCause, diagnose_physics
 
-ROUTE = [LoopClass(250.0, 100.0, None, "left", 0.15),
-         LoopClass(250.0, 100.0, None, "right", 0.15), LoopClass(None, share=0.7)]
+ROUTE = [CurveClass(250.0, 100.0, None, "left", 0.15),
+         CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
 CATALOGUE = (
     PhysicsCause("flange_lubrication", "flange", "flange_wear_factor", (0.25, 0.5, 1.0), 1.0),
     PhysicsCause("friction_level", "friction", "friction", (0.3, 0.4, 0.5), 0.4),

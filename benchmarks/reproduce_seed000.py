@@ -26,14 +26,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_laws import JENDEL_MAP_MEANS, ArchardKTH, WearLaw
-from wearcast.physics.wear_loop import LoopClass, WearSteps, simulate_wear
+from wearcast.physics.wear_loop import WearSteps, simulate_wear
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT.parent / "shared" / "reference" / "published"
-CLASSES = [LoopClass(None, 0.0, 70.0, share=0.75)] + [
-    LoopClass(r, 0.0, v, d, s / 2) for r, s, v in ((1000.0, 0.11, 70.0), (700.0, 0.11, 60.0),
-                                                  (450.0, 0.03, 40.0)) for d in ("left", "right")]
+CLASSES = [CurveClass(None, 0.0, 70.0, share=0.75)] + [
+    CurveClass(r, 0.0, v, d, s / 2) for r, s, v in ((1000.0, 0.11, 70.0), (700.0, 0.11, 60.0),
+                                                    (450.0, 0.03, 40.0)) for d in ("left", "right")]
 MEASURED = {"line1_50000km": (50_000.0, 0.348), "line1_80000km": (80_000.0, 0.683),
             "line2_140000km": (140_000.0, 0.929)}
 

@@ -98,7 +98,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from wearcast.physics.rail_feedback import simulate_rail_steps  # noqa: E402
-from wearcast.physics.wear_loop import LoopClass, WearSteps, simulate_wear  # noqa: E402
+from wearcast.physics.vocabulary import CurveClass
+from wearcast.physics.wear_loop import WearSteps, simulate_wear
 from wearcast.physics.wear_simulation import WearSimulation  # noqa: E402
 from wearcast.statistics.generators.scenarios import seed003_classes  # noqa: E402
 from wearcast.statistics.routes import (  # noqa: E402
@@ -176,15 +177,15 @@ def synthetic_line(seed: int = RNG_SEED) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def complete_classes(segments: pd.DataFrame) -> list[LoopClass]:
+def complete_classes(segments: pd.DataFrame) -> list[CurveClass]:
     """Every segment as its own class (the complete line)."""
     total = segments.length_m.sum()
     out = []
     for r in segments.itertuples():
         tangent = pd.isna(r.radius_m) or not np.isfinite(r.radius_m)
-        out.append(LoopClass(None if tangent else float(r.radius_m), float(r.cant_mm),
-                             float(r.speed_kmh), "left" if tangent else str(r.direction),
-                             r.length_m / total))
+        out.append(CurveClass(None if tangent else float(r.radius_m), float(r.cant_mm),
+                              float(r.speed_kmh), "left" if tangent else str(r.direction),
+                              r.length_m / total))
     return out
 
 
@@ -316,7 +317,7 @@ SEED_TABLE4 = {"FH": (27.57, 27.73, 27.89, 28.07, 28.33), "FT": (28.30, 28.36, 2
                "QR": (8.38, 8.35, 8.37, 8.43, 8.57)}
 
 
-def table3_classes() -> list[LoopClass]:
+def table3_classes() -> list[CurveClass]:
     """Seed 003 Table 3 (n_class = 7) as loop classes, each curve in both directions."""
     return seed003_classes(pd.read_csv(REFERENCE / "aosta_statistical_track_nclass7.csv",
                                        comment="#"))

@@ -36,14 +36,10 @@ from wearcast.physics.patch_wear import (  # noqa: E402
 )
 from wearcast.physics.profiles.s1002 import s1002_height_mm  # noqa: E402
 from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_distribution import Smoothing  # noqa: E402
 from wearcast.physics.wear_laws import WearLaw  # noqa: E402
-from wearcast.physics.wear_loop import (  # noqa: E402
-    LoopClass,
-    WearSteps,
-    class_wear_rates,
-    simulate_wear,
-)
+from wearcast.physics.wear_loop import WearSteps, class_wear_rates, simulate_wear
 
 IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
 Y = np.linspace(-70.0, 60.0, 651)
@@ -64,9 +60,9 @@ def seed_002_depths(veh, grid: int = 40, timing_reps: int = 0) -> dict:
     """Normal wear depth of the right wheel of the leading wheelset on seed 002's route, global
     and local application of Archard/KTH (nominal map / 7, seed 002 §2.2), over 75.4 km (the
     3.77 km route x the seed's wear multiplier 20); volumes per region [mm^3]."""
-    classes = [LoopClass(r, h, v, d, 1.0) for r, h, v in SEED_002_CURVES
+    classes = [CurveClass(r, h, v, d, 1.0) for r, h, v in SEED_002_CURVES
                for d in ("left", "right")]
-    classes.append(LoopClass(None, 0.0, 120.0, share=8.0))
+    classes.append(CurveClass(None, 0.0, 120.0, share=8.0))
     shares = np.array([c.share for c in classes]) / sum(c.share for c in classes)
     contacts, _ = class_contacts(veh, classes, Y, s1002_height_mm(Y), axle=1, side="right")
     law = WearLaw("archard_kth")
@@ -183,7 +179,7 @@ def seed_004() -> None:
     radii = np.arange(200.0, 2001.0, 100.0)
     speeds = [min(200.0, 3.6 * curve_case(float(r), 150.0, None, "left", 0.8).speed_m_s)
               for r in radii]
-    classes = [LoopClass(float(r), 150.0, v, "left") for r, v in zip(radii, speeds, strict=True)]
+    classes = [CurveClass(float(r), 150.0, v, "left") for r, v in zip(radii, speeds, strict=True)]
     contacts, archard = class_wear_rates("manchester", classes, "archard_kth",
                                          unbalanced_acceleration_m_s2=0.8)
     kp_law = WearLaw("krause_poll")
@@ -196,7 +192,7 @@ def seed_004() -> None:
           "| Archard/KTH monotonic:", bool(np.all(np.diff(a_tot) < 0)),
           "(seed: Archard non-monotonic, step near 900 m)")
     # Peak suppression: big unsmoothed fixed steps vs D_step + smoothing, same mileage.
-    sharp = [LoopClass(250.0, 120.0, None, "left", 0.5), LoopClass(None, share=0.5)]
+    sharp = [CurveClass(250.0, 120.0, None, "left", 0.5), CurveClass(None, share=0.5)]
     fine = simulate_wear("metro_b", sharp, steps=WearSteps(n_steps=8, depth_per_step_mm=0.1),
                          smoothing=Smoothing("moving_average", 3.0))
     km = float(fine.mileage_km[-1])

@@ -35,7 +35,7 @@ from wearcast.physics.vehicle_wear_simulation import (  # noqa: E402
     VehicleWearOptions,
     simulate_vehicle_wear,
 )
-from wearcast.physics.wear_loop import LoopClass  # noqa: E402
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics.generators.scenarios import seed003_classes  # noqa: E402
 from wearcast.statistics.physics_comparison import compare_with_measured  # noqa: E402
 
@@ -44,7 +44,7 @@ REFERENCE = ROOT.parent / "shared" / "reference" / "published"
 IMG = ROOT / "docs" / "img"
 
 
-def aosta_classes(table: pd.DataFrame) -> list[LoopClass]:
+def aosta_classes(table: pd.DataFrame) -> list[CurveClass]:
     """Seed 003 Table 3 as loop classes (``scenarios.seed003_classes``)."""
     return seed003_classes(table)
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from wearcast.statistics.generators import fleet_twin
+from wearcast.statistics.generators import fleet_twin, twin_routes, twin_wear_table
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "service" / "example_fleet"
 SEED = 20240601
@@ -79,7 +79,7 @@ demo, the tests and the benchmarks, not as evidence about real wheels. Regenerat
   **Synthetic**: a smooth model that follows seed 001 Fig. 10 only qualitatively (flange
   measures zero on tangent and wide curves, rising fast as the radius falls on the leading
   wheelset's high-rail wheel; tread measures nonzero on tangent; motor bogies higher T_gamma
-  than trailers, tau_max similar). See `fleet_twin.synthetic_wear_table`. It will be replaced
+  than trailers, tau_max similar). See `twin_wear_table.synthetic_wear_table`. It will be replaced
   by tables computed with the physics core (`POST /v1/wear-tables/compute`) once that exists.
 
 ## How the wear was made
@@ -107,13 +107,13 @@ def main(argv: list[str] | None = None) -> None:
     out.mkdir(parents=True, exist_ok=True)
 
     config = fleet_twin.example_fleet_config(seed=SEED, points_per_profile=POINTS_PER_PROFILE)
-    table = fleet_twin.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     twin = fleet_twin.generate_fleet(config, table)
 
     profiles_csv = twin.profiles.to_csv(index=False, lineterminator="\n")
     (out / "profiles.csv").write_text(profiles_csv)
     (out / "wear_table.csv").write_text(wear_table_csv(table))
-    routes = [u.route for u in config.units] + [fleet_twin.tangent_route()]
+    routes = [u.route for u in config.units] + [twin_routes.tangent_route()]
     (out / "routes.json").write_text(json.dumps([r.to_json() for r in routes], indent=1) + "\n")
     (out / "README.md").write_text(readme(twin, config, len(profiles_csv.encode())))
     print(f"wrote {out}: {len(twin.profiles):,} profile rows "

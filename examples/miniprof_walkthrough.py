@@ -28,6 +28,7 @@ from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
 from wearcast.statistics.cleaning import clean_profile
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -110,9 +111,10 @@ def main(folder: Path) -> None:
     fleet = ft.generate_fleet(ft.metro_calibration_config())
     client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
-    client.post("/v1/routes", json=ft.metro_route().to_json())
+    client.post("/v1/routes", json=twin_routes.metro_route().to_json())
     table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", ft.synthetic_wear_table().to_csv(index=False).encode(), "text/csv")}).json()
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
     model = client.post("/v1/models", json={
         "name": "metro", "measure": "tau_max", "running_mode": "lead",
         "wear_table_id": table["id"],

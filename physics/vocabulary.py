@@ -12,7 +12,7 @@ Conventions (docs/conventions.md, "Sides and curves" and "Wear curve and regions
   the distance (seed 001 §4).
 - Regions of the wheel frame: ``flange`` y < split, ``tread`` y >= split (default split −30 mm).
 
-The HTTP schemas (``service/schemas.py``) and the readers build their enums from these types.
+The HTTP schemas (``service/*_schemas.py``) and the readers build their enums from these types.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, TypeAlias, cast
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -77,11 +77,7 @@ class WearLoopDivergedError(RuntimeError):
 Progress = Callable[[int, int, float], None]
 
 
-#: A curve class of a route; the same class the curve-radius tables use.
-LoopClass: TypeAlias = CurveClass
-
-
-def as_loop_classes(route_classes: Any) -> list[LoopClass]:
+def as_loop_classes(route_classes: Any) -> list[CurveClass]:
     """Curve classes from ``vocabulary.CurveClass`` objects, objects that build one with a
     ``curve_class()`` method (``statistics.routes.RouteClass``), mappings or objects with the
     same attributes, or a route with ``classes``."""
@@ -100,11 +96,11 @@ def as_loop_classes(route_classes: Any) -> list[LoopClass]:
         if radius is not None and not np.isfinite(float(radius)):
             radius = None
         speed = get("speed_kmh")
-        out.append(LoopClass(radius_m=None if radius is None else float(radius),
-                             cant_mm=float(get("cant_mm", 0.0) or 0.0),
-                             speed_kmh=None if speed is None else float(speed),
-                             direction=cast(Direction, str(get("direction", "left") or "left")),
-                             share=float(get("share", 1.0))))
+        out.append(CurveClass(radius_m=None if radius is None else float(radius),
+                              cant_mm=float(get("cant_mm", 0.0) or 0.0),
+                              speed_kmh=None if speed is None else float(speed),
+                              direction=cast(Direction, str(get("direction", "left") or "left")),
+                              share=float(get("share", 1.0))))
     if not out:
         raise ValueError("route_classes is empty")
     total = sum(c.share for c in out)
@@ -159,7 +155,7 @@ def _grid(spec: tuple[float, float, float]) -> NDArray[np.float64]:
     return np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
 
 
-def contact_key(vehicle: BogieVehicle, classes: list[LoopClass], axle: int, side: str,
+def contact_key(vehicle: BogieVehicle, classes: list[CurveClass], axle: int, side: str,
                 unbalanced_acceleration_m_s2: float, tangent_speed_kmh: float,
                 fastsim_grid: int, y_mm: NDArray, patch_width: str = "hertz") -> Any:
     """Everything a contact update depends on besides the profile heights (hashable)."""
@@ -189,8 +185,8 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     Parameters
     ----------
     vehicle : BogieVehicle or preset name (``vehicles.vehicle_preset``, trailer bogie)
-    route_classes : curve classes (:func:`as_loop_classes` accepts LoopClass, mappings,
-        CurveClass / RouteClass objects or a Route)
+    route_classes : curve classes (:func:`as_loop_classes` accepts CurveClass / RouteClass
+        objects, mappings or a Route)
     law : WearLaw or its name (``archard_kth``, ``krause_poll``, ``usfd``, ``tau_max``)
     application : ``global`` (semi-elliptic, seed 004) or ``local`` (FASTSIM grid, seed 002)
     steps : WearSteps (default: adaptive, 20 steps of D_step = 0.2 mm, seed 003)

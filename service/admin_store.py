@@ -101,9 +101,16 @@ def check_replacement(session: Session, kind: str, entity_id: int, by: int) -> N
 
 def clear_caches() -> None:
     """Forget cached models, routes and tables (ids of removed rows may be given again)."""
-    from wearcast.service import model_store, physics_model_store, route_store
+    from wearcast.service import (
+        model_loading,
+        model_store,
+        physics_model_store,
+        prediction_store,
+        route_store,
+    )
 
-    for module in (model_store, route_store, physics_model_store):
+    for module in (model_loading, model_store, prediction_store, route_store,
+                   physics_model_store):
         for value in vars(module).values():
             clear = getattr(value, "clear", None)
             if clear is not None and type(value).__name__ == "LruCache":

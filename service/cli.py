@@ -200,7 +200,7 @@ def route(file: Annotated[Path, typer.Argument(exists=True, dir_okay=False,
     from pydantic import ValidationError
 
     from wearcast.service import route_store
-    from wearcast.service.schemas import RouteIn
+    from wearcast.service.route_schemas import RouteIn
 
     data = json.loads(file.read_text())
     with _session() as (_, session):
@@ -324,7 +324,7 @@ def wear_table_compute(
         rail_id: RailIdOption = None) -> None:
     """Compute a curve-radius wear table with the physics core (quasi-static curving)."""
     from wearcast.service import wear_table_store
-    from wearcast.service.schemas import WearTableComputeIn
+    from wearcast.service.wear_table_schemas import WearTableComputeIn
 
     motor, _, trailer = vehicle.partition(",")
     body = _validated(WearTableComputeIn, {
@@ -370,7 +370,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
              ) -> None:
     """What the model gets wrong, the named cause, the extended model and its gain."""
     from wearcast.service import diagnosis_store
-    from wearcast.service.schemas import DiagnoseIn
+    from wearcast.service.diagnosis_schemas import DiagnoseIn
     from wearcast.statistics import discrepancy_report
 
     body = _validated(DiagnoseIn, {"filter": _json_option(filter, "filter"),
@@ -440,7 +440,7 @@ def simulate(
         rail_id: RailIdOption = None) -> None:
     """Run the wear loop in process with a progress bar; the job is stored like an API one."""
     from wearcast.service import simulation_store
-    from wearcast.service.schemas import SimulationIn
+    from wearcast.service.simulation_schemas import SimulationIn
 
     body = _validated(SimulationIn, {
         "vehicle": vehicle, "route_id": None if route_id is None else _route_ref(route_id),
@@ -593,7 +593,7 @@ def calibrate(name: Annotated[str, typer.Option(help="model name")],
                   help='JSON filter, e.g. \'{"bogie_type": "motor"}\'')] = None) -> None:
     """Calibrate a hybrid model (seed 001 eq. 3) on the filtered measurements."""
     from wearcast.service import model_store
-    from wearcast.service.schemas import ModelIn
+    from wearcast.service.model_schemas import ModelIn
 
     body = _validated(ModelIn, {
         "name": name, "measure": measure, "running_mode": running_mode,
@@ -627,13 +627,13 @@ def predict(model_id: Annotated[int, typer.Argument(help="model id")],
             picture: Annotated[Path | None, typer.Option(
                 help="also write the wear-area picture here (.svg or .png)")] = None) -> None:
     """Predict wear areas, Sd/Sh/qR (and the worn profile) per mileage."""
-    from wearcast.service import model_store, pictures
-    from wearcast.service.schemas import PredictIn
+    from wearcast.service import pictures, prediction_store
+    from wearcast.service.prediction_schemas import PredictIn
 
     body = _validated(PredictIn, {"route_id": _route_ref(route_id), "bogie_type": bogie_type,
                                   "axle": axle, "side": side, "mileage_km": mileage_km})
     with _session() as (_, session):
-        result = model_store.predict(session, model_id, body)
+        result = prediction_store.predict(session, model_id, body)
         table = Table(title=f"model {model_id} on {result.route}: {bogie_type} axle {axle} "
                       f"{side}")
         for column in ("mileage [km]", "flange A P10/P50/P90 [mm²]",
@@ -671,8 +671,8 @@ def reprofile(model_id: Annotated[int, typer.Argument(help="model id")],
               sh_max_mm: Annotated[float | None, typer.Option()] = None,
               qr_min_mm: Annotated[float | None, typer.Option()] = None) -> None:
     """Mileage to the first Sd/Sh/qR limit (P10/P50/P90) and the governing limit."""
-    from wearcast.service import model_store
-    from wearcast.service.schemas import ReprofilingIn
+    from wearcast.service import reprofiling_store
+    from wearcast.service.reprofiling_schemas import ReprofilingIn
 
     limits = {k: v for k, v in (("sd_min_mm", sd_min_mm), ("sh_max_mm", sh_max_mm),
                                 ("qr_min_mm", qr_min_mm)) if v is not None}
@@ -680,7 +680,7 @@ def reprofile(model_id: Annotated[int, typer.Argument(help="model id")],
         "route_id": _route_ref(route_id), "wheel_id": wheel_id, "bogie_type": bogie_type,
         "axle": axle, "side": side, "limits": limits or None})
     with _session() as (_, session):
-        _show(model_store.reprofiling(session, model_id, body))
+        _show(reprofiling_store.reprofiling(session, model_id, body))
 
 
 @app.command()

@@ -26,18 +26,13 @@ from pydantic import Field, field_validator, model_validator
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from wearcast.physics.vocabulary import Axle, BogieType, Side
 from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
-from wearcast.service.schemas import (
-    Axle,
-    BogieType,
-    JobStatusOut,
-    Side,
-    SimulationClassIn,
-    SmoothingIn,
-    Strict,
-)
+from wearcast.service.job_schemas import JobStatusOut
+from wearcast.service.schema_base import Strict
+from wearcast.service.simulation_schemas import SimulationClassIn, SmoothingIn
 
 log = logging.getLogger(__name__)
 
@@ -313,7 +308,7 @@ def run_coefficient_fit(factory: SessionFactory, job_id: int, spec: dict[str, An
     """Run a claimed fit to the end; progress (per method) and result in its row; a cancel or
     a passed time limit ends it after the method running then."""
     from wearcast.service.job_store import JobControl, complete_job, set_job
-    from wearcast.statistics.coefficient_fit import compare_methods
+    from wearcast.statistics.coefficient_fit_comparison import compare_methods
 
     control = control or JobControl(factory, job_id, None)
     methods = list(spec["methods"])

@@ -8,7 +8,8 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field, model_validator
 
 from wearcast.physics.vocabulary import Side
-from wearcast.service.schemas import MeasuredProfilesIn, Strict
+from wearcast.service.profile_schemas import MeasuredProfilesIn
+from wearcast.service.schema_base import Strict
 
 #: Most poses in one request (each takes about 0.1-0.5 s of one core).
 MAX_POSES = 100

@@ -72,7 +72,7 @@ def load_example_fleet(target: Any, raw_dir: Path | None = None) -> ExampleIds:
 def _load_with_session(session_factory: Callable[[], Session], raw_dir: Path) -> ExampleIds:
     from wearcast.service import importing, route_store, wear_table_store
     from wearcast.service import models_db as db
-    from wearcast.service.schemas import RouteIn
+    from wearcast.service.route_schemas import RouteIn
 
     route_ids: dict[str, int] = {}
     with session_factory() as session:
@@ -213,9 +213,11 @@ def run_demo(out_dir: Path | str, *, echo: Callable[[str], None] = print) -> Dem
     exists. Then diagnose the whole fleet with the discrepancy finder (``_diagnose``): print
     the verdict and the findings, write ``diagnosis_report.html`` into ``out_dir``, save the
     extended model and predict with it. Returns what it printed, as data."""
-    from wearcast.service import model_store
+    from wearcast.service import model_store, prediction_store, reprofiling_store
     from wearcast.service.db import Database
-    from wearcast.service.schemas import ModelIn, PredictIn, ReprofilingIn
+    from wearcast.service.model_schemas import ModelIn
+    from wearcast.service.prediction_schemas import PredictIn
+    from wearcast.service.reprofiling_schemas import ReprofilingIn
     from wearcast.service.settings import Settings
 
     out = Path(out_dir)
@@ -243,12 +245,12 @@ def run_demo(out_dir: Path | str, *, echo: Callable[[str], None] = print) -> Dem
             predictions = []
             for role, route, bogie in plan:
                 for axle in (1, 2):
-                    prediction = model_store.predict(session, model_id, PredictIn(
+                    prediction = prediction_store.predict(session, model_id, PredictIn(
                         route_id=route, bogie_type=bogie, axle=axle, side="left",
                         mileage_km=[COMPARE_AT_KM]))
                     predictions.append(prediction)
                     at = prediction.points[0]
-                    repro = model_store.reprofiling(session, model_id, ReprofilingIn(
+                    repro = reprofiling_store.reprofiling(session, model_id, ReprofilingIn(
                         route_id=route, bogie_type=bogie, axle=axle, side="left"))
                     tread, flange = _measured_at(session, route, bogie, axle, COMPARE_AT_KM)
                     rows.append(DemoRow(
@@ -305,8 +307,9 @@ def _diagnose(session: Session, out: Path, model_id: int,
               report_name: str = "diagnosis_report.html") -> DemoDiagnosis:
     """Run the discrepancy finder on every stored measurement (issue 4), print the verdict
     and findings, write the HTML report, save the extended model and predict with it."""
-    from wearcast.service import diagnosis_store, model_store
-    from wearcast.service.schemas import DiagnoseIn, PredictIn
+    from wearcast.service import diagnosis_store, prediction_store
+    from wearcast.service.diagnosis_schemas import DiagnoseIn
+    from wearcast.service.prediction_schemas import PredictIn
     from wearcast.statistics import discrepancy_report
 
     run = diagnosis_store.run_diagnosis(session, model_id, DiagnoseIn())
@@ -340,7 +343,7 @@ def _diagnose(session: Session, out: Path, model_id: int,
         lines = []
         for bogie in ("motor", "trailer"):
             for mid, label in ((model_id, "calibrated"), (int(saved.id), "extended")):
-                p = model_store.predict(session, mid, PredictIn(
+                p = prediction_store.predict(session, mid, PredictIn(
                     route_id=route, bogie_type=bogie, axle=1, side="left",
                     mileage_km=[COMPARE_AT_KM])).points[0]
                 lines.append(f"  {label:<10} model {mid}: {route} {bogie:<7} axle 1 at "
@@ -367,11 +370,12 @@ def _hidden_effect_demo(out: Path, echo: Callable[[str], None]) -> DemoDiagnosis
     from wearcast.service.settings import Settings
     from wearcast.statistics.generators import fleet_twin as ft
     from wearcast.statistics.generators import twin_effects as te
+    from wearcast.statistics.generators import twin_wear_table
 
     out.mkdir(parents=True, exist_ok=True)
     echo("hidden-effect example: fleet twin with motor-bogie treads wearing 1.3 x faster "
          "(the model does not know it)")
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     cfg = te.scenario_config(seed=7, wear_effects=(te.traction(1.3),), vehicles_per_unit=2,
                              points_per_profile=150)
     twin = ft.generate_fleet(cfg, table)

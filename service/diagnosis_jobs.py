@@ -32,9 +32,9 @@ def wants_job(prefer_header: str) -> bool:
 def submit(session: Session, runner: Any, model_id: int, body: Any) -> int:
     """Queue the diagnosis of a stored hybrid model (404 naming ``model_id`` when there is
     none; 429 at the key's job quota); the job id."""
-    from wearcast.service import model_store
+    from wearcast.service import model_loading
 
-    model_store.get_model_row(session, model_id)
+    model_loading.get_model_row(session, model_id)
     runner.check_quota(session)
     row = job_store.queue_job(session, f"diagnosis of model {model_id}",
                               {"kind": KIND, "model_id": model_id,
@@ -48,7 +48,7 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
                       on_progress: Any = None, control: Any = None) -> None:
     """Diagnose the model of a claimed job (and store the extension when asked)."""
     from wearcast.service import diagnosis_store
-    from wearcast.service.schemas import DiagnoseIn
+    from wearcast.service.diagnosis_schemas import DiagnoseIn
 
     control = control or job_store.JobControl(factory, job_id, None)
     job_store.set_job(factory, job_id, progress=0.0, message="diagnosing")

@@ -29,12 +29,13 @@ import pandas as pd
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
-from wearcast.service import measurement_store, model_store, route_store
+from wearcast.service import measurement_store, model_loading, model_store, route_store
 from wearcast.service import models_db as db
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
-from wearcast.service.schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
-from wearcast.statistics import discrepancy, discrepancy_report, hybrid
+from wearcast.statistics import discrepancy, discrepancy_report, extension, hybrid
 from wearcast.statistics.causes import CATALOGUE
+from wearcast.statistics.json_values import json_value
 
 #: Columns of ``calibration_frame`` that are not covariates the finder should see twice.
 _STANDARD = {"measurement_id", "wheel_id", "vehicle_id", "bogie_type", "axle", "side",
@@ -91,8 +92,8 @@ def _route_names(session: Session, raw: pd.Series, calibration_route: str,
 
 def run_diagnosis(session: Session, model_id: int, body: DiagnoseIn) -> DiagnosisRun:
     """Gather the model's inputs from storage and run the discrepancy finder."""
-    row = model_store.get_model_row(session, model_id)
-    inputs = model_store.model_inputs(session, model_id)
+    row = model_loading.get_model_row(session, model_id)
+    inputs = model_loading.model_inputs(session, model_id)
     if not isinstance(inputs.model, hybrid.HybridModel):
         base = row.spec.get("derived_from")
         raise Unprocessable("model_id", f"model {model_id} is already an extended model; "
@@ -217,7 +218,7 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
                       + ") but no cause of the catalogue explains them")
     finding = diagnosis.finding(diagnosis.verdict)
     assert finding is not None
-    extended = discrepancy.apply_extension(run.model, finding)
+    extended = extension.apply_extension(run.model, finding)
     note = None
     if finding.cause == "profile_misalignment":
         params = finding.extension["parameters"]
@@ -228,10 +229,10 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
                 "per-instrument geometric corrections relative to instrument "
                 f"{params['reference_instrument']!r} (extension.parameters.corrections). Apply "
                 "them to that instrument's measured profiles or wear curves "
-                "(wearcast.statistics.discrepancy.correct_profile / correct_wear_curves) "
+                "(wearcast.statistics.extension.correct_profile / correct_wear_curves) "
                 "before comparing or recalibrating, and fix the instrument.")
     parent = run.row
-    state = model_store._jsonable(extended.to_dict())
+    state = json_value(extended.to_dict(), infinity_as_text=True)
     measure = extended.measure if isinstance(extended, hybrid.HybridModel) else parent.measure
     spec = {"derived_from": parent.id, "cause": finding.cause,
             "calibration": parent.spec.get("calibration", {}),

@@ -25,8 +25,8 @@ from wearcast.service import route_store
 from wearcast.service.errors import Conflict, NotFound, Unprocessable
 from wearcast.service.float32_blobs import from_f32
 from wearcast.service.import_staging import store_records
+from wearcast.service.measurement_schemas import MeasurementIn, MeasurementOut
 from wearcast.service.readers.records import MeasurementMeta, ParameterRecord, ProfileRecord
-from wearcast.service.schemas import MeasurementIn, MeasurementOut
 
 
 def _as_int(value: Any) -> int:

@@ -110,7 +110,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="physics model id")],
              ) -> None:
     """What a physics model gets wrong: the physical catalogue scored out of sample."""
     from wearcast.service import cli, physics_diagnosis_store
-    from wearcast.service.schemas import DiagnoseIn
+    from wearcast.service.diagnosis_schemas import DiagnoseIn
 
     body = cli._validated(DiagnoseIn, {"filter": cli._json_option(filter, "filter"),
                                        "save_as": save_as, "causes": cause or None,

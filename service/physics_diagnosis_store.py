@@ -27,9 +27,9 @@ from wearcast.service import measurement_store
 from wearcast.service import models_db as db
 from wearcast.service import physics_model_store as store
 from wearcast.service.db import SessionFactory, transaction
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
-from wearcast.service.schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.statistics.physics_diagnosis import catalogue_for, diagnose_physics
 from wearcast.statistics.physics_model import VehicleSeries, calibrate_scale
 

@@ -36,8 +36,10 @@ from wearcast.service.cache import LruCache
 from wearcast.service.db import SessionFactory, transaction
 from wearcast.service.errors import NotFound, Unprocessable
 from wearcast.service.job_store import JobControl, finite_json, resolve_classes
+from wearcast.service.model_schemas import ModelOut, PhysicsModelSummary
 from wearcast.service.physics_schemas import PhysicsModelIn
-from wearcast.service.schemas import ModelOut, PhysicsModelSummary, PredictIn, ReprofilingIn
+from wearcast.service.prediction_schemas import PredictIn
+from wearcast.service.reprofiling_schemas import ReprofilingIn
 from wearcast.statistics.physics_comparison import loss_rate_per_1000_km
 from wearcast.statistics.physics_model import (
     QUANTITIES,
@@ -378,9 +380,9 @@ def _check_route(session: Session, model: PhysicsModel, body: PredictIn | Reprof
 
 def _start(session: Session, body: PredictIn | ReprofilingIn) -> Any:
     """The wheel's position and measured start: as the hybrid model's
-    (``model_store.wheel_start``), except that ``wheel_id`` starts from the wheel's latest
+    (``wheel_start.wheel_start``), except that ``wheel_id`` starts from the wheel's latest
     measurement of either kind (a physics model reads only Sd/Sh/qR)."""
-    from wearcast.service.model_store import WheelStart, wheel_start
+    from wearcast.service.wheel_start import WheelStart, wheel_start
 
     if body.wheel_id is None:
         return wheel_start(session, body)

@@ -14,7 +14,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Discriminator, Field, Tag, field_validator
 
-from wearcast.service.schemas import Filter, JobStatusOut, ModelIn, Strict, WearLawName
+from wearcast.service.job_schemas import JobStatusOut
+from wearcast.service.model_schemas import ModelIn
+from wearcast.service.schema_base import Filter, Strict
+from wearcast.service.simulation_schemas import WearLawName
 
 #: Largest simulated mileage of a physics model's run [km].
 MAX_SIMULATED_KM = 1_000_000.0

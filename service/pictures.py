@@ -30,10 +30,10 @@ from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS
-from wearcast.service import measurement_store, model_store, route_store
+from wearcast.service import measurement_store, model_loading, prediction_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.picture_cache import PictureJob, render
-from wearcast.statistics.hybrid import Prediction
+from wearcast.statistics.hybrid_prediction import Prediction
 
 ImageFormat = Literal["svg", "png"]
 MEDIA_TYPES = {"svg": "image/svg+xml", "png": "image/png"}
@@ -150,15 +150,15 @@ def wear_area_job(session: Session, model_id: int, *, route_id: int | str,
                   ) -> PictureJob:
     """Inputs of :func:`wear_area_figure` read from storage: the model's prediction at the
     wheel position on the route and the measured areas shown beside it."""
-    loaded = model_store.load_model(session, model_id)
+    loaded = model_loading.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
     keys = (row.name, str(row.id)) if row else ()
     measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id, keys)
     top = max_mileage_km or max(200_000.0, 1.15 * float(measured["mileage_km"].max())
                                 if not measured.empty else 0.0)
-    prediction = model_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
-                                            side=side,
-                                            mileage_km=np.linspace(0.0, top, 41).tolist())
+    prediction = prediction_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
+                                                 side=side,
+                                                 mileage_km=np.linspace(0.0, top, 41).tolist())
     who = wheel_id or f"{bogie_type} bogie, axle {axle}, {side}"
     title = f"model {loaded.row.name!r} on route {row.name if row else 'inline'}: {who}"
     return PictureJob(wear_area_figure, (prediction, measured), {"title": title, "fmt": fmt})
@@ -181,10 +181,10 @@ def profile_job(session: Session, model_id: int, *, route_id: int | str,
     """Inputs of :func:`profile_figure` read from storage: the predicted profile at
     ``mileage_km`` and the measured wear curves within ``window`` (a share of the mileage)
     of it."""
-    loaded = model_store.load_model(session, model_id)
+    loaded = model_loading.load_model(session, model_id)
     route, row = route_store.resolve(session, route_id, None)
-    prediction = model_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
-                                            side=side, mileage_km=[mileage_km])
+    prediction = prediction_store.run_prediction(loaded, route, bogie_type=bogie_type, axle=axle,
+                                                 side=side, mileage_km=[mileage_km])
     keys = (row.name, str(row.id)) if row else ()
     measured = _position_measurements(session, model_id, bogie_type, axle, side, wheel_id, keys)
     curves, labels = [], []
@@ -210,8 +210,8 @@ def write_demo_pictures(out_dir: Path | str, *, model_id: int, predictions: list
                         max_pictures: int = 6) -> list[Path]:
     """Write wear-area and profile pictures for the wheel positions of ``predictions``.
 
-    ``predictions`` are :class:`~wearcast.service.schemas.PredictionOut` (route, position and
-    at least one mileage); one pair of pictures per distinct position, at most
+    ``predictions`` are :class:`~wearcast.service.prediction_schemas.PredictionOut` (route,
+    position and at least one mileage); one pair of pictures per distinct position, at most
     ``max_pictures`` positions. Returns the paths written.
     """
     out = Path(out_dir)

@@ -20,7 +20,7 @@ import pandas as pd
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from wearcast.service import model_store
+from wearcast.service import model_loading
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.float32_blobs import from_f32
@@ -144,7 +144,7 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
     latest measured wear areas (the wheel's latest profile measurement)."""
     if route_id is None:
         raise Unprocessable("route_id", "a model forecast needs the route it runs on")
-    inputs, route = model_store.load_inputs(session, model_id, route_id)
+    inputs, route = model_loading.load_inputs(session, model_id, route_id)
     profiles = frame[(frame["kind"] == "profile") & frame["flange_area_mm2"].notna()]
     latest = profiles.sort_values("mileage_km").groupby("wheel_id").tail(1) \
         .set_index("wheel_id")
@@ -163,9 +163,9 @@ def _model_forecast(session: Session, model_id: int, route_id: int | str | None,
         position = {"bogie_type": state.bogie_type, "axle": state.axle, "side": state.side}
         out = {}
         try:
-            model = model_store.wheel_model(inputs.model, route.route, inputs.table,
-                                            covariates=dict(route.attributes), **position)
-            measures = model_store.weighted_measures(inputs, route.route, **position)
+            model = model_loading.wheel_model(inputs.model, route.route, inputs.table,
+                                              covariates=dict(route.attributes), **position)
+            measures = model_loading.weighted_measures(inputs, route.route, **position)
             for name in FLANGE_LIMITS:
                 key = {"sd": "sd_min_mm", "sh": "sh_max_mm", "qr": "qr_min_mm"}[name]
                 wanted = {**_RELAXED, key: limits.limit_of(name)}

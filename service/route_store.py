@@ -15,7 +15,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
 from wearcast.service.errors import Conflict, NotFound, Unprocessable, from_value_error
-from wearcast.service.schemas import RouteIn, RouteOut, RouteSpec
+from wearcast.service.route_schemas import RouteIn, RouteOut, RouteSpec
 from wearcast.statistics import routes as stat_routes
 
 

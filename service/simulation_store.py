@@ -34,7 +34,7 @@ from wearcast.service.job_store import (
     run_job,
     set_job,
 )
-from wearcast.service.schemas import SimulationIn, SimulationOut
+from wearcast.service.simulation_schemas import SimulationIn, SimulationOut
 
 log = logging.getLogger(__name__)
 __all__ = ["RESTART_REASON", "create_simulation", "finite_json", "get_simulation",

@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import job_store, wear_table_store
 from wearcast.service.db import SessionFactory
-from wearcast.service.schemas import WearTableComputeIn
+from wearcast.service.wear_table_schemas import WearTableComputeIn
 
 log = logging.getLogger(__name__)
 #: ``spec["kind"]`` of a table-build job.

@@ -24,7 +24,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
-from wearcast.service.schemas import (
+from wearcast.service.wear_table_schemas import (
     VehiclePairIn,
     WearTableComputeIn,
     WearTableContactsOut,
@@ -36,9 +36,6 @@ from wearcast.statistics import wear_tables
 MAX_TABLE_BYTES = 20 * 1024 * 1024
 #: Compiled tables kept in process (each is a few hundred rows: well under 1 MB).
 COMPILED_TABLE_CACHE_SIZE = 16
-
-
-
 
 
 _compiled_tables: LruCache[wear_tables.WearTable] = LruCache(COMPILED_TABLE_CACHE_SIZE)

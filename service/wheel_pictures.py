@@ -26,12 +26,12 @@ from matplotlib.figure import Figure
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from wearcast.service import model_store
+from wearcast.service import model_loading, reprofiling_store, wheel_start
 from wearcast.service import models_db as db
 from wearcast.service.errors import NotFound
 from wearcast.service.picture_cache import PictureJob, render
 from wearcast.service.pictures import ImageFormat, _render
-from wearcast.service.schemas import ReprofilingIn
+from wearcast.service.reprofiling_schemas import ReprofilingIn
 from wearcast.statistics.reprofiling import ParameterCorridor
 
 #: (column, label, limit key, "min"/"max") of the three panels.
@@ -200,17 +200,17 @@ def wheel_parameter_job(session: Session, model_id: int, *, wheel_id: str,
     if route_id is None:
         raise Unprocessable("route_id", "a hybrid model needs the route the wheel runs on")
     body = ReprofilingIn(route_id=route_id, wheel_id=wheel_id)
-    inputs, route = model_store.load_inputs(session, model_id, route_id, None)
-    start = model_store.wheel_start(session, body)
-    answer = model_store.reprofiling_payload(inputs, route, model_id, body, start)
+    inputs, route = model_loading.load_inputs(session, model_id, route_id, None)
+    start = wheel_start.wheel_start(session, body)
+    answer = reprofiling_store.reprofiling_payload(inputs, route, model_id, body, start)
     remaining = answer["remaining_km"]["p90"] or answer["remaining_km"]["p50"]
     top = horizon_km or (1.3 * remaining if remaining else 300_000.0)
     if not math.isfinite(top) or top <= 0:
         top = 300_000.0
     corridor = None
     if not answer["crossed_limits"]:
-        corridor = model_store.parameter_corridor(inputs, route, body, start,
-                                                  np.linspace(0.0, top, 61))
+        corridor = reprofiling_store.parameter_corridor(inputs, route, body, start,
+                                                        np.linspace(0.0, top, 61))
     measured = _wheel_measured(session, wheel_id)
     title = (f"wheel {wheel_id}: model {model_id} on route {route.name}; reprofiling "
              + ("now (" + ", ".join(f"{k} past by {v:.2f} mm" for k, v in

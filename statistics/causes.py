@@ -22,7 +22,7 @@ null extension fits b_r alone, so no cause gains from merely re-estimating c_s).
 Each cause is ONE object in the scikit-learn estimator pattern: ``fit(data, rows)`` returns a
 fitted copy (``theta_``, ``log_scale_``, ``cov_``), ``predict(data)`` the extended model's
 areas and ``describe()`` the plain-language result; the saved extended model predicts by
-the very same ``predict`` (``discrepancy.ExtendedModel``), so fitting and prediction cannot
+the very same ``predict`` (``extension.ExtendedModel``), so fitting and prediction cannot
 disagree.
 
 Fitting works on the log residual e = log((A_meas + a0) / (A_pred + a0)) linearised in the

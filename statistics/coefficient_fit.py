@@ -29,10 +29,8 @@ initial one), so every full run, the reported one included, equals a fresh uncac
 The metaheuristics solve the SAME inner problem (the same model evaluations, the same outer
 loop), so their differences are the optimisers' alone; :func:`calibrate_full_loop` runs them
 the seed's way instead, one whole loop run per objective evaluation, to time that set-up too.
-GA, PSO and tabu search are short hand-written versions in log10(k); simulated annealing is
-``scipy.optimize.dual_annealing`` and differential evolution
-``scipy.optimize.differential_evolution``. Every method's reported RMSE is that of a full loop
-run at its final k, against the measurements (seed 000 eq. 16).
+The metaheuristics are :mod:`wearcast.statistics.coefficient_search`. Every method's reported
+RMSE is that of a full loop run at its final k, against the measurements (seed 000 eq. 16).
 
 Coefficients whose zone never occurs in the simulation are not identifiable; they keep their
 starting value and are reported as such.
@@ -44,19 +42,22 @@ own coefficient (its coefficient vector is [1]), so the depth per unit c_tau is 
 divided by the c_tau it ran with; the inner problem has one column (bounded least squares in
 closed form, which ``lsq_linear`` returns). The metaheuristics solve the same one-column problem.
 Krause-Poll and USFD have no coefficient in ``WearLaw`` to scale, so they are not fitted here.
+
+Twin measurements with known coefficients are :mod:`wearcast.statistics.coefficient_fit_twin`;
+the comparison of the methods (seed 000 Table 2) is
+:mod:`wearcast.statistics.coefficient_fit_comparison`.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pandas as pd
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import differential_evolution, dual_annealing, lsq_linear
+from scipy.optimize import lsq_linear
 
 from wearcast.physics.vehicles import BogieVehicle
 from wearcast.physics.wear_distribution import Smoothing
@@ -67,6 +68,7 @@ from wearcast.physics.wear_laws import (
 )
 from wearcast.physics.wear_loop import WearSteps, simulate_wear
 from wearcast.physics.wear_simulation import WearSimulation
+from wearcast.statistics.coefficient_search import FULL_LOOP_BUDGETS, SEARCHES, objective
 
 #: Seed 000 §V: bounds of k1, k2, k3 used by its optimisers (zone 4 not fitted) [-].
 SEED_000_BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4))
@@ -261,133 +263,15 @@ def _solve_exact(a, rhs, lo, hi, x0, rng):
     return res.x, 1
 
 
-def _objective(a, rhs):
-    def f(x):
-        r = a @ np.asarray(x) - rhs
-        return float(r @ r)
-    return f
-
-
-Objective = Callable[[NDArray], float]
-
-
-def _log_box(lo, hi):
-    return np.log10(lo), np.log10(hi)
-
-
-#: Seed 000 §IV.C prints its PSO: a swarm of 40, 30 iterations, learning factors
-#: c1 = c2 = 2, inertia weight "between 0.5-1.2" (taken as falling linearly from 1.2 to 0.5).
-SEED_000_PSO = {"n_particles": 40, "n_iter": 30, "c1": 2.0, "c2": 2.0,
-                "inertia": (1.2, 0.5)}
-
-
-def _search_pso(f: Objective, lo, hi, x0, rng, n_particles=40, n_iter=30, c1=2.0, c2=2.0,
-                inertia=(1.2, 0.5)):
-    """PSO in log10(k) with seed 000's settings by default (:data:`SEED_000_PSO`), seed 000
-    eq. (6): v <- w v + c1 r1 (P_i - x) + c2 r2 (P_g - x), w falling linearly over the
-    iterations from inertia[0] to inertia[1]."""
-    llo, lhi = _log_box(lo, hi)
-    pos = rng.uniform(llo, lhi, (n_particles, lo.size))
-    vel = np.zeros_like(pos)
-    val = np.array([f(10 ** p) for p in pos])
-    best_p, best_v = pos.copy(), val.copy()
-    g = best_p[np.argmin(best_v)]
-    for it in range(n_iter):
-        w = inertia[0] + (inertia[1] - inertia[0]) * it / max(n_iter - 1, 1)
-        r1, r2 = rng.random(pos.shape), rng.random(pos.shape)
-        vel = w * vel + c1 * r1 * (best_p - pos) + c2 * r2 * (g - pos)
-        pos = np.clip(pos + vel, llo, lhi)
-        val = np.array([f(10 ** p) for p in pos])
-        better = val < best_v
-        best_p[better], best_v[better] = pos[better], val[better]
-        g = best_p[np.argmin(best_v)]
-    return 10 ** g, n_particles * (n_iter + 1)
-
-
-def _search_ga(f: Objective, lo, hi, x0, rng, n_pop=30, n_gen=60, mutation=0.1):
-    llo, lhi = _log_box(lo, hi)
-    pop = rng.uniform(llo, lhi, (n_pop, lo.size))
-    fit = np.array([f(10 ** p) for p in pop])
-    for _ in range(n_gen):
-        elite = pop[np.argmin(fit)].copy()
-        # Tournament selection of parents, blend crossover, Gaussian mutation, elitism.
-        pairs = rng.integers(0, n_pop, (n_pop, 2, 2))
-        parents = np.where(fit[pairs[..., 0]] < fit[pairs[..., 1]], pairs[..., 0],
-                           pairs[..., 1])
-        w = rng.random((n_pop, lo.size))
-        child = w * pop[parents[:, 0]] + (1 - w) * pop[parents[:, 1]]
-        child += rng.normal(0.0, mutation * (lhi - llo), child.shape) * (
-            rng.random(child.shape) < 0.3)
-        pop = np.clip(child, llo, lhi)
-        pop[0] = elite
-        fit = np.array([f(10 ** p) for p in pop])
-    return 10 ** pop[np.argmin(fit)], n_pop * (n_gen + 1)
-
-
-def _search_tabu(f: Objective, lo, hi, x0, rng, n_iter=200, n_neighbours=5, tabu_len=8,
-                 radius=0.25, shrink=0.98):
-    # Seed 000 §V.C: 5 neighbours, tabu length 5-11, 200 iterations; the seed shrinks the radius
-    # by 0.2 % per update, too slow to reach 1 % in 200 iterations: we shrink by 2 %.
-    llo, lhi = _log_box(lo, hi)
-    cur = np.clip(np.log10(x0), llo, lhi)
-    best, best_v = cur.copy(), f(10 ** cur)
-    tabu: list[NDArray] = []
-    evals = 1
-    cell = 0.02 * (lhi - llo)
-    for _ in range(n_iter):
-        cand = np.clip(cur + rng.normal(0.0, radius * (lhi - llo), (n_neighbours, lo.size)),
-                       llo, lhi)
-        vals = np.array([f(10 ** c) for c in cand])
-        evals += n_neighbours
-        for j in np.argsort(vals):
-            key = np.round(cand[j] / cell)
-            if vals[j] < best_v or not any(np.array_equal(key, t) for t in tabu):
-                cur = cand[j]
-                tabu.append(key)
-                tabu = tabu[-tabu_len:]
-                if vals[j] < best_v:
-                    best, best_v = cand[j].copy(), vals[j]
-                break
-        radius *= shrink
-    return 10 ** best, evals
-
-
-def _search_sa(f: Objective, lo, hi, x0, rng, maxiter=300, maxfun=10_000_000):
-    llo, lhi = _log_box(lo, hi)
-    res = dual_annealing(lambda p: f(10 ** p), list(zip(llo, lhi, strict=True)), maxiter=maxiter,
-                         maxfun=maxfun, seed=int(rng.integers(2**31)),
-                         x0=np.clip(np.log10(x0), llo, lhi))
-    return 10 ** res.x, int(res.nfev)
-
-
-def _search_de(f: Objective, lo, hi, x0, rng, maxiter=1000, popsize=15, polish=True):
-    llo, lhi = _log_box(lo, hi)
-    res = differential_evolution(lambda p: f(10 ** p), list(zip(llo, lhi, strict=True)),
-                                 seed=int(rng.integers(2**31)), tol=1e-10, polish=polish,
-                                 maxiter=maxiter, popsize=popsize)
-    return 10 ** res.x, int(res.nfev)
-
-
-_SEARCHES: dict[str, Callable[..., tuple[NDArray, int]]] = {
-    "GA": _search_ga, "PSO": _search_pso, "TS": _search_tabu, "SA": _search_sa, "DE": _search_de}
-
-
 def _on_frozen_basis(search: Callable[..., tuple[NDArray, int]]) -> InnerSolver:
     """A metaheuristic as an inner solver: it minimises the frozen-basis objective."""
     def solve(a, rhs, lo, hi, x0, rng):
-        return search(_objective(a, rhs), lo, hi, x0, rng)
+        return search(objective(a, rhs), lo, hi, x0, rng)
     return solve
 
 
 _SOLVERS: dict[str, InnerSolver] = {"exact": _solve_exact, **{
-    name: _on_frozen_basis(search) for name, search in _SEARCHES.items()}}
-#: Budgets of the full-loop metaheuristics (every evaluation is a whole loop run, ~0.3 s on
-#: the benchmark's twin): PSO as seed 000 printed it (swarm 40, 30 iterations: 1,240 runs);
-#: the seed prints no sizes for the others, which are kept near 200 loop runs.
-FULL_LOOP_BUDGETS: dict[str, dict[str, int]] = {
-    "GA": {"n_pop": 12, "n_gen": 15}, "PSO": {"n_particles": 40, "n_iter": 30},
-    "TS": {"n_iter": 40}, "SA": {"maxiter": 50, "maxfun": 200},
-    "DE": {"maxiter": 4, "popsize": 10}}
+    name: _on_frozen_basis(search) for name, search in SEARCHES.items()}}
 
 
 def _free_box(problem: CalibrationProblem) -> tuple[list[int], NDArray, NDArray, NDArray]:
@@ -485,9 +369,9 @@ def calibrate_full_loop(problem: CalibrationProblem, method: str = "PSO", *, see
     The runs share one contact cache (bit-identical profiles only: the initial one), so each
     evaluation equals a fresh run.
     """
-    if method not in _SEARCHES:
-        raise ValueError(f"unknown full-loop method {method!r}; known: {', '.join(_SEARCHES)}")
-    search = _SEARCHES[method]
+    if method not in SEARCHES:
+        raise ValueError(f"unknown full-loop method {method!r}; known: {', '.join(SEARCHES)}")
+    search = SEARCHES[method]
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
     free, lo, hi, x0 = _free_box(problem)
@@ -508,114 +392,3 @@ def calibrate_full_loop(problem: CalibrationProblem, method: str = "PSO", *, see
     runs += 1
     return _fit_result(f"{method} (full loop)", problem, x, sim, t0, runs, evals,
                        np.ones(len(free), dtype=bool))
-
-
-@dataclass(frozen=True)
-class TwinData:
-    """Synthetic measurements made by the loop with known coefficients.
-
-    true_coefficients ((4,) KTH zones or (1,) c_tau), y_mm, wear_fit_mm at ``mileage_fit_km``,
-    wear_predict_mm at ``mileage_predict_km`` (noise added to both), noise_mm, simulation
-    (noise-free truth)
-    """
-
-    true_coefficients: NDArray
-    y_mm: NDArray
-    mileage_fit_km: float
-    wear_fit_mm: NDArray
-    mileage_predict_km: float
-    wear_predict_mm: NDArray
-    noise_mm: float
-    simulation: WearSimulation
-
-
-def make_twin(vehicle: BogieVehicle | str, classes: Any, true_coefficients: Sequence[float],
-              mileage_fit_km: float = 50_000.0, mileage_predict_km: float = 80_000.0,
-              step_km: float = 5000.0, noise_mm: float = 0.0, seed: int = 0,
-              y_mm: ArrayLike | None = None, law: str = "archard_kth",
-              tau_threshold_mpa: float = 0.0, **loop: Any) -> TwinData:
-    """Twin measurements (seed 000's lines: fit at 50,000 km, predict at 80,000 km).
-
-    The truth runs with fixed steps of ``step_km`` to ``mileage_predict_km``; the wear at
-    ``mileage_fit_km`` must be a step boundary. Gaussian noise of ``noise_mm`` is added.
-    ``law`` and ``tau_threshold_mpa`` as in :class:`CalibrationProblem` (for ``tau_max``,
-    ``true_coefficients`` is (c_tau,) [mm/(m MPa)]).
-    """
-    k = np.asarray(true_coefficients, dtype=float)
-    n = int(round(mileage_predict_km / step_km))
-    if not np.isclose(n * step_km, mileage_predict_km) or not np.isclose(
-            round(mileage_fit_km / step_km) * step_km, mileage_fit_km):
-        raise ValueError("both mileages must be multiples of step_km")
-    sim = simulate_wear(vehicle, classes, law=fit_law(law, k, tau_threshold_mpa),
-                        steps=WearSteps(mode="fixed", n_steps=n, step_km=step_km,
-                                        contact_update_depth_mm=loop.pop(
-                                            "contact_update_depth_mm", 0.0)), **loop)
-    y = sim.y_mm if y_mm is None else np.asarray(y_mm, dtype=float)
-    rng = np.random.default_rng(seed)
-    i_fit = int(round(mileage_fit_km / step_km))
-    fit = np.interp(y, sim.y_mm, sim.wear_mm[i_fit]) + rng.normal(0.0, noise_mm, y.size)
-    pred = np.interp(y, sim.y_mm, sim.wear_mm[-1]) + rng.normal(0.0, noise_mm, y.size)
-    return TwinData(true_coefficients=k, y_mm=y, mileage_fit_km=mileage_fit_km,
-                    wear_fit_mm=fit, mileage_predict_km=mileage_predict_km,
-                    wear_predict_mm=pred, noise_mm=noise_mm, simulation=sim)
-
-
-def compare_methods(problem: CalibrationProblem, methods: Sequence[str] = METHODS, *,
-                    predict_mileage_km: float | None = None,
-                    predict_wear_mm: ArrayLike | None = None, seed: int = 0,
-                    max_runs: int = 5, rtol: float = 1e-4,
-                    progress: Callable[[int, int, str], None] | None = None
-                    ) -> tuple[pd.DataFrame, dict[str, FitResult]]:
-    """Seed 000 Table 2 for our methods and the fits behind it.
-
-    Returns (table, fits): the table has RMSE [mm], maximum depth [mm] and its relative error
-    [%], time [s], loop runs, objective evaluations, the coefficients (k1..k4, or
-    c_tau_mm_per_m_mpa for tau_max), and (optionally) the same at a
-    prediction mileage; a ``traditional_mean_k`` row evaluates the start coefficients (seed 000
-    §VI). ``progress(done, total, method)`` is called after each method.
-    """
-    for m in methods:
-        if m not in _SOLVERS:
-            raise ValueError(f"methods: unknown method {m!r}; known: {', '.join(METHODS)}")
-    rows = []
-    fits: dict[str, FitResult] = {}
-    y = np.asarray(problem.y_mm, dtype=float)
-    w = np.asarray(problem.wear_mm, dtype=float)
-
-    def row(name, k, rmse, max_d, re, t, runs, evals):
-        r = {"method": name, "rmse_mm": rmse, "max_depth_mm": max_d, "re_max_depth_pct": re,
-             "time_s": t, "model_runs": runs, "evaluations": evals}
-        r.update({name: float(v) for name, v in zip(problem.coefficient_names, k, strict=True)})
-        if predict_mileage_km is not None:
-            sim = run_model(problem, k, predict_mileage_km)
-            model = np.interp(y, sim.y_mm, sim.wear_mm[-1])
-            r["max_depth_predict_mm"] = float(model.max())
-            if predict_wear_mm is not None:
-                pw = np.asarray(predict_wear_mm, dtype=float)
-                r.update({"rmse_predict_mm": rmse_mm(model, pw),
-                          "re_max_depth_predict_pct": 100.0 * (model.max() - pw.max())
-                          / pw.max()})
-        rows.append(r)
-
-    base = run_model(problem, problem.start)
-    model = np.interp(y, base.y_mm, base.wear_mm[-1])
-    row("traditional_mean_k", problem.start, rmse_mm(model, w), float(model.max()),
-        100.0 * (model.max() - w.max()) / w.max(), float("nan"), 1, 0)
-    for i, m in enumerate(methods):
-        fit = calibrate(problem, m, seed=seed, max_runs=max_runs, rtol=rtol)
-        fits[m] = fit
-        row(m, fit.coefficients, fit.rmse_mm, fit.max_depth_mm, fit.re_max_depth_pct,
-            fit.time_s, fit.model_runs, fit.evaluations)
-        if progress is not None:
-            progress(i + 1, len(methods), m)
-    return pd.DataFrame(rows), fits
-
-
-def comparison_table(problem: CalibrationProblem, methods: Sequence[str] = METHODS, *,
-                     predict_mileage_km: float | None = None,
-                     predict_wear_mm: ArrayLike | None = None, seed: int = 0,
-                     max_runs: int = 5, rtol: float = 1e-4) -> pd.DataFrame:
-    """Seed 000 Table 2 for our methods (the table of :func:`compare_methods`)."""
-    return compare_methods(problem, methods, predict_mileage_km=predict_mileage_km,
-                           predict_wear_mm=predict_wear_mm, seed=seed, max_runs=max_runs,
-                           rtol=rtol)[0]

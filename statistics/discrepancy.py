@@ -44,6 +44,9 @@ scores it out of sample and names a cause only when it is specific:
    vehicle-clustered (sandwich) covariance of the fit, Student t with groups - 1 degrees of
    freedom.
 
+The finder's data are :mod:`wearcast.statistics.discrepancy_data`, its findings
+:mod:`wearcast.statistics.discrepancy_findings`.
+
 Pure: no I/O. The figures and the HTML report are in
 :mod:`wearcast.statistics.discrepancy_report`; the gain and finding types in
 :mod:`wearcast.statistics.findings`.
@@ -51,7 +54,6 @@ Pure: no I/O. The figures and the HTML report are in
 
 from __future__ import annotations
 
-import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,35 +62,20 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
-from wearcast.statistics.discrepancy_progression import (
-    ExpectedProgression,
-    centred,
-    exponent_offset,
+from wearcast.statistics.discrepancy_data import build_data
+from wearcast.statistics.discrepancy_findings import (
+    Scored,
+    covariate_codes,
+    is_named,
+    scored_findings,
 )
-from wearcast.statistics.extension import (
-    ExtendedModel,
-    apply_extension,
-    correct_profile,
-    correct_wear_curves,
-)
-from wearcast.statistics.findings import (
-    FinderResult,
-    Finding,
-    Gain,
-    bootstrap_gain_interval,
-    json_value,
-)
+from wearcast.statistics.discrepancy_progression import ExpectedProgression
+from wearcast.statistics.findings import FinderResult, Finding
 from wearcast.statistics.hybrid import HybridModel
-from wearcast.statistics.residuals import (
-    geometric_basis,
-    model_residuals,
-    residual_structure,
-    shape_residuals,
-)
-from wearcast.statistics.route_measure import leading_shares
+from wearcast.statistics.json_values import json_value
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable, compile_wear_table
 
@@ -98,8 +85,6 @@ DEFAULT_MIN_RELATIVE_GAIN = 0.01
 DEFAULT_N_NULL = 199
 MAX_CAUSES = 3
 
-__all__ = ["Diagnosis", "ExtendedModel", "Finding", "Gain", "apply_extension", "build_data",
-           "correct_profile", "correct_wear_curves", "diagnose"]
 
 
 @dataclass(frozen=True)
@@ -144,89 +129,12 @@ class Diagnosis(FinderResult):
                 "nuisance": json_value(self.nuisance), "null_test": self.null_test}
 
 
-def _lubricated_share(flags: NDArray[np.bool_] | None, history: Any
-                      ) -> NDArray[np.float64] | None:
-    """Share of each measurement's mileage run lubricated (its route history)."""
-    if flags is None:
-        return None
-    x = flags.astype(float)
-    return np.asarray(history @ x) if history is not None else x
-
-
 def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
     uniq = np.unique(groups)
     rng = np.random.default_rng(seed)
     perm = rng.permutation(uniq.size)
     fold_of = {g: int(perm[i] % k) for i, g in enumerate(uniq)}
     return np.array([fold_of[g] for g in groups], dtype=np.int64)
-
-
-def build_data(model: HybridModel, measurements: pd.DataFrame, wear_curves: Any,
-               routes_by_name: Mapping[str, Route], table: pd.DataFrame | WearTable, *,
-               calibration_wheel_ids: Collection[Any] = (),
-               route_attributes: Mapping[str, Mapping[str, Any]] | None = None,
-               expected_progression: ExpectedProgression | None = None
-               ) -> cz.FinderData:
-    """Residuals and covariates in the form the causes read (see ``causes.FinderData``).
-
-    With ``expected_progression`` the base prediction carries the simulated progression
-    shape of every row (``discrepancy_progression``): the causes are departures from it.
-    """
-    res = model_residuals(model, measurements, routes_by_name, table,
-                          calibration_wheel_ids=calibration_wheel_ids)
-    frame = res.frame
-    mileage = frame["mileage_km"].to_numpy(dtype=float)
-    lead = leading_shares(frame["axle"].to_numpy(), res.mode)
-    base = res.predicted_mm2
-    factor = None
-    if expected_progression is not None:
-        factor = expected_progression.row_factors(
-            frame["bogie_type"].to_numpy(), mileage, res.parts, lead,
-            WEAR_MEASURES.index(model.measure))
-        base = base * factor
-    rcol = "route" if "route" in frame.columns else "route_id"
-    route = frame[rcol].astype(str).to_numpy()
-    shape = None
-    basis = geometric_basis(model.grid_y_mm, model.split_y_mm)
-    if wear_curves is not None:
-        # keep only the part of each shape residual that a geometric error can produce:
-        # its least-squares projection on the basis (the rest no extension can explain)
-        d = np.nan_to_num(shape_residuals(model, res.measured_mm2, wear_curves), nan=0.0)
-        coef, *_ = np.linalg.lstsq(basis.T, d.T, rcond=None)
-        shape = (basis.T @ coef).T
-    data = cz.FinderData(
-        frame=frame, measured=res.measured_mm2, base=base, floor=res.floor_mm2,
-        mileage_km=mileage,
-        c_s=np.array([model.flange.c_s, model.tread.c_s]), parts=res.parts,
-        measure_index=WEAR_MEASURES.index(model.measure),
-        lead_share=lead, mode=res.mode,
-        left_right=res.left_right_shares, route=route,
-        lubricated=_lubricated_share(cz.lubrication_flags(frame, route, route_attributes),
-                                     res.history),
-        shape_res=shape, basis=basis,
-    )
-    if expected_progression is not None and factor is not None:
-        # the expected progression's own exponent over these mileages: a named
-        # nonlinear_progression reports expected + departure (``NonlinearProgression.public``)
-        x = cz.NonlinearProgression().features(data, np.zeros(2))[:, 0, 0]
-        data.cache["expected_exponent_offset"] = exponent_offset(
-            centred(np.log(factor), cz.life_ids(frame, mileage), mileage), x)
-        data.cache["expected_progression"] = expected_progression.source
-    return data
-
-
-@dataclass
-class _Scored:
-    """One cause scored at one step of the forward selection."""
-
-    cause: cz.Cause
-    before: NDArray[np.float64]            # (n,) held-out error of the step's baseline
-    after: NDArray[np.float64]             # (n,) held-out error with the cause added
-    gain: float
-    p_raw: float = 1.0
-    p_adj: float = 1.0
-    step: int = 0
-    metric: str = "area"
 
 
 def _relative(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
@@ -339,7 +247,7 @@ def diagnose(
 
     # the wear-curve shape cause: per-instrument mean signature vs one common signature
     shape_row: tuple[float, NDArray[np.float64]] | None = None
-    scored: dict[str, _Scored] = {}
+    scored: dict[str, Scored] = {}
     if shape_cause is not None:
         coef = _whitened_shape(data)
         inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
@@ -354,7 +262,7 @@ def diagnose(
         boot = fs.bootstrap_gains(_shape_design(data.n, None), [_shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
         shape_row = (_relative(before, after), boot[0])
-        scored[shape_cause.code] = _Scored(shape_cause, before, after, shape_row[0],
+        scored[shape_cause.code] = Scored(shape_cause, before, after, shape_row[0],
                                            metric="shape")
 
     # forward selection over the area causes
@@ -410,14 +318,14 @@ def diagnose(
         p_raw, p_adj = fs.min_p(observed, boot)
         for i, code in enumerate(codes):
             if code in rows:
-                scored[code] = _Scored(next(c for c in remaining if c.code == code), before,
+                scored[code] = Scored(next(c for c in remaining if c.code == code), before,
                                        rows[code], float(observed[i]), float(p_raw[i]),
                                        float(p_adj[i]), step)
             else:
                 s = scored[code]
                 s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
-        eligible = [c for c in remaining if _named(scored[c.code], alpha, min_relative_gain,
-                                                   groups, n_boot, rng)]
+        eligible = [c for c in remaining if is_named(scored[c.code], alpha, min_relative_gain,
+                                                     groups, n_boot, rng)]
         if not eligible:
             break
         best = max(eligible, key=lambda c: scored[c.code].gain)
@@ -444,8 +352,8 @@ def diagnose(
         step += 1
 
     names = [c.code for c in selected]
-    if shape_cause is not None and _named(scored[shape_cause.code], alpha, min_relative_gain,
-                                          groups, n_boot, rng):
+    if shape_cause is not None and is_named(scored[shape_cause.code], alpha, min_relative_gain,
+                                            groups, n_boot, rng):
         names.append(shape_cause.code)
     if names:   # the verdict is the named cause with the largest relative gain
         top = max(names, key=lambda c: scored[c].gain)
@@ -467,9 +375,9 @@ def diagnose(
             verdict = "outside_catalogue"
 
     for code in scored:
-        _covariate_codes(scored[code].cause, data)
-    findings = _findings(data, scored, selected, names, vehicle, chosen, n_boot, groups,
-                         alpha, min_relative_gain, rng)
+        covariate_codes(scored[code].cause, data)
+    findings = scored_findings(data, scored, selected, names, vehicle, chosen, n_boot, groups,
+                               alpha, min_relative_gain, rng)
     order = {c: i for i, c in enumerate(names)}
     findings.sort(key=lambda f: (order.get(f.cause, len(order)), -f.gain.relative))
     preds: dict[str, list[list[float]]] = {}
@@ -506,119 +414,3 @@ def diagnose(
                      runner_up=runner_up, margin=margin, margin_p_value=margin_p,
                      candidates=tuple(candidates), unexplained=tuple(unexplained),
                      nuisance=nuisance, null_test=test)
-
-
-def _gain_interval(s: _Scored, groups: NDArray[Any], n_boot: int,
-                   rng: np.random.Generator) -> tuple[float, float]:
-    return bootstrap_gain_interval(fs.group_sums(s.before, groups),
-                                   fs.group_sums(s.after, groups), n_boot, rng)
-
-
-def _named(s: _Scored, alpha: float, min_gain: float, groups: NDArray[Any], n_boot: int,
-           rng: np.random.Generator) -> bool:
-    return bool(s.p_adj <= alpha and s.gain >= min_gain)   # resampling p: reject at <= alpha
-
-
-_SUBGROUPS = {
-    "traction": "tread of motor bogies vs other bogies",
-    "running_direction": "axle 1 vs axle 2 per running mode",
-    "curve_asymmetry": "left vs right wheels per curved route",
-    "flange_lubrication": "flanges on lubricated vs dry routes",
-    "wear_measure": "all wheel positions (ratio of the two measures)",
-    "nonlinear_progression": "mileage since reprofiling",
-    "seasonal_friction": "season of the running intervals",
-    "vehicle_load": "vehicles by load_t",
-    "profile_misalignment": "wear curves per instrument_id",
-}
-
-
-def _findings(data: cz.FinderData, scored: Mapping[str, _Scored], selected: Sequence[cz.Cause],
-              names: Sequence[str], vehicle: NDArray[Any], chosen: Sequence[cz.Cause],
-              n_boot: int, groups: NDArray[Any], alpha: float, min_gain: float,
-              rng: np.random.Generator) -> list[Finding]:
-    everything = np.ones(data.n, dtype=bool)
-    joint: dict[str, cz.Cause] = {}
-    if selected:
-        comp = cz.Composite(tuple(selected)).fit(data, everything, cluster=vehicle)
-        assert isinstance(comp, cz.Composite)
-        joint = {m.code: m for m in comp.members}
-    calibrated = float(np.sum(data.e ** 2) / data.n)
-    out = []
-    for code, s in scored.items():
-        est = joint.get(code) or s.cause.fit(data, everything, cluster=vehicle)
-        lo, hi = _gain_interval(s, groups, n_boot, rng)
-        n = data.n
-        gain = Gain(before_error=float(s.before.sum() / n), after_error=float(s.after.sum() / n),
-                    relative=s.gain, ci95_low=lo, ci95_high=hi, calibrated_error=calibrated,
-                    metric="wear_curve_shape" if s.metric == "shape" else "log_area")
-        params = est.public()
-        if code == "wear_measure":
-            w = est.intervals().get("share_other_measure") if hasattr(est, "intervals") \
-                else None
-            if w is not None and w["ci95_low"] <= 1.0 <= w["ci95_high"]:
-                params.update(c_s_flange=float(data.c_s[0] * np.exp(est.log_scale_[0])),
-                              c_s_tread=float(data.c_s[1] * np.exp(est.log_scale_[1])))
-        intervals = est.intervals()
-        evidence: dict[str, Any] = {
-            "p_value": s.p_adj, "p_value_raw": s.p_raw,
-            "test": ("held-out gain against resampled nuisance-only datasets, "
-                     "Westfall-Young max-T across the catalogue"
-                     + (f" (forward-selection step {s.step + 1}: baseline includes "
-                        f"{', '.join(c.code for c in selected[:s.step])})" if s.step else "")),
-            "effect_size": params.get("instruments", params) if code == "profile_misalignment"
-            else params,
-            "intervals": intervals,
-            "subgroup": _SUBGROUPS.get(code, ""),
-            "interval": {"relative_gain_ci95": [lo, hi]},
-            "confounded_with": _confounded(s.cause, chosen, data),
-            "step": s.step + 1,
-        }
-        if s.metric != "shape" and s.cause.covariate_name in data.frame.columns \
-                and data.frame[s.cause.covariate_name].nunique() <= 20:
-            evidence["residual_by_level"] = residual_structure(
-                data.frame, s.cause.covariate_name).to_dict(orient="records")
-        extension = {"cause": code, "parameters": params,
-                     "log_scale": {"flange": float(est.log_scale_[0]),
-                                   "tread": float(est.log_scale_[1])},
-                     "intervals": intervals,
-                     "explanation": s.cause.explanation, "needs": list(s.cause.needs)}
-        ci = "; ".join(f"{k} {v['value']:.3g} [{v['ci95_low']:.3g}, {v['ci95_high']:.3g}]"
-                       for k, v in intervals.items() if math.isfinite(v["ci95_low"]))
-        summary = (f"{est.describe()}; held-out error "
-                   f"{'down' if s.gain >= 0 else 'up'} {100 * abs(s.gain):.1f} % "
-                   f"(95 % CI {100 * lo:.1f} to {100 * hi:.1f} %)"
-                   + (f"; 95 % intervals: {ci}" if ci else ""))
-        significant = bool(s.p_adj <= alpha)
-        material = bool(s.gain >= min_gain)
-        out.append(Finding(code, summary, evidence, extension, gain, significant and
-                           (code in names or not names), material))
-    return out
-
-
-def _numeric(values: NDArray[Any]) -> NDArray[np.float64]:
-    v = pd.to_numeric(pd.Series(values), errors="coerce")
-    if v.notna().all():
-        return np.asarray(v.to_numpy(dtype=float))
-    return pd.factorize(pd.Series(values).astype(str))[0].astype(float)
-
-
-def _covariate_codes(cause: cz.Cause, data: cz.FinderData) -> NDArray[np.float64]:
-    key = f"covariate_codes:{cause.code}"
-    if key not in data.cache:
-        data.cache[key] = _numeric(np.asarray(cause.covariate(data)))
-    return np.asarray(data.cache[key])
-
-
-def _confounded(cause: cz.Cause, chosen: Sequence[cz.Cause], data: cz.FinderData) -> list[str]:
-    """Other scored causes whose covariate is nearly collinear with this one's (|r| > 0.9)."""
-    x = _covariate_codes(cause, data)
-    if np.std(x) == 0:
-        return []
-    out = []
-    for other in chosen:
-        if other.code == cause.code or f"covariate_codes:{other.code}" not in data.cache:
-            continue
-        y = _covariate_codes(other, data)
-        if np.std(y) > 0 and abs(np.corrcoef(x, y)[0, 1]) > 0.9:
-            out.append(other.code)
-    return out

@@ -21,8 +21,10 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
-from wearcast.statistics.findings import json_value
-from wearcast.statistics.hybrid import HybridModel, Prediction, predict, profile_at_areas
+from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.hybrid_prediction import Prediction, predict
+from wearcast.statistics.hybrid_profiles import profile_at_areas
+from wearcast.statistics.json_values import json_value
 from wearcast.statistics.residuals import geometric_basis
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable
@@ -32,7 +34,7 @@ if TYPE_CHECKING:
 
 
 def build_finder_data(*args: Any, **kwargs: Any) -> cz.FinderData:
-    from wearcast.statistics.discrepancy import build_data
+    from wearcast.statistics.discrepancy_data import build_data
 
     return build_data(*args, **kwargs)
 
@@ -43,7 +45,7 @@ class ExtendedModel:
 
     ``rate_factors`` gives the per-region multiplier of the base model's rate for one wheel
     (its covariates); ``for_wheel`` returns a plain HybridModel whose c_s carries that factor,
-    so ``hybrid.predict`` and ``reprofiling.reprofiling_mileage`` work unchanged;
+    so ``hybrid_prediction.predict`` and ``reprofiling.reprofiling_mileage`` work unchanged;
     ``predict`` adds the mileage dependence of ``nonlinear_progression``.
     """
 
@@ -122,7 +124,8 @@ class ExtendedModel:
     def predict(self, route: Route, table: pd.DataFrame | WearTable, *, bogie_type: str,
                 axle: int, side: str, mileage_km: Any,
                 covariates: Mapping[str, Any] | None = None) -> Prediction:
-        """``hybrid.predict`` with the extension (areas A = k s, or k s_ref (s/s_ref)^beta)."""
+        """``hybrid_prediction.predict`` with the extension (areas A = k s, or
+        k s_ref (s/s_ref)^beta)."""
         m = self.for_wheel(route, table, bogie_type=bogie_type, axle=axle, side=side,
                            covariates=covariates)
         out = predict(m, route, table, bogie_type=bogie_type, axle=axle, side=side,

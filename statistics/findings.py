@@ -7,29 +7,13 @@ and the physics diagnosis (:mod:`wearcast.statistics.physics_diagnosis`).
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-
-def json_value(value: Any) -> Any:
-    """``value`` with numpy scalars and arrays made plain Python, mappings' keys made strings,
-    tuples made lists and non-finite floats made None (ready for ``json.dumps``)."""
-    if isinstance(value, Mapping):
-        return {str(k): json_value(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_value(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return json_value(value.tolist())
-    if isinstance(value, np.generic):
-        return json_value(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+from wearcast.statistics.json_values import json_value
 
 
 def bootstrap_gain_interval(before_by_group: ArrayLike, after_by_group: ArrayLike,

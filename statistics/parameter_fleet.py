@@ -30,6 +30,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 from scipy.stats import t as student_t
 
+from wearcast.statistics.json_values import finite_or_none
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 
 #: S1002 new-profile values [mm] (docs/conventions.md "Profile parameters and limits"; EN 13715).
@@ -149,15 +150,12 @@ class LimitMileage:
     mileage_p90_km: float
 
     def to_dict(self) -> dict[str, Any]:
-        def num(v: float) -> float | None:
-            return float(v) if math.isfinite(v) else None
-
         return {
             "parameter": self.parameter,
             "limit_mm": self.limit_mm,
-            "mileage_p10_km": num(self.mileage_p10_km),
-            "mileage_p50_km": num(self.mileage_p50_km),
-            "mileage_p90_km": num(self.mileage_p90_km),
+            "mileage_p10_km": finite_or_none(self.mileage_p10_km),
+            "mileage_p50_km": finite_or_none(self.mileage_p50_km),
+            "mileage_p90_km": finite_or_none(self.mileage_p90_km),
         }
 
 
@@ -205,17 +203,14 @@ class ParameterForecast:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        def num(v: float) -> float | None:
-            return float(v) if math.isfinite(v) else None
-
         return {
             "group": self.group,
             "trends": {k: v.to_dict() for k, v in self.trends.items()},
             "limits": {k: v.to_dict() for k, v in self.limits.items()},
             "governing_limit": self.governing_limit,
-            "mileage_p10_km": num(self.mileage_p10_km),
-            "mileage_p50_km": num(self.mileage_p50_km),
-            "mileage_p90_km": num(self.mileage_p90_km),
+            "mileage_p10_km": finite_or_none(self.mileage_p10_km),
+            "mileage_p50_km": finite_or_none(self.mileage_p50_km),
+            "mileage_p90_km": finite_or_none(self.mileage_p90_km),
             "reason": self.reason,
         }
 

@@ -36,12 +36,7 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
-from wearcast.statistics.findings import (
-    FinderResult,
-    Finding,
-    Gain,
-    bootstrap_gain_interval,
-)
+from wearcast.statistics.findings import FinderResult, Finding, Gain, bootstrap_gain_interval
 from wearcast.statistics.physics_comparison import QUANTITIES
 
 DEFAULT_ALPHA = 0.05

@@ -33,11 +33,10 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.vocabulary import REGIONS
-from wearcast.statistics.hybrid import (
-    HybridModel,
-    parameters_at_areas,
-    region_rates,
-)
+from wearcast.statistics.hybrid import HybridModel
+from wearcast.statistics.hybrid_prediction import region_rates
+from wearcast.statistics.hybrid_profiles import parameters_at_areas
+from wearcast.statistics.json_values import finite_or_none
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_tables import WearTable
@@ -371,21 +370,19 @@ class ReprofilingResult:
         return math.isfinite(self.mileage_p50_km)
 
     def to_dict(self) -> dict[str, Any]:
-        def num(v: float) -> float | None:
-            return float(v) if math.isfinite(v) else None
-
         return {
-            "mileage_p10_km": num(self.mileage_p10_km),
-            "mileage_p50_km": num(self.mileage_p50_km),
-            "mileage_p90_km": num(self.mileage_p90_km),
+            "mileage_p10_km": finite_or_none(self.mileage_p10_km),
+            "mileage_p50_km": finite_or_none(self.mileage_p50_km),
+            "mileage_p90_km": finite_or_none(self.mileage_p90_km),
             "governing_limit": self.governing_limit,
-            "sd_mm": num(self.sd_mm),
-            "sh_mm": num(self.sh_mm),
-            "qr_mm": num(self.qr_mm),
+            "sd_mm": finite_or_none(self.sd_mm),
+            "sh_mm": finite_or_none(self.sh_mm),
+            "qr_mm": finite_or_none(self.qr_mm),
             "extrapolated": self.extrapolated,
             "reason": self.reason,
-            "rates_mm2_per_km": {k: num(v) for k, v in self.rates_mm2_per_km.items()},
-            "equivalent_mileage_km": {k: num(v) for k, v in self.equivalent_mileage_km.items()},
+            "rates_mm2_per_km": {k: finite_or_none(v) for k, v in self.rates_mm2_per_km.items()},
+            "equivalent_mileage_km": {k: finite_or_none(v)
+                                      for k, v in self.equivalent_mileage_km.items()},
             "limits": dict(self.limits),
             "crossed_limits": dict(self.crossed_limits),
             "start_parameters": dict(self.start_parameters),
@@ -418,7 +415,7 @@ def reprofiling_mileage(
         (default: new profile)
     horizon_km : search horizon [km]; beyond it the limit counts as not reached
     n_grid : points of the geometric search grid before the refinement
-    weighted_measures : P_s per region if known already (see ``hybrid.region_rates``)
+    weighted_measures : P_s per region if known already (see ``hybrid_prediction.region_rates``)
     start_parameters : measured ``sd_mm``, ``sh_mm``, ``qr_mm`` [mm] of the start state; the
         prediction starts from them (module docstring); past a limit: 0 km remaining
 

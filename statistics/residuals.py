@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, RUNNING_MODES, WEAR_MEASURES
+from wearcast.statistics.frames import check_frame
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.route_measure import leading_shares, route_parts, weighted_measure
 from wearcast.statistics.routes import Route
@@ -52,13 +53,7 @@ def route_column(measurements: pd.DataFrame) -> str:
 
 def check_measurements(measurements: pd.DataFrame) -> pd.DataFrame:
     """Validate the measurement frame and return a clean copy with a 0..n-1 index."""
-    if not isinstance(measurements, pd.DataFrame):
-        raise ValueError("measurements: must be a pandas DataFrame")
-    missing = [c for c in REQUIRED_COLUMNS if c not in measurements.columns]
-    if missing:
-        raise ValueError(f"{missing[0]}: column missing from measurements")
-    if measurements.empty:
-        raise ValueError("measurements: no rows")
+    check_frame(measurements, REQUIRED_COLUMNS, field="measurements", what="measurements")
     df = measurements.reset_index(drop=True).copy()
     route_column(df)
     df["mileage_km"] = pd.to_numeric(df["mileage_km"], errors="coerce").astype(float)

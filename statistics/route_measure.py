@@ -48,7 +48,7 @@ class UnknownBogieTypeError(ValueError):
     """The model (its wear table) does not cover the requested bogie type."""
 
 
-def _check_choice(value: object, allowed: Sequence[object], name: str) -> None:
+def check_choice(value: object, allowed: Sequence[object], name: str) -> None:
     if value not in allowed:
         raise ValueError(f"{name}: must be one of {tuple(allowed)}, got {value!r}")
 
@@ -150,9 +150,9 @@ def weighted_wear_measure(
     Raises UnknownBogieTypeError for a bogie type the table lacks and RadiusOutOfTableError
     for a class tighter than the table covers.
     """
-    _check_choice(side, SIDES, "side")
-    _check_choice(region, REGIONS, "region")
-    _check_choice(measure, WEAR_MEASURES, "measure")
+    check_choice(side, SIDES, "side")
+    check_choice(region, REGIONS, "region")
+    check_choice(measure, WEAR_MEASURES, "measure")
     wt = compile_wear_table(table)
     if bogie_type not in wt.bogie_types:
         raise UnknownBogieTypeError(

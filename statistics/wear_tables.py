@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from wearcast.physics.vocabulary import BOGIE_TYPES, RAILS, REGIONS, WEAR_MEASURES, WHEELSETS
+from wearcast.statistics.frames import check_frame
 
 TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
 #: Relative slack on the table's smallest radius (rounding of uploaded radii) [-].
@@ -53,13 +54,8 @@ def validate_wear_table(table: pd.DataFrame) -> pd.DataFrame:
     on a tangent row, duplicate rows, and a missing tangent row for any
     (bogie_type, wheelset, region, measure) that has curve rows.
     """
-    if not isinstance(table, pd.DataFrame):
-        raise ValueError("table: must be a pandas DataFrame")
-    missing = [c for c in TABLE_COLUMNS if c not in table.columns]
-    if missing:
-        raise ValueError(f"{missing[0]}: column missing from the wear table")
-    if table.empty:
-        raise ValueError("table: the wear table has no rows")
+    check_frame(table, TABLE_COLUMNS, field="table", what="the wear table",
+                no_rows="the wear table has no rows")
     df = table.loc[:, list(TABLE_COLUMNS)].reset_index(drop=True).copy()
     df["bogie_type"] = df["bogie_type"].astype(str).str.strip()
     if (df["bogie_type"] == "").any() or table["bogie_type"].isna().any():

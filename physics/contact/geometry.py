@@ -5,7 +5,7 @@ wheelset are solved so that each wheel touches its rail (minimum vertical gap ze
 sides), and every contact point is reported: the primary (gap 0) and, where the profiles
 approach each other a second time within a tolerance, a secondary patch (two-point contact,
 typically tread + flange).  Background: seed 000 §V, seed 002 §2, seed 004 §2 (contact search
-before Hertz/FASTSIM); the case is the Manchester contact benchmark (``reference/README.md``).
+before Hertz/FASTSIM); the case is the Manchester contact benchmark (docs/references.md).
 
 Frames and signs (read this before using the results)
 ------------------------------------------------------
@@ -120,7 +120,7 @@ class WheelsetTrack:
 def s1002_60e1(rail_inclination: float = 1.0 / 40.0, nominal_radius_mm: float = 460.0,
                rail: str = "60E1") -> WheelsetTrack:
     """S1002 wheels on 60E1 (or 60E2) rails, gauge 1435 mm at 14 mm, flange backs 1360 mm:
-    the Manchester benchmark geometry of ``reference/README.md`` (rails 1:40 by default)."""
+    the Manchester benchmark geometry (docs/references.md; rails 1:40 by default)."""
     return WheelsetTrack(wheel=s1002_curve(), rail=rail_curve(rail),
                          nominal_radius_mm=nominal_radius_mm, rail_inclination=rail_inclination)
 

@@ -1,9 +1,9 @@
 """Flange parameters Sd, Sh, qR of a wheel profile (EN 15313 / MiniProf).
 
 Definitions (EN 15313 / MiniProf "wheel wear" defaults L1 = 2, L2 = 70, L3 = 10 mm;
-docs/conventions.md
-"Conventions"; ``reference/README.md`` "Wheel limits"), in the wheel frame y [mm] from the
-tape circle (back face at y = -70), z [mm] up towards the flange tip:
+docs/conventions.md "Profile parameters and limits"; EBO Anlage 6 in docs/references.md),
+in the wheel frame y [mm] from the tape circle (back face at y = -70), z [mm] up towards the
+flange tip:
 
 * Sh, flange height: flange-tip height minus the tape-circle height z(0);
 * Sd, flange thickness: distance from the back face (y = -70) to the flange face (the

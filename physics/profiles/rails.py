@@ -5,7 +5,7 @@ The head is symmetric; ``y < 0`` is the half that faces the track centre when th
 laid (the gauge side), matching the wheel frame of docs/conventions.md where the flange is at ``y <
 0``.
 
-Geometry (``reference/README.md``, tables "60E1" and "60E2"): a chain of tangent arcs from the
+Geometry (EN 13674-1, docs/references.md; 60E1 and 60E2): a chain of tangent arcs from the
 crown outwards, then the 1:20 flank (dy/dz = 1/20).  The arc centres are recomputed here from
 the radii and the lateral positions of the tangent points between arcs (60E1: 10.228 and
 26.0265 mm; 60E2: 11.889, 24.4565 and 35.387 mm), which reproduces the README's centres to
@@ -91,7 +91,7 @@ def _arc_chain(name: str, radii: tuple[float, ...], tangent_y: tuple[float, ...]
 @cache
 def rail_head(name: str) -> RailHead:
     """Arc chain of a named rail head: ``"60E1"`` (R300, R80, R13) or ``"60E2"``
-    (R200, R70, R16, R8); see ``reference/README.md``."""
+    (R200, R70, R16, R8); EN 13674-1 (docs/references.md)."""
     key = name.upper()
     if key in ("60E1", "UIC60"):
         return _arc_chain("60E1", (300.0, 80.0, 13.0), (-10.228, -26.0265))

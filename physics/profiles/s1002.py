@@ -71,7 +71,7 @@ def s1002_height_mm(y_mm: ArrayLike) -> NDArray[np.float64]:
     z [mm], radius increase over the tape circle (positive towards the flange tip);
     NaN outside the validity range.
 
-    Source: EN 13715 S1002 in the Netter (DLR) piecewise form, ``reference/README.md``.
+    Source: EN 13715 S1002 (docs/references.md) in the Netter (DLR) piecewise form.
     """
     y = np.asarray(y_mm, dtype=float)
     conditions = [

@@ -1,6 +1,6 @@
 """Greenwood MiniProf measurement files: wheels (``.whl``), rails (``.ban``), multi-part (``.mpt``).
 
-Three text layouts (reference/README.md "Measurement file formats"):
+Three text layouts, as the instrument's files come:
 
 * **regular** — ``Key=Value`` header lines (``ColumnDef=X,Y``, ``XYPoints``, ``Date``
   dd/mm/yyyy, ``Side=%L``, ``MPSerNo``, ``Sd=``/``Sh=``/``qR=`` …), then the points, one per

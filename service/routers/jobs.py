@@ -16,8 +16,8 @@ from wearcast.service import job_store
 from wearcast.service import models_db as db
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import ApiError, NotFound
+from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.json_response import json_response
-from wearcast.service.schemas import JobStatusOut
 
 router = APIRouter(tags=["jobs"])
 JobId = Annotated[int, Path(ge=1, le=2**63 - 1)]

@@ -11,7 +11,12 @@ from wearcast.service import importing, measurement_store
 from wearcast.service.deps import SessionDep, SettingsDep
 from wearcast.service.errors import Unprocessable
 from wearcast.service.json_response import json_response
-from wearcast.service.schemas import ImportOut, MeasurementIn, MeasurementOut, MeasurementPage
+from wearcast.service.measurement_schemas import (
+    ImportOut,
+    MeasurementIn,
+    MeasurementOut,
+    MeasurementPage,
+)
 
 router = APIRouter(tags=["measurements"])
 
@@ -44,18 +49,24 @@ def create_measurement(body: MeasurementIn, session: SessionDep) -> MeasurementO
     return measurement_store.create(session, body)
 
 
+def parse_filter_json(raw: str) -> dict[str, Any]:
+    """A ``?filter=<json>`` query parameter: a JSON object of field: value(s) (422 naming
+    ``filter`` otherwise)."""
+    try:
+        parsed = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise Unprocessable("filter", f"not valid JSON: {exc.msg}") from exc
+    if not isinstance(parsed, dict):
+        raise Unprocessable("filter", "must be a JSON object of field: value(s)")
+    return parsed
+
+
 def query_filter(request: Request, filter_json: str | None) -> dict[str, Any]:
     """The ``filter`` of a listing: ``?filter=<json>`` merged with ``?field=value`` params
     (repeat a parameter for a list of accepted values)."""
     out: dict[str, Any] = {}
     if filter_json:
-        try:
-            parsed = json.loads(filter_json)
-        except json.JSONDecodeError as exc:
-            raise Unprocessable("filter", f"not valid JSON: {exc.msg}") from exc
-        if not isinstance(parsed, dict):
-            raise Unprocessable("filter", "must be a JSON object of field: value(s)")
-        out.update(parsed)
+        out.update(parse_filter_json(filter_json))
     for name in request.query_params:
         if name not in RESERVED:
             values = request.query_params.getlist(name)

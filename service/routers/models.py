@@ -9,7 +9,6 @@ return their answer serialised by orjson (see ``predict`` below).
 
 from __future__ import annotations
 
-import json
 from typing import Annotated, Any, Literal
 
 import orjson
@@ -18,19 +17,26 @@ from fastapi.responses import HTMLResponse
 from pydantic import BaseModel, ValidationError
 from starlette.concurrency import run_in_threadpool
 
+from wearcast.physics.vocabulary import BogieType, Side
 from wearcast.service import (
     diagnosis_jobs,
     diagnosis_store,
+    model_loading,
     model_store,
     physics_diagnosis_store,
     physics_jobs,
     physics_model_store,
     pictures,
+    prediction_store,
+    reprofiling_store,
+    wheel_start,
 )
 from wearcast.service.db import Database
 from wearcast.service.deps import SessionDep
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut
 from wearcast.service.errors import Unprocessable, validation_items
 from wearcast.service.job_store import default_timeout, queue_job
+from wearcast.service.model_schemas import ModelOut
 from wearcast.service.physics_schemas import (
     JobAccepted,
     ModelCreateIn,
@@ -39,17 +45,9 @@ from wearcast.service.physics_schemas import (
 )
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import ImageFormat
-from wearcast.service.schemas import (
-    BogieType,
-    DiagnoseIn,
-    DiagnosisOut,
-    ModelOut,
-    PredictIn,
-    PredictionOut,
-    ReprofilingIn,
-    ReprofilingOut,
-    Side,
-)
+from wearcast.service.prediction_schemas import PredictIn, PredictionOut
+from wearcast.service.reprofiling_schemas import ReprofilingIn, ReprofilingOut
+from wearcast.service.routers.measurements import parse_filter_json
 
 router = APIRouter(tags=["models"])
 QueryAxle = Annotated[int, Query(ge=1, le=2, description="1 or 2")]
@@ -135,18 +133,18 @@ def _predict_loading(request: Request, model_id: int, body: PredictIn) -> Respon
     """Predict with its inputs (and a measured start) read from the database (threadpool)."""
     database: Database = request.app.state.database
     with database.session_factory() as session:
-        inputs, route = model_store.load_inputs(session, model_id, body.route_id, body.route)
-        start = model_store.wheel_start(session, body) if body.measured_start else None
-    return _bytes(model_store.predict_json(inputs, route, model_id, body, start))
+        inputs, route = model_loading.load_inputs(session, model_id, body.route_id, body.route)
+        start = wheel_start.wheel_start(session, body) if body.measured_start else None
+    return _bytes(prediction_store.predict_json(inputs, route, model_id, body, start))
 
 
 def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -> Response:
     """Reprofiling with its inputs (and the wheel's latest state) read from the database."""
     database: Database = request.app.state.database
     with database.session_factory() as session:
-        inputs, route = model_store.load_inputs(session, model_id, body.route_id, body.route)
-        start = model_store.wheel_start(session, body)
-    return _bytes(model_store.reprofiling_json(inputs, route, model_id, body, start))
+        inputs, route = model_loading.load_inputs(session, model_id, body.route_id, body.route)
+        start = wheel_start.wheel_start(session, body)
+    return _bytes(reprofiling_store.reprofiling_json(inputs, route, model_id, body, start))
 
 
 # Predict and reprofiling are the hot paths: about a millisecond of CPU each. When the model
@@ -154,20 +152,27 @@ def _reprofiling_loading(request: Request, model_id: int, body: ReprofilingIn) -
 # computed right here on the event loop, without a database session or a threadpool hop
 # (the hop costs more CPU than it could save: the computation holds the GIL). Otherwise (the
 # first request, a wheel's latest state) the database is read in the threadpool.
+def _hot_inputs(request: Request, model_id: int, body: PredictIn | ReprofilingIn
+                ) -> tuple[model_loading.ModelInputs, model_loading.RouteInputs] | None:
+    """The model's and the route's inputs from process memory, or None (not read yet, or a
+    stored start: a wheel's latest state is always read)."""
+    if body.wheel_id is not None or body.measurement_id is not None:
+        return None
+    return model_loading.cached_inputs(_database_url(request), model_id, body.route_id,
+                                       body.route)
+
+
 @router.post("/models/{model_id}/predict", response_model=PredictionOut | PhysicsPredictionOut)
 async def predict(model_id: int, body: PredictIn, request: Request) -> Response:
     """Predict a wheel position at mileages. A physics model answers
     ``PhysicsPredictionOut`` (Sd/Sh/qR P10/P50/P90 per mileage, on its own route)."""
     if await _physics(request, model_id):
         return await run_in_threadpool(_physics_answer, request, model_id, body, "predict")
-    cached = None
-    if body.wheel_id is None and body.measurement_id is None:  # stored starts: always read
-        cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
-                                           body.route)
+    cached = _hot_inputs(request, model_id, body)
     if cached is None:
         return await run_in_threadpool(_predict_loading, request, model_id, body)
-    start = model_store.wheel_start(None, body) if body.profile is not None else None
-    return _bytes(model_store.predict_json(*cached, model_id, body, start))
+    start = wheel_start.wheel_start(None, body) if body.profile is not None else None
+    return _bytes(prediction_store.predict_json(*cached, model_id, body, start))
 
 
 @router.post("/models/{model_id}/reprofiling", response_model=ReprofilingOut)
@@ -178,14 +183,11 @@ async def reprofiling(model_id: int, body: ReprofilingIn, request: Request) -> R
     if await _physics(request, model_id):
         return await run_in_threadpool(_physics_answer, request, model_id, body,
                                        "reprofiling")
-    cached = None
-    if body.wheel_id is None and body.measurement_id is None:  # stored states: always read
-        cached = model_store.cached_inputs(_database_url(request), model_id, body.route_id,
-                                           body.route)
+    cached = _hot_inputs(request, model_id, body)
     if cached is None:
         return await run_in_threadpool(_reprofiling_loading, request, model_id, body)
-    start = model_store.wheel_start(None, body)
-    return _bytes(model_store.reprofiling_json(*cached, model_id, body, start))
+    start = wheel_start.wheel_start(None, body)
+    return _bytes(reprofiling_store.reprofiling_json(*cached, model_id, body, start))
 
 
 _IMAGE: dict[int | str, dict[str, Any]] = {
@@ -276,12 +278,7 @@ def diagnose_report(model_id: int, session: SessionDep,
 def _filter_from_query(raw: str | None) -> dict:
     if raw is None or not raw.strip():
         return {}
-    try:
-        value = json.loads(raw)
-    except json.JSONDecodeError as exc:
-        raise Unprocessable("filter", f"not valid JSON: {exc}") from exc
-    if not isinstance(value, dict):
-        raise Unprocessable("filter", "must be a JSON object of field -> value(s)")
+    value = parse_filter_json(raw)
     try:
         return DiagnoseIn(filter=value).filter
     except ValidationError as exc:

@@ -17,7 +17,7 @@ from wearcast.service.errors import NotFound
 from wearcast.service.float32_blobs import floats_of
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
-from wearcast.service.schemas import Strict
+from wearcast.service.schema_base import MAX_PROFILE_POINTS, Strict
 
 router = APIRouter(tags=["reference profiles"])
 
@@ -28,8 +28,8 @@ class ReferenceIn(Strict):
     measured new wheel) named by ``measurement_id``."""
 
     name: str = Field(min_length=1, max_length=100)
-    y_mm: list[float] | None = Field(None, min_length=20, max_length=20000)
-    z_mm: list[float] | None = Field(None, min_length=20, max_length=20000)
+    y_mm: list[float] | None = Field(None, min_length=20, max_length=MAX_PROFILE_POINTS)
+    z_mm: list[float] | None = Field(None, min_length=20, max_length=MAX_PROFILE_POINTS)
     measurement_id: int | None = None
     description: str | None = Field(None, max_length=500)
 

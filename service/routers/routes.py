@@ -7,7 +7,7 @@ from fastapi import APIRouter, Response
 from wearcast.service import route_store
 from wearcast.service.deps import SessionDep
 from wearcast.service.json_response import json_response
-from wearcast.service.schemas import RouteIn, RouteOut
+from wearcast.service.route_schemas import RouteIn, RouteOut
 
 router = APIRouter(tags=["routes"])
 

@@ -14,7 +14,7 @@ from fastapi import APIRouter, Query, Request
 
 from wearcast.service import simulation_store
 from wearcast.service.deps import SessionDep
-from wearcast.service.schemas import SimulationIn, SimulationOut
+from wearcast.service.simulation_schemas import SimulationIn, SimulationOut
 
 router = APIRouter(tags=["simulations"])
 

@@ -14,7 +14,11 @@ from wearcast.service import wear_table_jobs, wear_table_store
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Unprocessable
 from wearcast.service.routers.jobs import JobOut, job_out
-from wearcast.service.schemas import WearTableComputeIn, WearTableContactsOut, WearTableOut
+from wearcast.service.wear_table_schemas import (
+    WearTableComputeIn,
+    WearTableContactsOut,
+    WearTableOut,
+)
 
 router = APIRouter(tags=["wear tables"])
 

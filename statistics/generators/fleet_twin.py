@@ -1,17 +1,16 @@
 """Fleet twin: a generator of realistic wheel-profile measurements that obey the hybrid model.
 
 The twin produces what a fleet's MiniProf campaign would deliver — one measured profile per
-(wheel, mileage) in the long-CSV import format of docs/conventions.md — but from a known truth, so
-that
-the statistical core can be tested against it and the discrepancy finder can later be shown
-effects it has to find.
+(wheel, mileage) in the long-CSV import format of docs/conventions.md — but from a known
+truth, so that the statistical core can be tested against it and the discrepancy finder can
+later be shown effects it has to find.
 
 How a profile is made (all lengths in mm, mileage in km):
 
 1. **Wear measure of the wheel's route** (seed 001 eq. 2): P = sum_i c_i P_i over the route's
-   curve classes, P_i read from a curve-radius table (docs/conventions.md "Curve-radius table CSV")
-   for the wheel's bogie
-   type, wheelset position (axle 1 leads in ``lead`` mode; ``mixed`` = half leading, half
+   curve classes (``twin_routes``), P_i read from a curve-radius table
+   (``twin_wear_table.synthetic_wear_table`` by default) for the wheel's bogie type,
+   wheelset position (axle 1 leads in ``lead`` mode; ``mixed`` = half leading, half
    trailing), rail (high/low from the wheel's side and the curve's direction, tangent for
    straight track) and region; radii between table rows are interpolated linearly in
    curvature 1/R, wide curves beyond the last row towards the tangent value at 1/R = 0.
@@ -21,13 +20,8 @@ How a profile is made (all lengths in mm, mileage in km):
 3. **Effects** (hooks for the discrepancy finder): each ``WearEffect`` maps a wheel's wear
    history (mileages, dates, areas) to a modified one, each ``ProfileEffect`` modifies the
    measured points of one profile (e.g. an instrument's systematic error).
-4. **Wear-curve shape** for that area from a family of realistic shapes. Tread: hollow wear,
-   a main bump around y = +4 mm and a smaller one around y = -12 mm (seed 001 Fig. 6/9 shows
-   worn curves with two maxima), widening as wear grows. Flange: the flange face is thinned
-   horizontally by a smooth bump d(y) on -52 < y < -30 (peak near y = -41), which moves the
-   Sd point inwards by about d; the vertical wear curve is w = z_ref(y) - z_ref(y + d(y)).
-   Wear of the tread lies entirely in y >= split and of the flange entirely in y < split, so
-   each region's area is exact.
+4. **Wear-curve shape** for that area from a family of realistic shapes
+   (``twin_wear_curves``).
 5. **Worn profile** = S1002 - w, sampled at ``points_per_profile`` points evenly spaced in arc
    length from the flange back (y = -70) to the field side (y = +60) like a MiniProf trace,
    then moved by a small rigid misalignment (lateral, vertical shift and rotation about the
@@ -39,322 +33,33 @@ Everything is pure (numpy/pandas in and out, no I/O) and deterministic for a giv
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from wearcast.physics.profiles.s1002 import S1002_Y_MAX_MM, S1002_Y_MIN_MM, s1002_height_mm
-from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES, Region
+from wearcast.physics.profiles.s1002 import s1002_height_mm
+from wearcast.physics.vocabulary import REGIONS
+from wearcast.statistics.generators.twin_routes import TwinRoute, aosta_route, metro_route
+from wearcast.statistics.generators.twin_wear_curves import (
+    FINE_Y_MM,
+    flange_thinning_at_sd_mm,
+    worn_profile_mm,
+)
+from wearcast.statistics.generators.twin_wear_table import TWIN_REGION_ORDER, synthetic_wear_table
 from wearcast.statistics.route_measure import weighted_wear_measure
-from wearcast.statistics.routes import Route, RouteClass
-from wearcast.statistics.wear_tables import TABLE_COLUMNS, compile_wear_table
+from wearcast.statistics.wear_tables import compile_wear_table
 
 Array = NDArray[np.float64]
 
-#: The twin draws its random numbers and writes its table rows region by region in this order
-#: (tread first); kept so that seeded fleets and the bundled example fleet stay the same.
-TWIN_REGION_ORDER: tuple[Region, ...] = REGIONS[::-1]
-WEAR_TABLE_COLUMNS = list(TABLE_COLUMNS)
+
 PROFILE_COLUMNS = [
     "wheel_id", "vehicle_id", "bogie_type", "axle", "side", "mileage_km", "y_mm", "z_mm",
     "measured_on", "route_id", "running_mode", "instrument_id", "load_t",
 ]
 
-# Fine lateral grid on which wear curves are built and areas integrated [mm].
-_FINE_STEP_MM = 0.02
-_FINE_Y_MM = np.linspace(S1002_Y_MIN_MM, S1002_Y_MAX_MM,
-                         int(round((S1002_Y_MAX_MM - S1002_Y_MIN_MM) / _FINE_STEP_MM)) + 1)
-
-
-# --------------------------------------------------------------------------------------------
-# Routes
-# --------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class TwinRoute(Route):
-    """A route (curve classes with shares summing to 1) plus free attributes."""
-
-    attributes: Mapping[str, object] = field(default_factory=dict)
-
-    def to_json(self) -> dict[str, object]:
-        """The ``POST /v1/routes`` body for this route."""
-        return {**self.to_dict(), "attributes": dict(self.attributes)}
-
-
-def _split_directions(radius_m: float | None, cant_mm: float, speed_kmh: float,
-                      share: float) -> list[RouteClass]:
-    if radius_m is None:
-        return [RouteClass(None, None, 0.0, speed_kmh, share)]
-    return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
-
-
-# Seed 003 (003_c55c21cb74d435ad), Table 3: Aosta – Pré-Saint-Didier line, statistical track
-# description with n_class = 7, N_c = 20 curve tracks. Columns: representative radius R_c [m]
-# (None = tangent, "inf" in the paper), superelevation H [mm], speed V [km/h], share p_k [%].
-AOSTA_TABLE3 = (
-    (162.0, 110.0, 57.0, 0.93), (162.0, 131.0, 60.0, 1.30),
-    (195.0, 90.0, 60.0, 7.09), (195.0, 103.0, 60.0, 7.42), (195.0, 126.0, 60.0, 5.48),
-    (237.0, 70.0, 60.0, 0.87), (237.0, 83.0, 60.0, 8.76), (237.0, 109.0, 60.0, 4.63),
-    (237.0, 120.0, 60.0, 0.47),
-    (293.0, 50.0, 60.0, 0.28), (293.0, 65.0, 60.0, 3.05), (293.0, 83.0, 60.0, 0.90),
-    (293.0, 100.0, 60.0, 0.31),
-    (376.0, 49.0, 60.0, 1.13), (376.0, 62.0, 60.0, 1.26),
-    (774.0, 24.0, 60.0, 1.73), (774.0, 40.0, 60.0, 0.42),
-    (3572.0, 5.0, 60.0, 2.40), (3572.0, 20.0, 60.0, 0.91),
-    (None, 0.0, 130.0, 50.65),
-)
-
-# Seed 000 (000_67a233c1b13bf7f0), Table 1: track conditions of metro lines 1 and 2 (type B
-# vehicle): radius band [m], share of track length [%], running speed [km/h].
-METRO_TABLE1 = (
-    (1200.0, math.inf, 75.0, 70.0),
-    (800.0, 1200.0, 11.0, 70.0),
-    (600.0, 800.0, 11.0, 60.0),
-    (350.0, 600.0, 3.0, 40.0),
-)
-
-
-def aosta_route(name: str = "aosta") -> TwinRoute:
-    """The Aosta – Pré-Saint-Didier line as 39 curve classes (seed 003 Table 3).
-
-    Each of the 19 curved classes is split into equal left- and right-hand halves (the table
-    gives no direction); shares are the printed p_k [%] normalised to sum to 1 (they sum to
-    99.99 % as printed).
-    """
-    total = sum(row[3] for row in AOSTA_TABLE3)
-    classes: list[RouteClass] = []
-    for radius_m, cant_mm, speed_kmh, share_pct in AOSTA_TABLE3:
-        classes += _split_directions(radius_m, cant_mm, speed_kmh, share_pct / total)
-    return TwinRoute(name, tuple(classes), {
-        "source": "seed 003 Table 3 (Aosta - Pre Saint Didier, n_class=7)",
-        "line_type": "regional, mountain", "flange_lubrication": False,
-    })
-
-
-def metro_route(name: str = "metro", max_cant_mm: float = 120.0) -> TwinRoute:
-    """Metro lines 1/2 of seed 000 Table 1 as curve classes.
-
-    The band R > 1200 m (75 %) is taken as tangent track; each other band is represented by
-    its mid radius. Cant is not printed: it is set to the equilibrium cant
-    11.8 V^2 / R [mm] (V km/h, R m, standard gauge), capped at ``max_cant_mm``. Curves are
-    split into equal left and right halves (the lines are built of S-curves, seed 000 §V).
-    """
-    classes: list[RouteClass] = []
-    for r_min, r_max, share_pct, speed_kmh in METRO_TABLE1:
-        if math.isinf(r_max):
-            classes += _split_directions(None, 0.0, speed_kmh, share_pct / 100.0)
-            continue
-        radius_m = 0.5 * (r_min + r_max)
-        cant_mm = min(max_cant_mm, round(11.8 * speed_kmh**2 / radius_m))
-        classes += _split_directions(radius_m, float(cant_mm), speed_kmh, share_pct / 100.0)
-    return TwinRoute(name, tuple(classes), {
-        "source": "seed 000 Table 1 (metro lines 1 and 2, type B vehicle)",
-        "line_type": "metro", "flange_lubrication": False,
-    })
-
-
-def tangent_route(name: str = "tangent", speed_kmh: float = 100.0) -> TwinRoute:
-    """100 % tangent track (the application example of seed 001 Fig. 15)."""
-    return TwinRoute(name, (RouteClass(None, None, 0.0, speed_kmh, 1.0),),
-                     {"source": "seed 001 Fig. 15 (100 % tangent track)", "line_type": "tangent"})
-
-
-# --------------------------------------------------------------------------------------------
-# Curve-radius table and weighted wear measure
-# --------------------------------------------------------------------------------------------
-
-def synthetic_wear_table(radii_m: Sequence[float] = (150, 200, 250, 300, 400, 500, 700, 1000,
-                                                     1500, 2000, 3000)) -> pd.DataFrame:
-    """A smooth, synthetic curve-radius table in the docs/conventions.md CSV format.
-
-    Stand-in for the physics core's tables; follows seed 001 Fig. 10 qualitatively:
-
-    - flange: zero on tangent track and in wide curves; on the leading wheelset's high-rail
-      wheel it rises from curvature 1/1500 m^-1 and grows fast as the radius falls
-      (P ~ (kappa - kappa0)^1.3); the trailing wheelset's high-rail wheel flanges only below
-      ~400 m and far less; low-rail wheels never flange.
-    - tread: nonzero on tangent track, rising moderately with curvature, more on the low rail
-      (longitudinal creep) than on the high rail.
-    - motor bogies carry a higher T_gamma than trailer bogies (x1.8 in curves, x1.3 on
-      tangent: traction creep and stiffer steering), tau_max is similar (x1.05).
-
-    Units: tau_max [MPa] (maximum surface shear traction), t_gamma [N] (wear number).
-    Returns a DataFrame with columns ``WEAR_TABLE_COLUMNS``; tangent rows have radius_m NaN.
-    """
-    rows: list[tuple[object, ...]] = []
-    kappa = 1.0 / np.asarray(radii_m, dtype=float)  # [1/m]
-    for bogie in ("motor", "trailer"):
-        for wheelset in ("leading", "trailing"):
-            for measure in WEAR_MEASURES:
-                tangent = _synthetic_values(bogie, wheelset, "tangent", np.zeros(1), measure)
-                for region in TWIN_REGION_ORDER:
-                    rows.append((bogie, wheelset, "tangent", np.nan, region, measure,
-                                 float(tangent[region][0])))
-                for rail in ("high", "low"):
-                    values = _synthetic_values(bogie, wheelset, rail, kappa, measure)
-                    for region in TWIN_REGION_ORDER:
-                        for r, v in zip(radii_m, values[region], strict=True):
-                            rows.append((bogie, wheelset, rail, float(r), region, measure,
-                                         round(float(v), 4)))
-    return pd.DataFrame(rows, columns=WEAR_TABLE_COLUMNS)
-
-
-def _synthetic_values(bogie: str, wheelset: str, rail: str, kappa: Array,
-                      measure: str) -> dict[str, Array]:
-    """Smooth synthetic wear measures vs curvature kappa [1/m] (see ``synthetic_wear_table``)."""
-    k = kappa * 1000.0  # curvature in 1/km: 6.67 at R = 150 m
-    leading = wheelset == "leading"
-    if measure == "tau_max":  # [MPa]
-        tread0, tread_slope, flange_scale = 180.0, 22.0, 110.0
-        motor_curve, motor_tangent = 1.05, 1.05
-    else:  # t_gamma [N]
-        tread0, tread_slope, flange_scale = 25.0, 14.0, 90.0
-        motor_curve, motor_tangent = 1.8, 1.3
-    tread = tread0 + tread_slope * k * (1.25 if rail == "low" else 1.0 if rail == "high" else 0.0)
-    if not leading:
-        tread = tread0 + 0.8 * (tread - tread0)
-    if rail == "high":
-        k0 = 1000.0 / 1500.0 if leading else 1000.0 / 400.0
-        scale = flange_scale if leading else 0.25 * flange_scale
-        flange = scale * np.clip(k - k0, 0.0, None) ** 1.3
-    else:
-        flange = np.zeros_like(k)
-    if bogie == "motor":
-        factor = np.where(k > 0, motor_curve, motor_tangent)
-        tread = tread * factor
-        flange = flange * factor
-    return {"tread": np.asarray(tread, dtype=float), "flange": np.asarray(flange, dtype=float)}
-
-
-# --------------------------------------------------------------------------------------------
-# Wear-curve shapes
-# --------------------------------------------------------------------------------------------
-
-def _hann(u: Array) -> Array:
-    """Raised-cosine bump, 1 at u = 0, 0 for |u| >= 1."""
-    return np.where(np.abs(u) < 1.0, 0.5 * (1.0 + np.cos(np.pi * np.clip(u, -1.0, 1.0))), 0.0)
-
-
-def tread_wear_curve(y_mm: Array, area_mm2: float, centre_shift_mm: float = 0.0,
-                     split_y_mm: float = -30.0) -> Array:
-    """Hollow tread wear w(y) [mm] with exactly ``area_mm2`` over y >= split.
-
-    A main bump at y = 4 + shift (half-width 20..28 mm, widening with wear) and a secondary
-    bump at y = -12 + shift (half-width 9 mm, 35 % weight): seed 001 Fig. 6/9 (two maxima).
-    Support is clipped to y in (split, +45) so that no tread wear leaks into the flange region.
-    """
-    y = np.asarray(y_mm, dtype=float)
-    if area_mm2 <= 0.0:
-        return np.zeros_like(y)
-    half_width = 20.0 + 8.0 * np.tanh(area_mm2 / 80.0)
-    shape = _hann((y - 4.0 - centre_shift_mm) / half_width)
-    shape = shape + 0.35 * _hann((y + 12.0 - centre_shift_mm) / 9.0)
-    shape = np.where((y > split_y_mm + 1.0) & (y < 45.0), shape, 0.0)
-    fine = np.where((_FINE_Y_MM > split_y_mm + 1.0) & (_FINE_Y_MM < 45.0),
-                    _hann((_FINE_Y_MM - 4.0 - centre_shift_mm) / half_width)
-                    + 0.35 * _hann((_FINE_Y_MM + 12.0 - centre_shift_mm) / 9.0), 0.0)
-    norm = float(np.trapezoid(fine, _FINE_Y_MM))
-    return area_mm2 * shape / norm
-
-
-def _flange_thinning(y: Array, amplitude_mm: Array | float, centre_mm: float) -> Array:
-    # Half-width grows with amplitude so that 1 + d'(y) > 0 (the face stays a function of y).
-    amplitude = np.asarray(amplitude_mm, dtype=float)
-    half_width = 10.0 + 0.6 * amplitude
-    return amplitude * _hann((y - centre_mm) / half_width)
-
-
-def _flange_curve_from_amplitude(y: Array, amplitude_mm: Array | float, centre_mm: float,
-                                 split_y_mm: float) -> Array:
-    d = _flange_thinning(y, amplitude_mm, centre_mm)
-    w = s1002_height_mm(y) - s1002_height_mm(np.clip(y + d, S1002_Y_MIN_MM, S1002_Y_MAX_MM))
-    return np.where((y < split_y_mm) & (y > -55.0), np.clip(w, 0.0, None), 0.0)
-
-
-_FLANGE_AMPLITUDES_MM = np.linspace(0.0, 9.0, 181)
-_FLANGE_AREA_CACHE: dict[tuple[float, float], Array] = {}
-
-
-def _flange_area_table(centre_mm: float, split_y_mm: float) -> Array:
-    key = (round(centre_mm, 3), split_y_mm)
-    if key not in _FLANGE_AREA_CACHE:
-        mask = (_FINE_Y_MM > -56.0) & (_FINE_Y_MM < split_y_mm + 0.5)
-        y = _FINE_Y_MM[mask]
-        curves = _flange_curve_from_amplitude(y[None, :], _FLANGE_AMPLITUDES_MM[:, None],
-                                              centre_mm, split_y_mm)
-        _FLANGE_AREA_CACHE[key] = np.asarray(np.trapezoid(curves, y, axis=1), dtype=float)
-    return _FLANGE_AREA_CACHE[key]
-
-
-def flange_thinning_for_area(area_mm2: float, centre_mm: float = -41.0,
-                             split_y_mm: float = -30.0) -> float:
-    """Peak horizontal flange-face thinning d_max [mm] that gives a flange wear area [mm^2].
-
-    About equal to the loss of flange thickness Sd for the default centre.
-    """
-    areas = _flange_area_table(centre_mm, split_y_mm)
-    if area_mm2 > areas[-1]:
-        raise ValueError(f"flange wear area {area_mm2:.1f} mm^2 exceeds the shape family's "
-                         f"maximum {areas[-1]:.1f} mm^2 (about 9 mm of flange thinning)")
-    return float(np.interp(area_mm2, areas, _FLANGE_AMPLITUDES_MM))
-
-
-def flange_wear_curve(y_mm: Array, area_mm2: float, centre_mm: float = -41.0,
-                      split_y_mm: float = -30.0) -> Array:
-    """Flange-face wear w(y) [mm] with ``area_mm2`` over y < split.
-
-    The face is thinned horizontally by d(y) (raised cosine, peak near y = -41 mm), so
-    w = z_ref(y) - z_ref(y + d(y)) with z_ref the S1002 profile.
-    """
-    y = np.asarray(y_mm, dtype=float)
-    if area_mm2 <= 0.0:
-        return np.zeros_like(y)
-    amplitude = flange_thinning_for_area(area_mm2, centre_mm, split_y_mm)
-    return _flange_curve_from_amplitude(y, amplitude, centre_mm, split_y_mm)
-
-
-def flange_thinning_at_sd_mm(flange_area_mm2: float, centre_mm: float = -41.0,
-               split_y_mm: float = -30.0) -> float:
-    """Horizontal flange-face thinning [mm] at y = -37.5 mm for a flange wear area [mm^2].
-
-    y = -37.5 mm is where S1002's Sd is read (10 mm above the tape circle). The Sd of the worn
-    profile differs from 32.5 mm minus this thinning because tread wear lowers the tape-circle
-    height and so raises the Sd measuring height (EN 15313 definition).
-    """
-    if flange_area_mm2 <= 0.0:
-        return 0.0
-    amplitude = flange_thinning_for_area(flange_area_mm2, centre_mm, split_y_mm)
-    return float(_flange_thinning(np.asarray([-37.5]), amplitude, centre_mm)[0])
-
-
-def worn_profile_mm(y_mm: Array, tread_area_mm2: float, flange_area_mm2: float,
-                    tread_shift_mm: float = 0.0, flange_centre_mm: float = -41.0,
-                    split_y_mm: float = -30.0) -> Array:
-    """Worn profile z(y) = S1002(y) - w_tread(y) - w_flange(y) [mm]."""
-    y = np.asarray(y_mm, dtype=float)
-    return (s1002_height_mm(y) - tread_wear_curve(y, tread_area_mm2, tread_shift_mm, split_y_mm)
-            - flange_wear_curve(y, flange_area_mm2, flange_centre_mm, split_y_mm))
-
-
-def wear_areas_mm2(y_mm: Array, z_mm: Array, split_y_mm: float = -30.0) -> tuple[float, float]:
-    """(tread, flange) wear areas [mm^2] of an *aligned* profile against S1002 by trapezoid rule.
-
-    A plain integral for checks on generated data; the statistical core's processing does
-    cleaning and alignment for real measurements.
-    """
-    y = np.asarray(y_mm, dtype=float)
-    order = np.argsort(y)
-    y, w = y[order], (s1002_height_mm(y) - np.asarray(z_mm, dtype=float))[order]
-    tread = y >= split_y_mm
-    return float(np.trapezoid(w[tread], y[tread])), float(np.trapezoid(w[~tread], y[~tread]))
-
-
-# --------------------------------------------------------------------------------------------
-# Fleet configuration and effects
-# --------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
 class UnitConfig:
@@ -529,9 +234,9 @@ def lateral_scale_error(instrument_id: str, scale: float) -> ProfileEffect:
 
 def arc_length_samples(n_points: int) -> Array:
     """y positions [mm] evenly spaced in arc length along S1002 from y = -70 to +60."""
-    z = s1002_height_mm(_FINE_Y_MM)
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(_FINE_Y_MM), np.diff(z)))])
-    return np.interp(np.linspace(0.0, s[-1], n_points), s, _FINE_Y_MM)
+    z = s1002_height_mm(FINE_Y_MM)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(FINE_Y_MM), np.diff(z)))])
+    return np.interp(np.linspace(0.0, s[-1], n_points), s, FINE_Y_MM)
 
 
 def fleet_wheels(config: FleetConfig) -> Iterator[WheelSpec]:

@@ -40,9 +40,9 @@ from numpy.typing import NDArray
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
-from wearcast.physics.vocabulary import Direction
+from wearcast.physics.vocabulary import CurveClass, Direction
 from wearcast.physics.wear_laws import WearLaw
-from wearcast.physics.wear_loop import LoopClass, WearSimulation, WearSteps, simulate_wear
+from wearcast.physics.wear_loop import WearSimulation, WearSteps, simulate_wear
 from wearcast.statistics.generators.fleet_twin import (
     FleetConfig,
     FleetTwin,
@@ -90,9 +90,9 @@ class LoopFleetTwin:
     simulations: Mapping[tuple[str, str, int, str], WearSimulation]
 
 
-def _loop_classes(route: TwinRoute) -> list[LoopClass]:
-    return [LoopClass(c.radius_m, c.cant_mm, c.speed_kmh, cast(Direction, c.direction or "left"),
-                      c.share)
+def _loop_classes(route: TwinRoute) -> list[CurveClass]:
+    return [CurveClass(c.radius_m, c.cant_mm, c.speed_kmh, cast(Direction, c.direction or "left"),
+                       c.share)
             for c in route.classes]
 
 

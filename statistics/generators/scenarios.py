@@ -30,7 +30,7 @@ from wearcast.physics.vehicle_wear_simulation import (
     VehicleWearSimulation,
     simulate_vehicle_wear,
 )
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy_progression import ExpectedProgression, SimulatedWheel
 from wearcast.statistics.generators import depot as dp
@@ -38,6 +38,7 @@ from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import fleet_twin_loop as fl
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 from wearcast.statistics.routes import Route, RouteClass
 
 
@@ -92,7 +93,7 @@ def twin_scenario(wear_effects: Sequence[ft.WearEffect] = (),
     """The four-unit twin of ``twin_effects.scenario_config`` (``config`` passed on), its
     profiles processed, calibrated on unit A's motor bogies; ``max_wheels`` keeps the first
     wheels by id."""
-    table = ft.synthetic_wear_table() if table is None else table
+    table = twin_wear_table.synthetic_wear_table() if table is None else table
     cfg = te.scenario_config(seed=seed, wear_effects=tuple(wear_effects),
                              profile_effects=tuple(profile_effects), **config)
     twin = ft.generate_fleet(cfg, table)
@@ -125,7 +126,7 @@ def depot_scenario(effects: dp.DepotEffects, seed: int = 0) -> Scenario:
                       cal, fleet)
 
 
-def cached_vehicle_simulator(route: Sequence[LoopClass], vehicle: str = "metro_b", *,
+def cached_vehicle_simulator(route: Sequence[CurveClass], vehicle: str = "metro_b", *,
                              law: str = "usfd", mileage_km: float = 3000.0,
                              depth_per_step_mm: float = 1.0,
                              on_run: Callable[[Mapping[str, Any], float], None] | None = None,
@@ -191,11 +192,11 @@ LOOP_TRUTH = fl.LoopTruth(vehicles={"motor": "metro_b", "trailer": "metro_b"},
                           law="archard_kth", n_steps=6, mileage_scale=0.15)
 LOOP_MILEAGES_KM = (15_000.0, 40_000.0, 70_000.0, 100_000.0, 135_000.0, 170_000.0)
 LOOP_MEASURE = "tau_max"   # the loop table carries the loop's rates under both names
-def loop_route(name: str, lubricated: bool = False) -> ft.TwinRoute:
+def loop_route(name: str, lubricated: bool = False) -> twin_routes.TwinRoute:
     classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share in LOOP_CLASSES:
         classes += _loop_classes(radius_m, cant_mm, speed_kmh, share)
-    return ft.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
+    return twin_routes.TwinRoute(name, tuple(classes), {"flange_lubrication": lubricated})
 
 
 def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),
@@ -273,7 +274,7 @@ def loop_expected_progression(runs: Mapping[tuple[str, int], Sequence[Any]], top
                                           source="the wear loop on the same track")
 
 
-def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
+def seed003_classes(table: pd.DataFrame) -> list[CurveClass]:
     """Seed 003 Table 3's statistical track (columns ``R_c_m`` [m, NaN = tangent], ``H_mm``,
     ``V_kmh``, ``p_k_pct``) as loop classes: each curve class in both directions with half its
     share."""
@@ -281,9 +282,9 @@ def seed003_classes(table: pd.DataFrame) -> list[LoopClass]:
     columns = [table[c].to_numpy(float) for c in ("R_c_m", "H_mm", "V_kmh", "p_k_pct")]
     for radius, cant, speed, share_pct in zip(*columns, strict=True):
         if not np.isfinite(radius):
-            out.append(LoopClass(None, 0.0, float(speed), share=float(share_pct) / 100.0))
+            out.append(CurveClass(None, 0.0, float(speed), share=float(share_pct) / 100.0))
             continue
         for direction in ("left", "right"):
-            out.append(LoopClass(float(radius), float(cant), float(speed), direction,
-                                 float(share_pct) / 200.0))
+            out.append(CurveClass(float(radius), float(cant), float(speed), direction,
+                                  float(share_pct) / 200.0))
     return out

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes
 from wearcast.statistics.processing import process_profile
 from wearcast.statistics.route_measure import curve_direction_shares, weighted_wear_measure
 from wearcast.statistics.routes import Route
@@ -103,7 +104,7 @@ def running_direction(table: pd.DataFrame, leading_share: float, *, mode: str = 
     return effect
 
 
-def asymmetric_route(route: ft.TwinRoute, left_share: float) -> ft.TwinRoute:
+def asymmetric_route(route: twin_routes.TwinRoute, left_share: float) -> twin_routes.TwinRoute:
     """The route with a share ``left_share`` of its curved length bending left
     (:func:`wearcast.statistics.route_measure.curve_direction_shares`)."""
     shares = curve_direction_shares(route, left_share)
@@ -129,14 +130,14 @@ def curve_asymmetry(table: pd.DataFrame, left_share: float, *,
 
 def wear_measure(table: pd.DataFrame, true_measure: str = "t_gamma", *,
                  model_measure: str = "tau_max",
-                 reference: ft.TwinRoute | None = None) -> ft.WearEffect:
+                 reference: twin_routes.TwinRoute | None = None) -> ft.WearEffect:
     """Wear follows ``true_measure`` instead of ``model_measure`` (P ratio per wheel).
 
     Normalised per region by the ratio for a trailer axle-1 left wheel on ``reference``
     (default the Aosta route, mixed mode) so the fleet's wear magnitude stays similar.
     """
     index = compile_wear_table(table)
-    ref = reference or ft.aosta_route()
+    ref = reference or twin_routes.aosta_route()
     def reference_p(region: str, measure: str) -> float:
         return weighted_wear_measure(ref, index, bogie_type="trailer", axle=1, side="left",
                                      running_mode="mixed", region=region, measure=measure)
@@ -170,7 +171,7 @@ def flange_tread_offset(instrument_id: str, offset_mm: float, split_y_mm: float 
     return effect
 
 
-def to_route(route: ft.TwinRoute) -> Route:
+def to_route(route: twin_routes.TwinRoute) -> Route:
     """The statistics ``Route`` of a twin route (attributes are returned separately)."""
     return Route(route.name, route.classes)
 
@@ -208,8 +209,8 @@ def scenario_config(*, seed: int = 0, wear_effects: tuple[ft.WearEffect, ...] = 
     (mode, lubrication and instrument are orthogonal across units);
     different start dates and daily mileages so dates and mileage are not collinear.
     """
-    aosta = ft.aosta_route()
-    lubricated = replace(ft.aosta_route("aosta_lubricated"),
+    aosta = twin_routes.aosta_route()
+    lubricated = replace(twin_routes.aosta_route("aosta_lubricated"),
                          attributes={**aosta.attributes, "flange_lubrication": True})
     units = (
         ft.UnitConfig("A", aosta, vehicles=vehicles_per_unit, running_mode="mixed",
@@ -218,7 +219,8 @@ def scenario_config(*, seed: int = 0, wear_effects: tuple[ft.WearEffect, ...] = 
         ft.UnitConfig("B", lubricated, vehicles=vehicles_per_unit, running_mode="mixed",
                       start_date="2021-07-15", km_per_day=430.0, load_t=16.0,
                       instrument_id="MP-2"),
-        ft.UnitConfig("C", ft.metro_route(), vehicles=vehicles_per_unit, running_mode="lead",
+        ft.UnitConfig("C", twin_routes.metro_route(), vehicles=vehicles_per_unit,
+                      running_mode="lead",
                       start_date="2021-10-01", km_per_day=380.0, load_t=14.5,
                       instrument_id="MP-2"),
         ft.UnitConfig("D", lubricated, vehicles=vehicles_per_unit, running_mode="lead",

@@ -239,12 +239,12 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
     # estimate of the approach on elongated ellipses).
     from wearcast.physics.class_contacts import class_contacts
     from wearcast.physics.profiles.s1002 import s1002_height_mm
-    from wearcast.physics.wear_loop import LoopClass
+    from wearcast.physics.vocabulary import CurveClass
 
     y = np.linspace(-70.0, 60.0, 651)
     z = s1002_height_mm(y)
     veh = vehicle_preset("minuetto")
-    classes = [LoopClass(162.0, 131.0, 60.0, "left", 0.5), LoopClass(None, share=0.5)]
+    classes = [CurveClass(162.0, 131.0, 60.0, "left", 0.5), CurveClass(None, share=0.5)]
     hertz, _ = class_contacts(veh, classes, y, z, axle=1, side="right")
     kp, _ = class_contacts(veh, classes, y, z, axle=1, side="right",
                            patch_width="kik_piotrowski")

@@ -6,7 +6,7 @@ import pytest
 from wearcast.physics.contact.fastsim import contact_combined_flexibilities, fastsim
 from wearcast.physics.contact.kalker import fastsim_flexibilities, linear_creep_forces
 
-# CONTACT examples/fastsim.inp (Vollebregt), via shared/reference/README.md and fastsim.ref_out:
+# CONTACT examples/fastsim.inp and its fastsim.ref_out (Vollebregt CONTACT, docs/references.md):
 # a=8, b=4 mm, Fn=82 kN, G=82 GPa, nu=0.28, mu=0.3, xi=0, eta=-6.25e-4, phi=6.25e-4 1/mm.
 CASE = dict(xi=0.0, eta=-6.25e-4, phi_per_mm=6.25e-4, a_mm=8.0, b_mm=4.0,
             normal_force_n=82_000.0, mu=0.3)

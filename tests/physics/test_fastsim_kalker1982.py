@@ -13,8 +13,8 @@ from wearcast.physics.contact.fastsim_kalker1982 import (
 
 # Kalker, VSD 11 (1982), test cases as held in the public C++ port's tests
 # (criogenox/C_Normal_Tangential_Railway_Contact, tang_fastsim/tests/test_paper.cpp), all with
-# mx = my = 5: (ux, uy, fix, fiy), tol -> (Tx, Ty). shared/reference/README.md lists cases
-# 0, 2 and 4; 1 and 3 are the same table's tol variants. Tx is printed with the opposite sign
+# mx = my = 5: (ux, uy, fix, fiy), tol -> (Tx, Ty). Cases 1 and 3 are
+# the tol variants of cases 0 and 2. Tx is printed with the opposite sign
 # to ours (the port flips it too); Ty has ours.
 PAPER = [
     ((0.0, -2.0, 2.0, 4.0), 3.0, (0.0, 0.1843)),

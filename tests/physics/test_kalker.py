@@ -9,7 +9,8 @@ from wearcast.physics.contact.kalker import (
     linear_creep_forces,
 )
 
-# Rows typed from shared/reference/README.md ("Kalker's linear-theory coefficients").
+# Rows typed from Kalker's tables of the linear-theory coefficients (Kalker 1967,
+# docs/references.md).
 NODES = [
     # (a, b, nu, C11, C22, C23, C33)
     (0.1, 1.0, 0.0, 2.51, 2.51, 0.334, 6.42),

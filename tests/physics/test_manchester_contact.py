@@ -44,10 +44,10 @@ def typed(wheelset):
 
 
 def test_centred_tread_contact(typed):
-    # reference/README.md + mbench_a22_right_ref.csv, y = 0: pmax = 338.3 MPa, Fn = 9997 N,
-    # Fs = -253.6 N (spin), FZ = 10000 N.  Measured: pmax 338.2, Fn 9997.1, Fs -243.3 (the
-    # patch's equivalent ellipse in FASTSIM vs CONTACT's conformal patch), FZ 10000.005 (the
-    # normal / tangential coupling settles to 1e-4 of the load).
+    # CONTACT's Manchester case result mbench_a22_right_ref.csv, y = 0: pmax = 338.3 MPa,
+    # Fn = 9997 N, Fs = -253.6 N (spin), FZ = 10000 N.  Measured: pmax 338.2, Fn 9997.1, Fs
+    # -243.3 (the patch's equivalent ellipse in FASTSIM vs CONTACT's conformal patch), FZ
+    # 10000.005 (the normal / tangential coupling settles to 1e-4 of the load).
     right, _ = typed
     assert right.loc[0.0, "pmax_Nmm2"] == pytest.approx(338.3, rel=0.01)
     assert right.loc[0.0, "Fn_N"] == pytest.approx(9997.0, abs=5.0)

@@ -29,7 +29,7 @@ def wheelset():
 
 
 def test_typed_reference_numbers(wheelset):
-    # reference/README.md and mbench_a22_right_ref.csv, CONTACT's right wheel (= our left):
+    # CONTACT's Manchester case result mbench_a22_right_ref.csv, its right wheel (= our left):
     # y = 0: contact 1.873 mm from the tape circle, delta = -0.029 rad; y = 6.5 mm: flange,
     # delta = -1.1591 rad, y_w = -40.262 mm, roll -0.004376 rad (input of the case).
     centred = contact_points(wheelset, 0.0)

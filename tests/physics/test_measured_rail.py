@@ -28,7 +28,7 @@ from wearcast.physics.rail_head_wear import (
 from wearcast.physics.vehicles import vehicle_preset
 
 #: 60E1 gauge corner point where the surface is at 45 deg: on the R13 arc centred at
-#: (-23.0160, -14.9491) (reference/README.md 60E1 table), centre + 13 (-1, 1)/sqrt(2).
+#: (-23.0160, -14.9491) (the 60E1 arc chain of EN 13674-1), centre + 13 (-1, 1)/sqrt(2).
 P45_60E1 = (-23.0160 - 13 / math.sqrt(2), -14.9491 + 13 / math.sqrt(2))
 
 

@@ -14,20 +14,14 @@ from wearcast.physics.rail_feedback import simulate_rail_steps
 from wearcast.physics.rail_head_wear import WornRail, wear_rail
 from wearcast.physics.rail_wear_per_vehicle import rail_depth_per_vehicle_all_wheels
 from wearcast.physics.vehicles import vehicle_preset
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_laws import ArchardKTH, WearLaw
-from wearcast.physics.wear_loop import (
-    RAIL_GRID_MM,
-    WHEEL_GRID_MM,
-    LoopClass,
-    WearSteps,
-    _grid,
-    simulate_wear,
-)
+from wearcast.physics.wear_loop import RAIL_GRID_MM, WHEEL_GRID_MM, WearSteps, _grid, simulate_wear
 
 INCLINATION = 1.0 / 40.0
 GRID = _grid(RAIL_GRID_MM)
-CURVES = [LoopClass(300.0, 100.0, None, "left", 0.15),
-          LoopClass(300.0, 100.0, None, "right", 0.15), LoopClass(None, share=0.7)]
+CURVES = [CurveClass(300.0, 100.0, None, "left", 0.15),
+          CurveClass(300.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
 
 
 def _arc_integral(rail, depth_on_grid: np.ndarray) -> float:

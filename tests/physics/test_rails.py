@@ -11,8 +11,8 @@ from wearcast.physics.profiles.rails import (
     rail_profile,
 )
 
-# Test vectors of shared/reference/README.md ("60E2 rail head ... Test vectors", z up, top = 0,
-# un-inclined), printed to 5 decimals; the arcs are evaluated exactly, so 1e-4 mm as the issue
+# Test vectors of the 60E2 rail head (EN 13674-1 arc chain; z up, top = 0, un-inclined),
+# printed to 5 decimals; the arcs are evaluated exactly, so 1e-4 mm as the issue
 # asks.  The value at y = 36 lies on the 1:20 flank, where a 5e-6 mm error in the tangent point
 # would show 20-fold: it checks that the arc chain is rebuilt from the tangent points.
 RAIL_VECTORS = [

@@ -3,7 +3,7 @@ import pytest
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
 
-# Test vectors of shared/reference/README.md ("S1002 wheel profile ... Test vectors"), computed
+# Test vectors of the S1002 wheel profile (EN 13715, docs/references.md), computed
 # from the Netter definition and agreeing with CONTACT's MBench_S1002_v3.prw. They are printed
 # to 6 decimals, so we ask for 1e-4 mm as the issue does (the formula is evaluated exactly).
 S1002_VECTORS = [

@@ -10,12 +10,12 @@ from wearcast.physics.vehicle_wear_simulation import (
     simulate_vehicle_wear,
     vehicle_bogies,
 )
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics.physics_comparison import compare_with_measured
 
-ROUTE = [LoopClass(250.0, 100.0, None, "left", 0.15), LoopClass(250.0, 100.0, None, "right", 0.15),
-         LoopClass(None, share=0.7)]
-ONE_WAY = [LoopClass(250.0, 100.0, None, "left", 0.3), LoopClass(None, share=0.7)]
+ROUTE = [CurveClass(250.0, 100.0, None, "left", 0.15),
+         CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
+ONE_WAY = [CurveClass(250.0, 100.0, None, "left", 0.3), CurveClass(None, share=0.7)]
 KM = 1500.0
 STEP = 1.0
 

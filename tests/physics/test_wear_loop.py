@@ -7,19 +7,19 @@ import pytest
 
 from wearcast.physics.patch_wear import contact_volume_basis, law_coefficients
 from wearcast.physics.profiles.parameters import nominal_frame_flange_parameters
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_distribution import Smoothing
 from wearcast.physics.wear_laws import ArchardKTH, WearLaw
 from wearcast.physics.wear_loop import (
     MAX_WHEEL_WEAR_MM,
-    LoopClass,
     WearLoopDivergedError,
     WearSteps,
     class_wear_rates,
     simulate_wear,
 )
 
-CLASSES = [LoopClass(300.0, 100.0, None, "left", 0.3), LoopClass(800.0, 80.0, None, "right", 0.3),
-           LoopClass(None, share=0.4)]
+CLASSES = [CurveClass(300.0, 100.0, None, "left", 0.3), CurveClass(800.0, 80.0, None, "right", 0.3),
+           CurveClass(None, share=0.4)]
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +76,7 @@ def test_step_basis_reproduces_the_wear_linearly(adaptive):
 
 
 def test_fixed_steps_of_seed_000():
-    sim = simulate_wear("metro_b", [LoopClass(None)], steps=WearSteps(mode="fixed", n_steps=2,
+    sim = simulate_wear("metro_b", [CurveClass(None)], steps=WearSteps(mode="fixed", n_steps=2,
                                                                        step_km=5000.0))
     assert sim.mileage_km == pytest.approx([0.0, 5000.0, 10000.0])
     # The step-depth limit cuts a fixed step into sub-steps (at most max_substeps).
@@ -100,9 +100,9 @@ def test_a_runaway_fixed_step_raises_instead_of_returning_a_profile():
 
 def test_mirror_symmetry_left_curve_right_wheel_equals_right_curve_left_wheel():
     steps = WearSteps(n_steps=1)
-    a = simulate_wear("metro_b", [LoopClass(400.0, 100.0, None, "left")], steps=steps,
+    a = simulate_wear("metro_b", [CurveClass(400.0, 100.0, None, "left")], steps=steps,
                       side="right")
-    b = simulate_wear("metro_b", [LoopClass(400.0, 100.0, None, "right")], steps=steps,
+    b = simulate_wear("metro_b", [CurveClass(400.0, 100.0, None, "right")], steps=steps,
                       side="left")
     assert a.profiles_mm == pytest.approx(b.profiles_mm, abs=1e-12)
     assert a.mileage_km == pytest.approx(b.mileage_km, rel=1e-12)
@@ -110,11 +110,11 @@ def test_mirror_symmetry_left_curve_right_wheel_equals_right_curve_left_wheel():
 
 def test_shares_are_normalised_and_split_classes_add_up():
     steps = WearSteps(mode="fixed", n_steps=1, step_km=3000.0)
-    one = simulate_wear("metro_b", [LoopClass(500.0, 100.0, share=1.0), LoopClass(None)],
+    one = simulate_wear("metro_b", [CurveClass(500.0, 100.0, share=1.0), CurveClass(None)],
                         steps=steps)
-    split = simulate_wear("metro_b", [LoopClass(500.0, 100.0, share=0.5),
-                                      LoopClass(500.0, 100.0, share=0.5),
-                                      LoopClass(None, share=1.0)], steps=steps)
+    split = simulate_wear("metro_b", [CurveClass(500.0, 100.0, share=0.5),
+                                      CurveClass(500.0, 100.0, share=0.5),
+                                      CurveClass(None, share=1.0)], steps=steps)
     assert one.profiles_mm[-1] == pytest.approx(split.profiles_mm[-1], abs=1e-12)
 
 
@@ -162,7 +162,7 @@ def test_seed_004_krause_poll_monotonic_archard_steps_at_zone_changes():
     # with the radius, so the severe zone is met in the sharpest curves, not the fastest ones:
     # the seed's non-monotonicity is not reproduced (see the benchmark), only its mechanism.
     radii = np.arange(200.0, 2001.0, 100.0)
-    classes = [LoopClass(float(r), 150.0, None, "right") for r in radii]
+    classes = [CurveClass(float(r), 150.0, None, "right") for r in radii]
     contacts, archard = class_wear_rates("metro_b", classes, "archard_kth")
     kp = contact_volume_basis(contacts, WearLaw("krause_poll")) @ law_coefficients(
         WearLaw("krause_poll"))

@@ -21,8 +21,8 @@ from wearcast.physics.class_contacts import class_contacts
 from wearcast.physics.patch_wear import law_coefficients, wheel_depth_basis
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_laws import WearLaw
-from wearcast.physics.wear_loop import LoopClass
 
 Y_MM = np.linspace(-70.0, 60.0, 651)
 CURVES = [(1000.0, 150.0, 120.0), (800.0, 150.0, 100.0), (600.0, 160.0, 90.0),
@@ -34,8 +34,8 @@ SEED_GLOBAL_MM3, SEED_LOCAL_MM3 = 56.3, 47.0  # seed 002 Table 2 (Matlab global 
 @pytest.fixture(scope="module")
 def depths() -> dict[str, np.ndarray]:
     vehicle = vehicle_preset("aln663")
-    classes = [LoopClass(r, h, v, d, 1.0) for r, h, v in CURVES for d in ("left", "right")]
-    classes.append(LoopClass(None, 0.0, 120.0, share=8.0))
+    classes = [CurveClass(r, h, v, d, 1.0) for r, h, v in CURVES for d in ("left", "right")]
+    classes.append(CurveClass(None, 0.0, 120.0, share=8.0))
     shares = np.array([c.share for c in classes]) / sum(c.share for c in classes)
     contacts, _ = class_contacts(vehicle, classes, Y_MM, s1002_height_mm(Y_MM), axle=1,
                                  side="right")

@@ -8,13 +8,14 @@ A test that takes ``backend_url`` runs once on each.
 from __future__ import annotations
 
 import os
-import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
+
+from wearcast.service.db import scratch_database
 
 DEFAULT_POSTGRES_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 
@@ -37,15 +38,8 @@ def fresh_postgres_database() -> Iterator[str]:
     except Exception as exc:  # no server, no driver, no permission
         admin.dispose()
         pytest.skip(f"PostgreSQL not reachable at {url.render_as_string()}: {exc}")
-    name = f"wearcast_test_{uuid.uuid4().hex[:12]}"
-    with admin.connect() as connection:
-        connection.execute(text(f'CREATE DATABASE "{name}"'))
-    try:
-        yield url.set(database=name).render_as_string(hide_password=False)
-    finally:
-        with admin.connect() as connection:
-            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        admin.dispose()
+    with scratch_database(admin, "wearcast_test") as database_url:
+        yield database_url
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])

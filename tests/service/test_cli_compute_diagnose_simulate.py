@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 from wearcast.service.cli import app
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_wear_table
 
 
 @pytest.fixture
@@ -56,7 +57,7 @@ def test_cli_simulate(workdir: Path) -> None:
 
 
 def test_cli_diagnose_with_report_and_save(workdir: Path) -> None:
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     cfg = te.scenario_config(seed=0, wear_effects=(te.traction(1.3),))
     twin = ft.generate_fleet(cfg, table)
     twin.profiles.to_csv(workdir / "fleet.csv", index=False)

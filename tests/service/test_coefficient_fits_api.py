@@ -9,10 +9,10 @@ import pytest
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
-from wearcast.statistics.coefficient_fit import make_twin
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 CLASSES = [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
            {"radius_m": 1500, "speed_kmh": 70, "direction": "left", "share": 0.4}]
@@ -23,8 +23,8 @@ TRUE_K1 = 3e-4
 def twin():
     # Tangent + 1500 m: only KTH zone 1 occurs; 200 km in 100 km steps (twin of seed 000's
     # fit-at-one-mileage, predict-at-another; short so that the test is fast).
-    classes = [LoopClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
-                         c["share"]) for c in CLASSES]
+    classes = [CurveClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
+                          c["share"]) for c in CLASSES]
     return make_twin("metro_b", classes, (TRUE_K1, 35e-4, 5e-4, 350e-4), 200.0, 400.0, 100.0)
 
 
@@ -128,8 +128,8 @@ TAU_0_MPA = 100.0
 
 @pytest.fixture(scope="module")
 def tau_twin():
-    classes = [LoopClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
-                         c["share"]) for c in CLASSES]
+    classes = [CurveClass(c["radius_m"], 0.0, c["speed_kmh"], c.get("direction", "left"),
+                          c["share"]) for c in CLASSES]
     return make_twin("metro_b", classes, (TRUE_C_TAU,), 200.0, 400.0, 100.0, law="tau_max",
                      tau_threshold_mpa=TAU_0_MPA)
 

@@ -22,11 +22,12 @@ from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_wear_table
 
 
 @lru_cache(maxsize=16)
 def _twin(effect: str, seed: int = 0):
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     # moderate strengths of every cause of the catalogue (the generator's truths)
     effects = {"none": ((), ()), "traction": ((te.traction(1.3),), ()),
                "running_direction": ((te.running_direction(table, 0.8),), ()),

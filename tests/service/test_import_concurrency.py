@@ -18,12 +18,13 @@ from wearcast.service import models_db as db
 from wearcast.service.db import Database
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes
 
 
 @pytest.fixture(scope="module")
 def profiles() -> pd.DataFrame:
     fleet = ft.generate_fleet(ft.FleetConfig(
-        units=(ft.UnitConfig("C", ft.metro_route(), vehicles=2, running_mode="lead"),),
+        units=(ft.UnitConfig("C", twin_routes.metro_route(), vehicles=2, running_mode="lead"),),
         mileages_km=tuple(range(10_000, 90_000, 10_000)), mileage_jitter_km=0.0,
         rate_scatter=0.0, area_scatter=0.0, points_per_profile=80, seed=4))
     return fleet.profiles

@@ -20,6 +20,7 @@ from wearcast.service import idempotency
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes
 
 HEADER = b"wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,y_mm,z_mm\n"
 
@@ -36,7 +37,7 @@ def _import(client: TestClient, name: str, data: bytes, **kw: object):  # type: 
 @pytest.fixture(scope="module")
 def fleet_csv() -> bytes:
     fleet = ft.generate_fleet(ft.FleetConfig(
-        units=(ft.UnitConfig("L", ft.metro_route(), running_mode="lead"),),
+        units=(ft.UnitConfig("L", twin_routes.metro_route(), running_mode="lead"),),
         mileages_km=(40_000, 90_000), mileage_jitter_km=0.0, rate_scatter=0.0,
         area_scatter=0.0, points_per_profile=120, seed=11))
     return fleet.profiles.to_csv(index=False).encode()

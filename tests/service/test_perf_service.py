@@ -20,16 +20,23 @@ with warnings.catch_warnings():
     warnings.simplefilter("ignore")
     from fastapi.testclient import TestClient
 
-from wearcast.service import model_store, route_store, wear_table_store
+from wearcast.service import (
+    model_loading,
+    prediction_store,
+    reprofiling_store,
+    route_store,
+    wear_table_store,
+)
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.cache import LruCache
 from wearcast.service.cli import app as cli_app
 from wearcast.service.cli import serve_app
 from wearcast.service.demo import load_example_fleet
-from wearcast.service.schemas import PredictIn, PredictionOut, ReprofilingIn, ReprofilingOut
+from wearcast.service.prediction_schemas import PredictIn, PredictionOut
+from wearcast.service.reprofiling_schemas import ReprofilingIn, ReprofilingOut
 from wearcast.service.settings import Settings
-from wearcast.statistics import hybrid, reprofiling
+from wearcast.statistics import hybrid, hybrid_prediction, reprofiling
 from wearcast.statistics.wear_tables import compile_wear_table
 
 POSITION = {"bogie_type": "motor", "axle": 1, "side": "right"}
@@ -104,7 +111,7 @@ def test_predict_over_http_is_the_statistics_core_on_fresh_inputs(example, route
                          json={"route_id": route_name, "mileage_km": mileage, **POSITION})
     assert answer.status_code == 200, answer.text
     model, table, route = _fresh_inputs(client, model_id, route_name)
-    expected = hybrid.predict(model, route, table, mileage_km=mileage, **POSITION)
+    expected = hybrid_prediction.predict(model, route, table, mileage_km=mileage, **POSITION)
     body = answer.json()
     assert body["route"] == route_name
     for region in ("flange", "tread"):
@@ -135,7 +142,7 @@ def test_reprofiling_over_http_is_the_statistics_core_on_fresh_inputs(example, r
 def test_every_request_computes_its_answer(example, monkeypatch):
     client, model_id = example
     calls = {"predict": 0, "reprofiling": 0}
-    real_predict, real_reprofiling = hybrid.predict, reprofiling.reprofiling_mileage
+    real_predict, real_reprofiling = hybrid_prediction.predict, reprofiling.reprofiling_mileage
 
     def counting_predict(*args, **kwargs):
         calls["predict"] += 1
@@ -145,7 +152,7 @@ def test_every_request_computes_its_answer(example, monkeypatch):
         calls["reprofiling"] += 1
         return real_reprofiling(*args, **kwargs)
 
-    monkeypatch.setattr(hybrid, "predict", counting_predict)
+    monkeypatch.setattr(hybrid_prediction, "predict", counting_predict)
     monkeypatch.setattr(reprofiling, "reprofiling_mileage", counting_reprofiling)
     body = {"route_id": "metro", "mileage_km": [80_000.0], **POSITION}
     first = client.post(f"/v1/models/{model_id}/predict", json=body).json()
@@ -174,12 +181,12 @@ def test_cached_requests_run_no_sql_and_read_nothing_again(example, monkeypatch)
 
     event.listen(engine, "before_cursor_execute", count)
     try:
-        hits = model_store._hot_models.hits
+        hits = model_loading._hot_models.hits
         answer = client.post(f"/v1/models/{model_id}/reprofiling", json=body)
         predicted = client.post(f"/v1/models/{model_id}/predict",
                                 json={**body, "mileage_km": [1e5]})
         assert answer.status_code == 200 and predicted.status_code == 200
-        assert statements == [] and model_store._hot_models.hits == hits + 2
+        assert statements == [] and model_loading._hot_models.hits == hits + 2
         # a wheel's latest measurement can change: reprofiling by wheel_id reads storage
         missing_wheel = client.post(f"/v1/models/{model_id}/reprofiling",
                                     json={"route_id": "aosta", "wheel_id": "no-such-wheel"})
@@ -196,7 +203,7 @@ def test_cached_requests_run_no_sql_and_read_nothing_again(example, monkeypatch)
 
 def test_hot_path_answers_match_the_python_api_and_their_schemas(example):
     # the HTTP answers are written by orjson from numpy arrays; they must be the documented
-    # schemas and carry the values of model_store.predict/reprofiling (pydantic-built)
+    # schemas and carry the values of prediction_store.predict/reprofiling (pydantic-built)
     client, model_id = example
     pred_in = {"route_id": "metro", "mileage_km": [0.0, 5e4, 3e6], **POSITION}
     rep_in = {"route_id": "metro", **POSITION, "limits": {"qr_min_mm": 9.0}}
@@ -205,8 +212,8 @@ def test_hot_path_answers_match_the_python_api_and_their_schemas(example):
         rep = client.post(f"/v1/models/{model_id}/reprofiling", json=rep_in)
         assert pred.status_code == 200 and rep.status_code == 200
         with client.app.state.database.session_factory() as session:
-            want_pred = model_store.predict(session, model_id, PredictIn(**pred_in))
-            want_rep = model_store.reprofiling(session, model_id, ReprofilingIn(**rep_in))
+            want_pred = prediction_store.predict(session, model_id, PredictIn(**pred_in))
+            want_rep = reprofiling_store.reprofiling(session, model_id, ReprofilingIn(**rep_in))
         got_pred = PredictionOut.model_validate_json(pred.content)
         got_rep = ReprofilingOut.model_validate_json(rep.content)
         assert got_pred.model_dump() == want_pred.model_dump()
@@ -225,7 +232,7 @@ def test_another_database_with_the_same_ids_is_never_served_from_the_cache(examp
     a = client.post(f"/v1/models/{model_id}/predict", json=body).json()
     b = other.post(f"/v1/models/{other_id}/predict", json=body).json()
     model, table, route = _fresh_inputs(other, other_id, "aosta")
-    expected = hybrid.predict(model, route, table, mileage_km=[200_000.0], **POSITION)
+    expected = hybrid_prediction.predict(model, route, table, mileage_km=[200_000.0], **POSITION)
     assert b["points"][0]["flange_area_mm2"]["p50"] == pytest.approx(
         expected.flange_area_mm2[1, 0], rel=1e-12)
     assert a["points"][0]["flange_area_mm2"]["p50"] != b["points"][0]["flange_area_mm2"]["p50"]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.service.cli import app
 from wearcast.statistics.generators.scenarios import cached_vehicle_simulator
 
@@ -24,9 +24,9 @@ ROUTE = {"name": "curvy", "classes": [
     {"radius_m": 250, "direction": "left", "cant_mm": 100, "speed_kmh": 60, "share": 0.15},
     {"radius_m": 250, "direction": "right", "cant_mm": 100, "speed_kmh": 60, "share": 0.15},
     {"radius_m": None, "speed_kmh": 100, "share": 0.7}]}
-LOOP_ROUTE = [LoopClass(250.0, 100.0, 60.0, "left", 0.15),
-              LoopClass(250.0, 100.0, 60.0, "right", 0.15),
-              LoopClass(None, 0.0, 100.0, share=0.7)]
+LOOP_ROUTE = [CurveClass(250.0, 100.0, 60.0, "left", 0.15),
+              CurveClass(250.0, 100.0, 60.0, "right", 0.15),
+              CurveClass(None, 0.0, 100.0, share=0.7)]
 RUN_KM = 2000.0
 SCALE = 1.2
 SIMULATION = json.dumps({"depth_per_step_mm": 1.0, "mileage_km": RUN_KM})

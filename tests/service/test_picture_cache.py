@@ -16,6 +16,7 @@ from wearcast.service.app import create_app
 from wearcast.service.picture_cache import PictureJob, RenderedCache, picture_key
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -27,7 +28,7 @@ WHERE = {"route_id": "metro", "bogie_type": "motor", "axle": 1, "side": "left"}
 @pytest.fixture(scope="module")
 def fleet() -> pd.DataFrame:
     config = ft.FleetConfig(
-        units=(ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead"),),
+        units=(ft.UnitConfig("B", twin_routes.metro_route(), vehicles=1, running_mode="lead"),),
         mileages_km=(30_000, 80_000, 130_000), mileage_jitter_km=0.0,
         calibration_factor={"tread": 1.5e-6, "flange": 6.0e-6}, rate_scatter=0.0,
         area_scatter=0.0, noise_mm=0.005, points_per_profile=300, seed=7)
@@ -40,9 +41,11 @@ def setup(tmp_path: Path, fleet: pd.DataFrame) -> dict:
     r = client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.to_csv(index=False).encode(), "text/csv")})
     assert r.status_code == 200, r.text
-    assert client.post("/v1/routes", json=ft.metro_route().to_json()).status_code == 201
+    route = twin_routes.metro_route().to_json()
+    assert client.post("/v1/routes", json=route).status_code == 201
     table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", ft.synthetic_wear_table().to_csv(index=False).encode(), "text/csv")}).json()
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
     model = client.post("/v1/models", json={
         "name": "metro", "measure": "tau_max", "running_mode": "lead",
         "wear_table_id": table["id"],

@@ -28,7 +28,7 @@ def test_every_real_wheel_file_converts_to_a_plausible_wheel(reference_dir, name
     y, z = to_wheel_frame(mp)
     assert y.size > 500
     tip_y, tip_z = _tip(y, z)
-    # Flange tip: new S1002 28 mm at y = -55 (reference/README.md), worn wheels up to the
+    # Flange tip: new S1002 28 mm at y = -55 (EN 13715), worn wheels up to the
     # Sh limit of 36 mm; Car7358 measures 26.97 mm (a worn tip), hence 26.5; worn flanges
     # move the tip towards the tread (iter288: -49.3), so -57..-48.
     assert 26.5 <= tip_z <= 36.0

@@ -14,6 +14,7 @@ from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -32,9 +33,11 @@ def setup(tmp_path_factory: pytest.TempPathFactory) -> dict:
     fleet = ft.generate_fleet(ft.metro_calibration_config())
     assert client.post("/v1/measurements/import", files={"file": (
         "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")}).status_code == 200
-    assert client.post("/v1/routes", json=ft.metro_route().to_json()).status_code == 201
+    route = twin_routes.metro_route().to_json()
+    assert client.post("/v1/routes", json=route).status_code == 201
     table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", ft.synthetic_wear_table().to_csv(index=False).encode(), "text/csv")}).json()
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
     model = client.post("/v1/models", json={
         "name": "metro", "measure": "tau_max", "running_mode": "lead",
         "wear_table_id": table["id"],

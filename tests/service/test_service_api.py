@@ -26,6 +26,7 @@ from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 C_S = {"tread": 1.5e-6, "flange": 6.0e-6}
 
@@ -33,7 +34,7 @@ C_S = {"tread": 1.5e-6, "flange": 6.0e-6}
 @pytest.fixture(scope="module")
 def fleet() -> ft.FleetTwin:
     config = ft.FleetConfig(
-        units=(ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead",
+        units=(ft.UnitConfig("B", twin_routes.metro_route(), vehicles=1, running_mode="lead",
                              covariates={"depot": "north", "lubricated": 0}),),
         mileages_km=(30_000, 80_000, 130_000, 180_000), mileage_jitter_km=0.0,
         calibration_factor=C_S, rate_scatter=0.0, area_scatter=0.0, noise_mm=0.005,
@@ -48,7 +49,7 @@ def fleet_csv(fleet: ft.FleetTwin) -> bytes:
 
 @pytest.fixture(scope="module")
 def table_csv() -> bytes:
-    return ft.synthetic_wear_table().to_csv(index=False).encode()
+    return twin_wear_table.synthetic_wear_table().to_csv(index=False).encode()
 
 
 def _client(data_dir: Path) -> TestClient:
@@ -67,7 +68,7 @@ def loaded(tmp_path_factory: pytest.TempPathFactory, fleet_csv: bytes, table_csv
     client = _client(tmp_path_factory.mktemp("loaded"))
     imported = client.post("/v1/measurements/import",
                            files={"file": ("fleet.csv", fleet_csv, "text/csv")}).json()
-    for route in (ft.metro_route(), ft.aosta_route()):
+    for route in (twin_routes.metro_route(), twin_routes.aosta_route()):
         assert client.post("/v1/routes", json=route.to_json()).status_code == 201
     table = client.post("/v1/wear-tables", files={"file": ("t.csv", table_csv, "text/csv")})
     model = client.post("/v1/models", json={
@@ -339,7 +340,7 @@ def test_nan_and_infinity_are_refused(client: TestClient) -> None:
 
 
 def test_route_names_are_unique_and_unknown_ids_are_404(client: TestClient) -> None:
-    body = ft.tangent_route("flat").to_json()
+    body = twin_routes.tangent_route("flat").to_json()
     assert client.post("/v1/routes", json=body).status_code == 201
     again = client.post("/v1/routes", json=body)
     assert again.status_code == 409 and _field(again) == "name"
@@ -358,10 +359,10 @@ def test_wear_table_upload_and_its_refusals(client: TestClient, table_csv: bytes
     created = client.post("/v1/wear-tables", files={"file": ("t.csv", table_csv, "text/csv")})
     assert created.status_code == 201
     table = client.get(f"/v1/wear-tables/{created.json()['id']}").json()
-    assert table["n_rows"] == len(table["rows"]) == len(ft.synthetic_wear_table())
+    assert table["n_rows"] == len(table["rows"]) == len(twin_wear_table.synthetic_wear_table())
     tangent_rows = [r for r in table["rows"] if r["rail"] == "tangent"]
     assert tangent_rows and all(r["radius_m"] is None for r in tangent_rows)
-    frame = ft.synthetic_wear_table()
+    frame = twin_wear_table.synthetic_wear_table()
     no_tangent = frame[frame.rail != "tangent"].to_csv(index=False).encode()
     bad_enum = frame.assign(region=frame.region.where(frame.index != 3, "rim"))
     for data, field in ((no_tangent, "file.rail"),
@@ -400,7 +401,7 @@ def test_model_requests_refused_naming_the_field(loaded: dict, table_csv: bytes)
         response = client.post(f"/v1/models/{model_id}/predict", json={**predict, **change})
         assert response.status_code == 422 and _field(response) == field, response.text
     # a model whose table has no trailer rows refuses trailer wheels
-    motor_only = ft.synthetic_wear_table().query("bogie_type == 'motor'")
+    motor_only = twin_wear_table.synthetic_wear_table().query("bogie_type == 'motor'")
     table = client.post("/v1/wear-tables", files={
         "file": ("m.csv", motor_only.to_csv(index=False).encode(), "text/csv")}).json()
     model = client.post("/v1/models", json={**base, "name": "motors", "wear_table_id": table["id"],

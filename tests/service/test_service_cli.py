@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from wearcast.service.cli import app
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 
 @pytest.fixture
@@ -17,12 +18,12 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path / "data"))
     monkeypatch.delenv("WEARCAST_DATABASE_URL", raising=False)
     fleet = ft.generate_fleet(ft.FleetConfig(
-        units=(ft.UnitConfig("C", ft.metro_route(), running_mode="lead"),),
+        units=(ft.UnitConfig("C", twin_routes.metro_route(), running_mode="lead"),),
         mileages_km=(40_000, 100_000, 160_000), mileage_jitter_km=0.0, rate_scatter=0.0,
         area_scatter=0.0, points_per_profile=200, seed=11))
     fleet.profiles.to_csv(tmp_path / "fleet.csv", index=False)
-    ft.synthetic_wear_table().to_csv(tmp_path / "table.csv", index=False)
-    (tmp_path / "route.json").write_text(json.dumps(ft.metro_route().to_json()))
+    twin_wear_table.synthetic_wear_table().to_csv(tmp_path / "table.csv", index=False)
+    (tmp_path / "route.json").write_text(json.dumps(twin_routes.metro_route().to_json()))
     return tmp_path
 
 

@@ -18,6 +18,7 @@ from alembic.migration import MigrationContext
 from wearcast.service.models_db import Base
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -45,7 +46,7 @@ def test_the_walk_on_postgresql(postgres_url: str, tmp_path: Path) -> None:
         client = TestClient(app)
         assert client.get("/v1/health").json() == {"status": "ok", "database": "postgresql"}
         fleet = ft.generate_fleet(ft.FleetConfig(
-            units=(ft.UnitConfig("P", ft.metro_route(), running_mode="lead",
+            units=(ft.UnitConfig("P", twin_routes.metro_route(), running_mode="lead",
                                  covariates={"depot": "west"}),),
             mileages_km=(40_000, 90_000, 140_000), mileage_jitter_km=0.0,
             rate_scatter=0.0, area_scatter=0.0, points_per_profile=200, seed=3))
@@ -63,9 +64,11 @@ def test_the_walk_on_postgresql(postgres_url: str, tmp_path: Path) -> None:
         assert refused.status_code == 422 and refused.json()["errors"][0]["field"] == "axle"
         assert client.get("/v1/measurements").json()["total"] == 24
         assert client.get("/v1/measurements", params={"depot": "west"}).json()["total"] == 24
-        assert client.post("/v1/routes", json=ft.metro_route().to_json()).status_code == 201
+        route = twin_routes.metro_route().to_json()
+        assert client.post("/v1/routes", json=route).status_code == 201
         table = client.post("/v1/wear-tables", files={"file": (
-            "t.csv", ft.synthetic_wear_table().to_csv(index=False).encode(), "text/csv")})
+            "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+            "text/csv")})
         model = client.post("/v1/models", json={
             "name": "pg", "measure": "tau_max", "running_mode": "lead",
             "wear_table_id": table.json()["id"],

@@ -12,8 +12,8 @@ from fastapi.testclient import TestClient
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.job_store import RESTART_REASON
-from wearcast.service.schemas import SimulationIn
 from wearcast.service.settings import Settings
+from wearcast.service.simulation_schemas import SimulationIn
 from wearcast.service.simulation_store import create_simulation
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "service" / "example_fleet"

@@ -7,11 +7,10 @@ from functools import lru_cache
 import numpy as np
 
 from wearcast.statistics.discrepancy import Diagnosis, diagnose
-from wearcast.statistics.generators import fleet_twin as ft
-from wearcast.statistics.generators import scenarios
+from wearcast.statistics.generators import scenarios, twin_wear_table
 from wearcast.statistics.generators import twin_effects as te
 
-TABLE = ft.synthetic_wear_table()
+TABLE = twin_wear_table.synthetic_wear_table()
 
 #: Moderate strengths of every cause (the hidden-effect tests).
 EFFECTS = {

@@ -8,11 +8,13 @@ import pytest
 
 from wearcast.statistics import causes as cz
 from wearcast.statistics import hybrid
-from wearcast.statistics.discrepancy import build_data, diagnose
+from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_wear_table
 
-TABLE = ft.synthetic_wear_table()
+TABLE = twin_wear_table.synthetic_wear_table()
 
 
 @pytest.fixture(scope="module")

@@ -3,20 +3,15 @@
 import numpy as np
 import pytest
 
-from wearcast.physics.wear_loop import LoopClass
-from wearcast.statistics.coefficient_fit import (
-    CalibrationProblem,
-    calibrate,
-    comparison_table,
-    make_twin,
-    rmse_mm,
-    run_model,
-)
+from wearcast.physics.vocabulary import CurveClass
+from wearcast.statistics.coefficient_fit import CalibrationProblem, calibrate, rmse_mm, run_model
+from wearcast.statistics.coefficient_fit_comparison import comparison_table
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 # Seed 000 Table 1 track bands (reference/published/metro_lines_track_conditions.csv) with one
 # sharp curve added so that a second zone (seizure on the flange) occurs; both directions.
-CLASSES = [LoopClass(r, 0.0, v, d, s / 2) for r, s, v in ((1500.0, 75, 70), (700.0, 22, 60),
-                                                          (250.0, 3, 30))
+CLASSES = [CurveClass(r, 0.0, v, d, s / 2) for r, s, v in ((1500.0, 75, 70), (700.0, 22, 60),
+                                                           (250.0, 3, 30))
            for d in ("left", "right")]
 TRUE_K = (3e-4, 33e-4, 7e-4, 330e-4)
 BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4), (300e-4, 400e-4))

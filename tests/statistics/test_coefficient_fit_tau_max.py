@@ -8,18 +8,18 @@ and property tests: the loop makes the "measurement" with a known c_tau and the 
 import numpy as np
 import pytest
 
-from wearcast.physics.wear_loop import LoopClass
+from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics.coefficient_fit import (
     CalibrationProblem,
     calibrate,
     calibrate_full_loop,
-    make_twin,
     run_model,
 )
+from wearcast.statistics.coefficient_fit_twin import make_twin
 
 # Tangent + 1500 m curve, 200 km in two 100 km steps with the contact re-solved every step: the
 # second step's contact sees the worn profile, so the fit needs the outer (feedback) iteration.
-CLASSES = [LoopClass(None, 0.0, 70.0, "left", 0.6), LoopClass(1500.0, 0.0, 70.0, "left", 0.4)]
+CLASSES = [CurveClass(None, 0.0, 70.0, "left", 0.6), CurveClass(1500.0, 0.0, 70.0, "left", 0.4)]
 TRUE_C_TAU = 3e-6        # mm/(m MPa): three times the placeholder start
 TAU_0_MPA = 100.0
 MILEAGE_KM, STEP_KM = 200.0, 100.0

@@ -19,7 +19,8 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from wearcast.statistics.discrepancy import apply_extension, diagnose
+from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.extension import apply_extension
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import scenarios
 

@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 from wearcast.statistics import causes as cz
-from wearcast.statistics.discrepancy import build_data, diagnose
+from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import scenarios
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from wearcast.statistics import finder_scoring as fs
-from wearcast.statistics import hybrid
-from wearcast.statistics.discrepancy import ExtendedModel, apply_extension
+from wearcast.statistics import hybrid, hybrid_prediction
 from wearcast.statistics.discrepancy_report import diagnosis_figures, report_html
+from wearcast.statistics.extension import ExtendedModel, apply_extension
 from wearcast.statistics.generators import twin_effects as te
 
 _spec = importlib.util.spec_from_file_location(
@@ -104,10 +104,10 @@ def test_traction_extension_predicts_motor_treads_faster():
                         mileage_km=[100_000.0])
     trailer = ext.predict(route, helpers.TABLE, bogie_type="trailer", axle=1, side="left",
                           mileage_km=[100_000.0])
-    base_m = hybrid.predict(model, route, helpers.TABLE, bogie_type="motor", axle=1,
-                            side="left", mileage_km=[100_000.0])
-    base_t = hybrid.predict(model, route, helpers.TABLE, bogie_type="trailer", axle=1,
-                            side="left", mileage_km=[100_000.0])
+    base_m = hybrid_prediction.predict(model, route, helpers.TABLE, bogie_type="motor", axle=1,
+                                       side="left", mileage_km=[100_000.0])
+    base_t = hybrid_prediction.predict(model, route, helpers.TABLE, bogie_type="trailer", axle=1,
+                                       side="left", mileage_km=[100_000.0])
     ratio_ext = motor.tread_area_mm2[1, 0] / trailer.tread_area_mm2[1, 0]
     ratio_base = base_m.tread_area_mm2[1, 0] / base_t.tread_area_mm2[1, 0]
     m = diagnosis.finding("traction").extension["parameters"]["tread_multiplier_motor"]
@@ -132,8 +132,8 @@ def test_wear_measure_extension_is_a_plain_hybrid_model():
     model, _, _, routes, diagnosis = helpers.cached("wear_measure")
     ext = apply_extension(model, diagnosis.finding("wear_measure"))
     assert isinstance(ext, hybrid.HybridModel) and ext.measure == "t_gamma"
-    out = hybrid.predict(ext, routes["metro"], helpers.TABLE, bogie_type="motor", axle=1,
-                         side="right", mileage_km=[50_000.0])
+    out = hybrid_prediction.predict(ext, routes["metro"], helpers.TABLE, bogie_type="motor", axle=1,
+                                    side="right", mileage_km=[50_000.0])
     assert np.all(np.isfinite(out.tread_area_mm2))
 
 

@@ -19,12 +19,11 @@ from wearcast.statistics.discrepancy_progression import (
     SimulatedWheel,
     progression_from_simulations,
 )
-from wearcast.statistics.generators import fleet_twin as ft
-from wearcast.statistics.generators import scenarios
+from wearcast.statistics.generators import scenarios, twin_wear_table
 from wearcast.statistics.generators import twin_effects as te
 
 S_REF_KM = 100_000.0
-TABLE = ft.synthetic_wear_table()
+TABLE = twin_wear_table.synthetic_wear_table()
 
 
 def power_progression(beta: float) -> ExpectedProgression:

@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES, rail_for
 from wearcast.statistics.generators import fleet_twin as ft
+from wearcast.statistics.generators import twin_routes, twin_wear_curves, twin_wear_table
 from wearcast.statistics.route_measure import weighted_wear_measure
 from wearcast.statistics.routes import RouteClass
 from wearcast.statistics.wear_tables import compile_wear_table, table_value
@@ -24,8 +25,8 @@ EXAMPLE_DIR = REPO / "service" / "example_fleet"
 
 
 def small_config(**overrides) -> ft.FleetConfig:
-    units = (ft.UnitConfig("A", ft.aosta_route(), vehicles=1, running_mode="mixed"),
-             ft.UnitConfig("B", ft.metro_route(), vehicles=1, running_mode="lead",
+    units = (ft.UnitConfig("A", twin_routes.aosta_route(), vehicles=1, running_mode="mixed"),
+             ft.UnitConfig("B", twin_routes.metro_route(), vehicles=1, running_mode="lead",
                            instrument_id="MP-B", covariates={"depot": "north"}))
     base = {"units": units, "mileages_km": (30_000, 90_000, 150_000), "points_per_profile": 150,
             "seed": 7}
@@ -38,7 +39,7 @@ def small_config(**overrides) -> ft.FleetConfig:
 def test_aosta_route_reproduces_seed003_table3():
     # Seed 003 Table 3: 20 classes whose shares p_k print as 99.99 %; the tangent class holds
     # 50.65 %. We split 19 curved classes into left/right halves -> 39 classes summing to 1.
-    route = ft.aosta_route()
+    route = twin_routes.aosta_route()
     assert len(route.classes) == 39
     assert sum(c.share for c in route.classes) == pytest.approx(1.0, abs=1e-12)
     tangent = [c for c in route.classes if c.radius_m is None]
@@ -56,8 +57,8 @@ def test_typed_aosta_table_matches_reference_file(reference_dir):
     # of seed 003 Table 3 (exact: the same printed digits).
     table = pd.read_csv(reference_dir / "published" / "aosta_statistical_track_nclass7.csv",
                         comment="#")
-    assert len(table) == len(ft.AOSTA_TABLE3)
-    for row, typed in zip(table.itertuples(index=False), ft.AOSTA_TABLE3, strict=True):
+    assert len(table) == len(twin_routes.AOSTA_TABLE3)
+    for row, typed in zip(table.itertuples(index=False), twin_routes.AOSTA_TABLE3, strict=True):
         radius = None if np.isinf(row.R_c_m) else float(row.R_c_m)
         assert (radius, row.H_mm, row.V_kmh, row.p_k_pct) == typed
 
@@ -65,13 +66,13 @@ def test_typed_aosta_table_matches_reference_file(reference_dir):
 def test_typed_metro_table_matches_reference_file(reference_dir):
     table = pd.read_csv(reference_dir / "published" / "metro_lines_track_conditions.csv",
                         comment="#")
-    typed = [(r0, r1, s, v) for r0, r1, s, v in ft.METRO_TABLE1]
+    typed = [(r0, r1, s, v) for r0, r1, s, v in twin_routes.METRO_TABLE1]
     assert [tuple(map(float, r)) for r in table.itertuples(index=False)] == typed
 
 
 def test_metro_route_from_seed000_table1():
     # Seed 000 Table 1: 75 % of the line at R > 1200 m (taken as tangent), 11 + 11 + 3 % curves.
-    route = ft.metro_route()
+    route = twin_routes.metro_route()
     assert sum(c.share for c in route.classes) == pytest.approx(1.0)
     assert sum(c.share for c in route.classes if c.radius_m is None) == pytest.approx(0.75)
     radii = sorted({c.radius_m for c in route.classes if c.radius_m})
@@ -82,7 +83,8 @@ def test_metro_route_from_seed000_table1():
 
 def test_routes_are_valid_for_the_statistics_core():
     routes = pytest.importorskip("wearcast.statistics.routes")
-    for route in (ft.aosta_route(), ft.metro_route(), ft.tangent_route()):
+    for route in (twin_routes.aosta_route(), twin_routes.metro_route(),
+                  twin_routes.tangent_route()):
         body = route.to_json()
         assert routes.Route.from_dict(body).name == route.name
 
@@ -90,7 +92,7 @@ def test_routes_are_valid_for_the_statistics_core():
 # ------------------------------------------------------------------------- wear table
 
 def test_synthetic_wear_table_follows_seed001_fig10_qualitatively():
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     wear_tables = pytest.importorskip("wearcast.statistics.wear_tables")
     wear_tables.validate_wear_table(table)
     compiled = compile_wear_table(table)
@@ -122,9 +124,9 @@ def test_synthetic_wear_table_follows_seed001_fig10_qualitatively():
 
 def test_weighted_measure_agrees_with_statistics_core_lookup():
     wear_tables = pytest.importorskip("wearcast.statistics.wear_tables")
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     compiled = wear_tables.compile_wear_table(table)
-    route = ft.metro_route()
+    route = twin_routes.metro_route()
     for region in REGIONS:
         ours = weighted_wear_measure(route, table, bogie_type="motor", axle=1, side="left",
                                      running_mode="lead", region=region, measure="tau_max")
@@ -142,11 +144,11 @@ def test_weighted_measure_agrees_with_statistics_core_lookup():
        mode=st.sampled_from(["lead", "mixed"]), axle=st.sampled_from([1, 2]))
 def test_weighted_measure_mirror_symmetry(radius, share, mode, axle):
     # A left curve seen by the right wheel is a right curve seen by the left wheel.
-    table = compile_wear_table(ft.synthetic_wear_table())
+    table = compile_wear_table(twin_wear_table.synthetic_wear_table())
 
     def route(direction):
-        return ft.TwinRoute("r", (RouteClass(radius, direction, 50.0, 60.0, share),
-                                  RouteClass(None, None, 0.0, 80.0, 1.0 - share)))
+        return twin_routes.TwinRoute("r", (RouteClass(radius, direction, 50.0, 60.0, share),
+                                           RouteClass(None, None, 0.0, 80.0, 1.0 - share)))
 
     def p(r, axle, side, region, mode):
         return weighted_wear_measure(r, table, bogie_type="motor", axle=axle, side=side,
@@ -165,7 +167,8 @@ def test_weighted_measure_mirror_symmetry(radius, share, mode, axle):
 
 def test_weighted_measure_refuses_unknown_running_mode():
     with pytest.raises(ValueError, match="running_mode"):
-        weighted_wear_measure(ft.tangent_route(), ft.synthetic_wear_table(), bogie_type="motor",
+        weighted_wear_measure(twin_routes.tangent_route(), twin_wear_table.synthetic_wear_table(),
+                              bogie_type="motor",
                               axle=1, side="left", running_mode="reverse", region="tread",
                               measure="tau_max")
 
@@ -177,8 +180,8 @@ def test_weighted_measure_refuses_unknown_running_mode():
        shift=st.floats(-2.0, 2.0), centre=st.floats(-42.0, -40.0))
 def test_wear_shapes_have_exact_regional_areas(tread, flange, shift, centre):
     y = np.linspace(-70.0, 60.0, 26_001)
-    w_t = ft.tread_wear_curve(y, tread, shift)
-    w_f = ft.flange_wear_curve(y, flange, centre)
+    w_t = twin_wear_curves.tread_wear_curve(y, tread, shift)
+    w_f = twin_wear_curves.flange_wear_curve(y, flange, centre)
     assert np.all(w_t >= 0) and np.all(w_f >= 0)
     assert np.all(w_t[y < -30.0] == 0.0)  # tread wear stays in the tread region
     assert np.all(w_f[y >= -30.0] == 0.0)  # flange wear stays in the flange region
@@ -186,17 +189,17 @@ def test_wear_shapes_have_exact_regional_areas(tread, flange, shift, centre):
     assert np.trapezoid(w_t, y) == pytest.approx(tread, rel=2e-3, abs=1e-6)
     assert np.trapezoid(w_f, y) == pytest.approx(flange, rel=2e-3, abs=1e-2)
     # the worn flange face is still a single-valued, falling flank (-55 < y < -30)
-    z = ft.worn_profile_mm(y, tread, flange, shift, centre)
+    z = twin_wear_curves.worn_profile_mm(y, tread, flange, shift, centre)
     flank = (y > -54.0) & (y < -31.0)
     assert np.all(np.diff(z[flank]) < 0)
 
 
 def test_flange_thinning_grows_with_area_and_has_a_stated_ceiling():
     areas = [0.0, 20.0, 60.0, 120.0]
-    thinning = [ft.flange_thinning_at_sd_mm(a) for a in areas]
+    thinning = [twin_wear_curves.flange_thinning_at_sd_mm(a) for a in areas]
     assert thinning[0] == 0.0 and np.all(np.diff(thinning) > 0)
     with pytest.raises(ValueError, match="exceeds"):
-        ft.flange_wear_curve(np.linspace(-60, 0, 10), 10_000.0)
+        twin_wear_curves.flange_wear_curve(np.linspace(-60, 0, 10), 10_000.0)
 
 
 # ------------------------------------------------------------------------- generator
@@ -251,12 +254,14 @@ def test_wear_areas_follow_the_configured_rates_without_noise():
     config = small_config(rate_scatter=0.0, area_scatter=0.0, noise_mm=0.0, lateral_mm=0.0,
                           vertical_mm=0.0, rotation_rad=0.0)
     twin = ft.generate_fleet(config)
-    table = ft.synthetic_wear_table()
+    table = twin_wear_table.synthetic_wear_table()
     for wheel in twin.wheels:
         rows = twin.profiles[twin.profiles["wheel_id"] == wheel.wheel_id]
-        areas = [ft.wear_areas_mm2(g["y_mm"], g["z_mm"]) for _, g in rows.groupby("mileage_km")]
+        areas = [twin_wear_curves.wear_areas_mm2(g["y_mm"], g["z_mm"])
+                 for _, g in rows.groupby("mileage_km")]
         mileage = sorted(rows["mileage_km"].unique())
-        for i, region in enumerate(ft.TWIN_REGION_ORDER):  # wear_areas_mm2: (tread, flange)
+        # wear_areas_mm2: (tread, flange)
+        for i, region in enumerate(twin_wear_table.TWIN_REGION_ORDER):
             expected = config.calibration_factor[region] * weighted_wear_measure(
                 wheel.route, table, bogie_type=wheel.bogie_type, axle=wheel.axle,
                 side=wheel.side, running_mode=wheel.running_mode, region=region,

@@ -17,18 +17,19 @@ from wearcast.physics.wear_tables import wear_table_for_route
 from wearcast.statistics import hybrid
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_routes
 from wearcast.statistics.route_measure import weighted_wear_measure
 
 
 @pytest.fixture(scope="module")
 def physics_table():
-    radii = sorted({c.radius_m for r in (ft.aosta_route(), ft.metro_route())
+    radii = sorted({c.radius_m for r in (twin_routes.aosta_route(), twin_routes.metro_route())
                     for c in r.classes if c.radius_m is not None})
     return wear_table_for_route("minuetto", [None, *radii], cant_mm=0.0)
 
 
 def test_twin_follows_a_physics_table_and_calibration_recovers_cs(physics_table):
-    route = ft.aosta_route()
+    route = twin_routes.aosta_route()
     # Choose c_s so that unit A's motor wheels wear ~0.35 (tread) and ~0.5 (flange) mm^2 per
     # 1000 km on average, whatever the physics table's scale: realistic areas at 150,000 km.
     p = {region: np.mean([weighted_wear_measure(route, physics_table, bogie_type="motor",

@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wearcast.statistics.hybrid import HybridModel, calibrate, predict
+from wearcast.statistics.hybrid import HybridModel, calibrate
+from wearcast.statistics.hybrid_prediction import predict
 from wearcast.statistics.route_measure import UnknownBogieTypeError, weighted_wear_measure
 from wearcast.statistics.routes import Route, RouteClass
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM

@@ -17,13 +17,9 @@ import pytest
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
-from wearcast.statistics import hybrid, reprofiling
-from wearcast.statistics.hybrid import (
-    parameters_at_areas,
-    predict,
-    profile_at_areas,
-    region_rates,
-)
+from wearcast.statistics import hybrid_prediction, hybrid_profiles, reprofiling
+from wearcast.statistics.hybrid_prediction import predict, region_rates
+from wearcast.statistics.hybrid_profiles import parameters_at_areas, profile_at_areas
 from wearcast.statistics.profile_parameters import WheelLimits, flange_parameters
 from wearcast.statistics.reprofiling import (
     MILEAGE_ATOL_KM,
@@ -122,7 +118,7 @@ def test_parameters_without_whole_profiles_are_exact(table, monkeypatch):
     np.testing.assert_array_equal(extra, full[3])
     np.testing.assert_allclose(params, full[2], atol=1e-9, equal_nan=True)
     # with a prefix that stops before the flank every profile takes the whole-grid path
-    monkeypatch.setattr(hybrid, "PARAMETER_MAX_Y_MM", -45.0)
+    monkeypatch.setattr(hybrid_profiles, "PARAMETER_MAX_Y_MM", -45.0)
     fresh = _model()
     assert fresh.parameter_columns.size < model.parameter_columns.size
     np.testing.assert_allclose(parameters_at_areas(fresh, fa, ta)[0], full[2], atol=1e-9,
@@ -207,8 +203,8 @@ def test_given_weighted_measures_give_the_same_prediction(table):
     model = _model()
     kw = {**KW, "side": "right", "mileage_km": [0.0, 1e5, 3e5]}
     base = predict(model, ROUTE, table, **kw)
-    p_s = hybrid.model_weighted_measures(model, ROUTE, table, bogie_type="motor", axle=1,
-                                         side="right")
+    p_s = hybrid_prediction.model_weighted_measures(model, ROUTE, table, bogie_type="motor", axle=1,
+                                                    side="right")
     given = predict(model, ROUTE, table, weighted_measures=p_s, **kw)
     assert given.weighted_measure == base.weighted_measure
     np.testing.assert_array_equal(given.z_mm, base.z_mm)

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from wearcast.statistics import reprofiling
-from wearcast.statistics.hybrid import parameters_at_areas, region_rates
+from wearcast.statistics.hybrid_prediction import region_rates
+from wearcast.statistics.hybrid_profiles import parameters_at_areas
 from wearcast.statistics.profile_parameters import WheelLimits
 from wearcast.statistics.reprofiling import MILEAGE_ATOL_KM, MILEAGE_RTOL, _first_crossings
 from wearcast.statistics.routes import Route, RouteClass

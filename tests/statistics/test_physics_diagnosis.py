@@ -146,15 +146,15 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
     # 0.5), a wear scale of 1.2, 0.02 mm noise and irregular mileages on 5 vehicles; the
     # diagnosis runs the same loop for its extensions. Measured when written: friction named
     # at 0.50 with scale 1.208 and a held-out gain of 0.96 (interval from 0.945).
-    from wearcast.physics.wear_loop import LoopClass
+    from wearcast.physics.vocabulary import CurveClass
     from wearcast.statistics.generators.scenarios import (
         cached_vehicle_simulator,
         measured_vehicle_series,
     )
     from wearcast.statistics.physics_diagnosis import PhysicsCause
 
-    route = [LoopClass(250.0, 100.0, None, "left", 0.15),
-             LoopClass(250.0, 100.0, None, "right", 0.15), LoopClass(None, share=0.7)]
+    route = [CurveClass(250.0, 100.0, None, "left", 0.15),
+             CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
     simulate = cached_vehicle_simulator(route, "metro_b", law="usfd", mileage_km=3000.0,
                                         depth_per_step_mm=1.0)
     measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02)

@@ -113,7 +113,7 @@ def test_the_prediction_follows_the_measured_parameters():
     model = _model()
     base = reprofiling_mileage(model, ROUTE, _table(), **KW)
     # the model's own parameters at the start: the same answer
-    from wearcast.statistics.hybrid import parameters_at_areas
+    from wearcast.statistics.hybrid_profiles import parameters_at_areas
 
     p0, _ = parameters_at_areas(model, np.array([0.0]), np.array([0.0]))
     same = dict(zip(("sd_mm", "sh_mm", "qr_mm"), p0[0].tolist(), strict=True))

@@ -9,12 +9,13 @@ import pytest
 from wearcast.statistics import hybrid
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
+from wearcast.statistics.generators import twin_routes, twin_wear_table
 from wearcast.statistics.residuals import geometric_basis, log_residual, model_residuals
 from wearcast.statistics.route_measure import leading_shares, route_parts, weighted_wear_measure
 from wearcast.statistics.wear_tables import compile_wear_table
 
-TABLE = ft.synthetic_wear_table()
-ROUTE = te.to_route(ft.aosta_route())
+TABLE = twin_wear_table.synthetic_wear_table()
+ROUTE = te.to_route(twin_routes.aosta_route())
 
 
 def _exact_frame(model, mileage=(20_000.0, 80_000.0, 150_000.0)):

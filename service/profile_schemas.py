@@ -1,0 +1,45 @@
+"""A measured wheel profile sent in a request, and the measured wheel and rail a physics request
+may use in place of the preset's S1002 on its nominal rail.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field, model_validator
+
+from wearcast.service.schema_base import MAX_PROFILE_POINTS, Strict
+
+
+class MeasuredProfileIn(Strict):
+    """A measured wheel profile given as points in the wheel frame [mm] (y from the tape
+    circle, back face at -70; z up, 0 at the tape circle), placed by its own datum."""
+
+    y_mm: list[float] = Field(min_length=20, max_length=MAX_PROFILE_POINTS)
+    z_mm: list[float] = Field(min_length=20, max_length=MAX_PROFILE_POINTS)
+    mileage_km: float = Field(0.0, ge=0)
+    reference_profile: str = "S1002"
+
+
+class MeasuredProfilesIn(Strict):
+    """The measured wheel and rail a physics request may use instead of the preset's S1002 on
+    its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
+
+    rail_id: int | None = Field(default=None, ge=1, description=(
+        "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
+        "both sides, placed by its gauge point"))
+    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
+        "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
+        "datum when the import found one"))
+    wheel_id: str | None = Field(default=None, min_length=1, max_length=200, description=(
+        "as measurement_id, with the wheel's latest measured profile"))
+    profile: MeasuredProfileIn | None = Field(default=None, description=(
+        "as measurement_id, with a profile sent in the request"))
+
+    @model_validator(mode="after")
+    def _at_most_one_wheel(self) -> MeasuredProfilesIn:
+        given = [k for k in ("wheel_id", "measurement_id", "profile")
+                 if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
+                             f"{', '.join(given)})")
+        return self

@@ -1,0 +1,80 @@
+"""Request and response bodies of routes (``/v1/routes``): curve classes or segments.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, Field, field_validator, model_validator
+
+from wearcast.physics.vocabulary import Direction
+from wearcast.service.schema_base import Strict
+
+
+class RouteClassIn(Strict):
+    radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
+    direction: Direction | None = Field(default=None, description="side the track bends towards")
+    cant_mm: float = Field(default=0.0, ge=0, le=250, description="cant [mm]")
+    speed_kmh: float = Field(gt=0, le=500, description="running speed [km/h]")
+    share: float = Field(ge=0, le=1, description="share of the route's length [-]")
+
+    @model_validator(mode="after")
+    def _direction_for_curves(self) -> RouteClassIn:
+        if self.radius_m is not None and self.direction is None:
+            raise ValueError("a curve class (radius_m given) needs a direction: left or right")
+        return self
+
+
+class SegmentIn(Strict):
+    length_m: float = Field(gt=0, description="segment length [m]")
+    radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
+    direction: Direction | None = None
+    cant_mm: float = Field(default=0.0, ge=0, le=250)
+    speed_kmh: float = Field(gt=0, le=500)
+
+    @model_validator(mode="after")
+    def _direction_for_curves(self) -> SegmentIn:
+        if self.radius_m is not None and self.direction is None:
+            raise ValueError("a curved segment (radius_m given) needs a direction: left or right")
+        return self
+
+
+class RouteSpec(Strict):
+    """A route given inline: curve classes or segments (exactly one of them)."""
+
+    classes: list[RouteClassIn] | None = Field(default=None, min_length=1)
+    segments: list[SegmentIn] | None = Field(default=None, min_length=1)
+    attributes: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one_of(self) -> RouteSpec:
+        if (self.classes is None) == (self.segments is None):
+            raise ValueError("give either classes or segments (exactly one)")
+        return self
+
+
+class RouteIn(RouteSpec):
+    name: str = Field(min_length=1, max_length=200)
+
+    @field_validator("name")
+    @classmethod
+    def _not_numeric(cls, name: str) -> str:
+        if name.strip().isdigit():
+            raise ValueError("a route name must not be a bare number (numbers are route ids)")
+        return name.strip()
+
+
+class RouteClassOut(BaseModel):
+    radius_m: float | None
+    direction: str | None
+    cant_mm: float
+    speed_kmh: float
+    share: float
+
+
+class RouteOut(BaseModel):
+    id: int
+    name: str
+    classes: list[RouteClassOut]
+    segments: list[dict[str, Any]] | None = None
+    attributes: dict[str, Any]
