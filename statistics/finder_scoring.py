@@ -151,25 +151,29 @@ class NuisanceModel:
             w_eff = w_eff * np.sqrt(w_eff.shape[0] / max(w_eff.shape[0] - used_dof, 1))
         if scheme == "wild":
             # codes from codes_of are the positions of the first occurrences' order, so
-            # v_eff[self.vehicle] puts every vehicle's own effect back on its rows
+            # v_eff[self.vehicle] puts every vehicle's own effect back on its rows. Built in
+            # the (n, m, B) layout of the result (signs gathered to the rows, then the
+            # products): the same numbers as signing the effects first, without the transpose
             sv = rng.choice((-1.0, 1.0), size=(n_draws, v_eff.shape[0], 1))
             sw = rng.choice((-1.0, 1.0), size=(n_draws, w_eff.shape[0], 1))
-            vs = (sv * v_eff[None, :, :])[:, self.vehicle]
-            ws = (sw * w_eff[None, :, :])[:, self.wheel]
-            eps = self.residual[None, :, :] * rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
-        else:
-            by_wheel = np.argsort(self.wheel, kind="stable")
-            # all draws at once: effects resampled across vehicles / wheels, each wheel's
-            # residuals permuted within the wheel (argsort of wheel code + uniform key) with
-            # random signs
-            vs = v_eff[rng.integers(0, v_eff.shape[0], (n_draws, v_eff.shape[0]))][
-                :, self.vehicle]
-            ws = w_eff[rng.integers(0, w_eff.shape[0], (n_draws, w_eff.shape[0]))][
-                :, self.wheel]
-            order = np.argsort(self.wheel[None, :] + rng.random((n_draws, n)), axis=1)
-            eps = np.empty((n_draws, n, m))
-            eps[:, by_wheel] = self.residual[order]
-            eps *= rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
+            se = rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
+            vs = v_eff[self.vehicle][:, :, None] * sv[:, :, 0].T[self.vehicle][:, None, :]
+            ws = w_eff[self.wheel][:, :, None] * sw[:, :, 0].T[self.wheel][:, None, :]
+            eps = self.residual[:, :, None] * se[:, :, 0].T[:, None, :]
+            out = self.weight[:, :, None] * (vs + ws) + eps
+            return np.asarray(out.reshape(n * m, n_draws))
+        by_wheel = np.argsort(self.wheel, kind="stable")
+        # all draws at once: effects resampled across vehicles / wheels, each wheel's
+        # residuals permuted within the wheel (argsort of wheel code + uniform key) with
+        # random signs
+        vs = v_eff[rng.integers(0, v_eff.shape[0], (n_draws, v_eff.shape[0]))][
+            :, self.vehicle]
+        ws = w_eff[rng.integers(0, w_eff.shape[0], (n_draws, w_eff.shape[0]))][
+            :, self.wheel]
+        order = np.argsort(self.wheel[None, :] + rng.random((n_draws, n)), axis=1)
+        eps = np.empty((n_draws, n, m))
+        eps[:, by_wheel] = self.residual[order]
+        eps *= rng.choice((-1.0, 1.0), size=(n_draws, n, 1))
         out = self.weight[None, :, :] * (vs + ws) + eps
         return np.ascontiguousarray(np.moveaxis(out, 0, -1)).reshape(n * m, n_draws)
 
