@@ -28,7 +28,8 @@ scores it out of sample and names a cause only when it is specific:
    (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a parametric
    bootstrap under "the runner-up is the cause" (datasets carrying the runner-up's fitted
-   effect and resampled nuisance, both causes scored on them as on the data;
+   effect and nuisance resampled from the fit carrying both causes, both causes scored on
+   them as on the data;
    ``finder_scoring.margin_p``) and a sign-flip randomisation over the groups, combined by
    Bonferroni (``finder_scoring.MarginTest``). If it does not, the verdict is ``ambiguous``
    and lists the candidates;
@@ -524,6 +525,8 @@ def diagnose(
     preds["none"] = cz.NullArea().fit(data, everything).predict(data).tolist()
     preds["calibrated"] = data.base.tolist()
     preds["measured"] = data.measured.tolist()
+    margin_nuisance = (" (from the fit carrying both causes)"
+                       if fs.NUISANCE_OF_MARGIN == "encompassing" else "")
     test = (f"held-out gain vs {n_null} datasets resampled from the baseline's nuisance model "
             "(vehicle and wheel log-scale effects and residuals, "
             + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
@@ -532,10 +535,11 @@ def diagnose(
             + {"sign_flip": f"by a sign-flip test over {np.unique(groups).size} {group_by} "
                             "groups",
                "bootstrap": f"against {n_null} datasets carrying the runner-up's fitted "
-                            "effect and resampled nuisance",
+                            f"effect and resampled nuisance{margin_nuisance}",
                "combined": f"against {n_null} datasets carrying the runner-up's fitted "
-                           "effect and resampled nuisance and by a sign-flip test over "
-                           f"{np.unique(groups).size} {group_by} groups (Bonferroni)"
+                           f"effect and resampled nuisance{margin_nuisance} and by a "
+                           f"sign-flip test over {np.unique(groups).size} {group_by} groups "
+                           "(Bonferroni)"
                }[fs.MARGIN_TEST])
     if expected_progression is not None:
         test += ("; the baseline grows as the expected progression of "
