@@ -5,6 +5,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
+         [--margin-nuisance encompassing|runner_up]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -270,6 +271,11 @@ def main() -> None:
                     choices=("combined", "bootstrap", "sign_flip"),
                     help="test of the verdict's margin over the runner-up "
                          "(finder_scoring.MARGIN_TEST)")
+    ap.add_argument("--margin-nuisance", default=fs.NUISANCE_OF_MARGIN,
+                    choices=("encompassing", "runner_up"),
+                    help="nuisance of the margin's bootstrap: residuals of the fit carrying "
+                         "both causes or of the runner-up's own fit "
+                         "(finder_scoring.NUISANCE_OF_MARGIN)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
                     help="loop generator: baseline grows as the loop runs say or linearly")
     ap.add_argument("--progression-stretch", type=float, default=1.0,
@@ -280,6 +286,7 @@ def main() -> None:
     args = ap.parse_args()
     fs.RESAMPLING = args.resampling
     fs.MARGIN_TEST = args.margin_test
+    fs.NUISANCE_OF_MARGIN = args.margin_nuisance
     LOOP_NULL[0] = args.loop_null
     LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):

@@ -86,10 +86,12 @@ class Traction(Cause):
         return ["log_tread_multiplier_motor"]
 
     def features(self, data: FinderData, theta: Array) -> Array:
+        if "motor_bogie" not in data.cache:   # theta-independent: compared once
+            col = data.column("bogie_type")
+            data.cache["motor_bogie"] = np.zeros(data.n) if col is None else \
+                (col.astype(str) == "motor").to_numpy(dtype=float)
         x = np.zeros((data.n, 2, 1))
-        col = data.column("bogie_type")
-        if col is not None:
-            x[:, 1, 0] = (col.astype(str) == "motor").to_numpy()
+        x[:, 1, 0] = data.cache["motor_bogie"]
         return x
 
     def public(self) -> dict[str, Any]:

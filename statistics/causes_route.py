@@ -144,23 +144,35 @@ class CurveAsymmetry(Cause):
 
     def log_factor(self, data: FinderData, theta: Array) -> Array:
         new = self._p(data, self._weights(data, theta))
-        nominal = self._p(data, np.ones((data.n, 2)))
+        if "curve_nominal_measure" not in data.cache:   # theta-independent
+            data.cache["curve_nominal_measure"] = self._p(data, np.ones((data.n, 2)))
+        nominal = data.cache["curve_nominal_measure"]
         return np.asarray(np.where((new > 0) & (nominal > 0),
                                    np.log(np.maximum(new, 1e-300) / np.maximum(nominal, 1e-300)),
                                    0.0))
+
+    @staticmethod
+    def _side_parts(data: FinderData) -> tuple[Array, Array]:
+        """(n, 2) measure of the left and of the right curves alone above the tangent
+        (theta-independent: computed once per dataset)."""
+        if "curve_side_parts" not in data.cache:
+            def measure(shares: Array) -> Array:
+                return weighted_measure(data.parts, data.lead_share, data.measure_index,
+                                        shares)
+            ones, zeros = np.ones(data.n), np.zeros(data.n)
+            tangent = measure(np.zeros((data.n, 2)))
+            data.cache["curve_side_parts"] = (
+                measure(np.column_stack([ones, zeros])) - tangent,
+                measure(np.column_stack([zeros, ones])) - tangent)
+        lpart, rpart = data.cache["curve_side_parts"]
+        return lpart, rpart
 
     def features(self, data: FinderData, theta: Array) -> Array:
         p_now = self._p(data, self._weights(data, theta))
         left, right = data.left_right[:, 0], data.left_right[:, 1]
         total = left + right
         x = np.zeros((data.n, 2, len(self.routes)))
-        only_left = weighted_measure(data.parts, data.lead_share, data.measure_index,
-                                     np.column_stack([np.ones(data.n), np.zeros(data.n)]))
-        only_right = weighted_measure(data.parts, data.lead_share, data.measure_index,
-                                      np.column_stack([np.zeros(data.n), np.ones(data.n)]))
-        tangent = weighted_measure(data.parts, data.lead_share, data.measure_index,
-                                   np.zeros((data.n, 2)))
-        lpart, rpart = only_left - tangent, only_right - tangent
+        lpart, rpart = self._side_parts(data)
         for j, name in enumerate(self.routes):
             sel = np.asarray(data.route == name)
             dp = (total[sel] / left[sel])[:, None] * lpart[sel] \
@@ -332,6 +344,8 @@ def shape_coefficients(data: FinderData) -> Array:
     """(n, 3) least-squares coefficients of each row's shape residual on the geometric basis
     (lateral scale, flange offset, lateral shift); NaN points are left out."""
     assert data.shape_res is not None
-    d = np.nan_to_num(data.shape_res, nan=0.0)
-    coef, *_ = np.linalg.lstsq(data.basis.T, d.T, rcond=None)
-    return np.asarray(coef.T)
+    if "shape_coefficients" not in data.cache:   # computed once per dataset
+        d = np.nan_to_num(data.shape_res, nan=0.0)
+        coef, *_ = np.linalg.lstsq(data.basis.T, d.T, rcond=None)
+        data.cache["shape_coefficients"] = np.asarray(coef.T)
+    return np.array(data.cache["shape_coefficients"])

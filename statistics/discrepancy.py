@@ -21,12 +21,15 @@ scores it out of sample and names a cause only when it is specific:
    same resamples (no asymptotic test, no assumed noise distribution). The nuisance is
    taken from the residuals of the baseline plus the leading candidate (so a real effect is
    not resampled as nuisance), widened for the degrees of freedom that fit used; the
-   wear-curve shape cause is tested the same way on its coefficients;
+   wear-curve shape cause is tested the same way on its coefficients, in the metric of
+   their wheel-to-wheel nuisance covariance (``_noise_whitened``; its gain is reported in
+   curve space);
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a parametric
    bootstrap under "the runner-up is the cause" (datasets carrying the runner-up's fitted
-   effect and resampled nuisance, both causes scored on them as on the data;
+   effect and nuisance resampled from the fit carrying both causes, both causes scored on
+   them as on the data;
    ``finder_scoring.margin_p``) and a sign-flip randomisation over the groups, combined by
    Bonferroni (``finder_scoring.MarginTest``). If it does not, the verdict is ``ambiguous``
    and lists the candidates;
@@ -148,6 +151,42 @@ def _whitened_shape(data: cz.FinderData) -> NDArray[np.float64]:
     return np.asarray(cz.shape_coefficients(data) @ chol)
 
 
+def _instrument_centred(coef: NDArray[np.float64], inst_codes: NDArray[np.int64]
+                        ) -> NDArray[np.float64]:
+    """Residuals of the per-instrument mean fit of the shape coefficients (n, 3)."""
+    out = np.array(coef, dtype=float)
+    for i in np.unique(inst_codes):
+        out[inst_codes == i] -= out[inst_codes == i].mean(axis=0)
+    return out
+
+
+def _noise_whitened(coef: NDArray[np.float64], inst_codes: NDArray[np.int64],
+                    wheel: NDArray[Any]) -> NDArray[np.float64]:
+    """Shape coefficients (n, 3) in the metric of their nuisance: times L^-T, where L L^T is
+    the covariance of the wheels' mean coefficients about their instrument's mean.
+
+    An instrument's signature is constant over a wheel's measurements, so what it must stand
+    out against is the wheel-to-wheel scatter of the mean signature (the wheel's own
+    as-turned shape, vehicle effects, averaged measurement noise). That scatter is strongly
+    correlated between the three basis directions (the flange offset and the lateral shift
+    share z' on the flange), so a sum of squares in curve space spends most of its weight on
+    noise directions; in the metric of its inverse covariance (a generalised least-squares,
+    Hotelling-type contrast) every direction carries equal nuisance. The transform is fixed
+    before the test and applied to the data and to every resampled dataset alike, so the
+    resampling p-value keeps its level.
+    """
+    c = _instrument_centred(coef, inst_codes)
+    w = fs.codes_of(wheel)
+    g = int(w.max()) + 1
+    sums = np.zeros((g, c.shape[1]))
+    np.add.at(sums, w, c)
+    means = sums / np.bincount(w, minlength=g)[:, None]
+    cov = np.atleast_2d(np.cov(means.T)) if g > 1 else np.eye(c.shape[1])
+    ridge = 1e-9 * max(float(np.trace(cov)), 1e-300)
+    chol = np.linalg.cholesky(cov + ridge * np.eye(c.shape[1]))
+    return np.asarray(np.linalg.solve(chol, np.asarray(coef, dtype=float).T).T)
+
+
 def _shape_design(n: int, instrument: NDArray[Any] | None) -> NDArray[np.float64]:
     codes = np.zeros(n, dtype=np.int64) if instrument is None else fs.codes_of(instrument)
     levels = int(codes.max()) + 1
@@ -245,7 +284,9 @@ def diagnose(
         else:
             area.append(cause)
 
-    # the wear-curve shape cause: per-instrument mean signature vs one common signature
+    # the wear-curve shape cause: per-instrument mean signature vs one common signature.
+    # The gain is reported in curve space; the test statistic is the same held-out gain in
+    # the metric of the nuisance covariance (``_noise_whitened``)
     shape_row: tuple[float, NDArray[np.float64]] | None = None
     scored: dict[str, Scored] = {}
     if shape_cause is not None:
@@ -254,15 +295,16 @@ def diagnose(
         before = np.sum(fs.held_out_shape(coef, None, folds) ** 2, axis=1)
         after = np.sum(fs.held_out_shape(coef, inst, folds) ** 2, axis=1)
         inst_codes = fs.codes_of(inst)
-        centred = coef.copy()
-        for i in np.unique(inst_codes):   # residuals of the per-instrument fit
-            centred[inst_codes == i] -= coef[inst_codes == i].mean(axis=0)
-        nm = fs.NuisanceModel.fit(centred, np.ones_like(coef), vehicle, wheel)
+        z = _noise_whitened(coef, inst_codes, wheel)
+        z_gain = _relative(np.sum(fs.held_out_shape(z, None, folds) ** 2, axis=1),
+                           np.sum(fs.held_out_shape(z, inst, folds) ** 2, axis=1))
+        nm = fs.NuisanceModel.fit(_instrument_centred(z, inst_codes), np.ones_like(z),
+                                  vehicle, wheel)
         draws = nm.draws(n_null, rng, used_dof=int(inst_codes.max()))
         boot = fs.bootstrap_gains(_shape_design(data.n, None), [_shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
-        shape_row = (_relative(before, after), boot[0])
-        scored[shape_cause.code] = Scored(shape_cause, before, after, shape_row[0],
+        shape_row = (z_gain, boot[0])
+        scored[shape_cause.code] = Scored(shape_cause, before, after, _relative(before, after),
                                            metric="shape")
 
     # forward selection over the area causes
@@ -391,6 +433,8 @@ def diagnose(
     preds["none"] = cz.NullArea().fit(data, everything).predict(data).tolist()
     preds["calibrated"] = data.base.tolist()
     preds["measured"] = data.measured.tolist()
+    margin_nuisance = (" (from the fit carrying both causes)"
+                       if fs.NUISANCE_OF_MARGIN == "encompassing" else "")
     test = (f"held-out gain vs {n_null} datasets resampled from the baseline's nuisance model "
             "(vehicle and wheel log-scale effects and residuals, "
             + ("each kept at its rows with a random sign" if fs.RESAMPLING == "wild"
@@ -399,10 +443,11 @@ def diagnose(
             + {"sign_flip": f"by a sign-flip test over {np.unique(groups).size} {group_by} "
                             "groups",
                "bootstrap": f"against {n_null} datasets carrying the runner-up's fitted "
-                            "effect and resampled nuisance",
+                            f"effect and resampled nuisance{margin_nuisance}",
                "combined": f"against {n_null} datasets carrying the runner-up's fitted "
-                           "effect and resampled nuisance and by a sign-flip test over "
-                           f"{np.unique(groups).size} {group_by} groups (Bonferroni)"
+                           f"effect and resampled nuisance{margin_nuisance} and by a "
+                           f"sign-flip test over {np.unique(groups).size} {group_by} groups "
+                           "(Bonferroni)"
                }[fs.MARGIN_TEST])
     if expected_progression is not None:
         test += ("; the baseline grows as the expected progression of "
