@@ -162,10 +162,10 @@ def loop_leading_share(p: float) -> Callable[[ft.WheelSpec, ft.WearHistory], ft.
         km = history.mileage_km * LOOP_TRUTH.mileage_scale
         share = p if wheel.axle == 1 else 1.0 - p
         out = {}
+        per_axle = {ax: sc.loop_wear_areas(by_axle[ax], km) for ax in (1, 2)}
         for region, area in (("tread", history.tread_area_mm2),
                              ("flange", history.flange_area_mm2)):
-            a = {ax: np.array([sc.loop_wear_area(by_axle[ax], k, region) for k in km])
-                 for ax in (1, 2)}
+            a = {ax: per_axle[ax][region] for ax in (1, 2)}
             mix = 0.5 * (a[1] + a[2])
             new = share * a[1] + (1.0 - share) * a[2]
             out[region] = area * np.where(mix > 0, new / np.where(mix > 0, mix, 1.0), 1.0)

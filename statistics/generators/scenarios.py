@@ -220,10 +220,11 @@ def loop_config(seed: int, wear_effects: tuple[Any, ...] = (),
                           profile_effects=profile_effects)
 
 
-def loop_wear_area(sim: Any, loop_km: float, region: str) -> float:
-    """Worn area of one loop run's region at a loop mileage (held at its end) [mm^2]."""
+def loop_wear_areas(sim: Any, loop_km: NDArray) -> dict[str, NDArray]:
+    """Worn area of each region of one loop run at loop mileages (held at its end) [mm^2]:
+    the per-step areas integrated once, then interpolated."""
     wheel = SimulatedWheel("", 1, sim.y_mm, sim.profiles_mm, sim.mileage_km)
-    return float(wheel.region_areas_mm2(np.array([loop_km]))[region][0])
+    return wheel.region_areas_mm2(np.asarray(loop_km, dtype=float))
 
 
 def _loop_mean_areas(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: float
@@ -238,9 +239,10 @@ def _loop_mean_areas(runs: Mapping[tuple[str, int], Sequence[Any]], top_km: floa
             sims = runs.get((bogie, axle), ())
             if not sims:
                 raise ValueError(f"no loop run for the {bogie} bogie's axle {axle}")
+            per_run = [loop_wear_areas(s, km) for s in sims]
             for region in ("flange", "tread"):
-                areas[(bogie, wheelset, region)] = np.array(
-                    [[loop_wear_area(s, k, region) for k in km] for s in sims]).mean(axis=0)
+                areas[(bogie, wheelset, region)] = np.mean([a[region] for a in per_run],
+                                                           axis=0)
     return km, areas
 
 
