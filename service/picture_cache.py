@@ -81,8 +81,15 @@ def _feed(h: Any, value: Any) -> None:
     elif isinstance(value, np.ndarray):
         if value.dtype.hasobject:
             h.update(b"O%s:" % str(value.shape).encode())
-            for item in value.ravel().tolist():
-                _feed(h, item)
+            items = value.ravel().tolist()
+            if all(type(item) is str for item in items):
+                # a text column (wheel ids, routes) in one update: lengths, then the bytes
+                data = [item.encode("utf-8", "surrogatepass") for item in items]
+                h.update(b"Z" + np.fromiter(map(len, data), np.int64, len(data)).tobytes())
+                h.update(b"".join(data))
+            else:
+                for item in items:
+                    _feed(h, item)
         else:
             array = np.ascontiguousarray(value)
             h.update(b"A" + array.dtype.str.encode() + str(array.shape).encode() + b":")
@@ -111,6 +118,9 @@ def _feed(h: Any, value: Any) -> None:
         for key, item in items:
             _feed(h, key)
             _feed(h, item)
+    elif isinstance(value, list | tuple) and value and all(type(v) is float for v in value):
+        # a list of numbers (a predicted profile) in one update, as its float64 bytes
+        h.update(b"R%d:" % len(value) + np.asarray(value, np.float64).tobytes())
     elif isinstance(value, list | tuple):
         h.update(b"L%d:" % len(value))
         for item in value:

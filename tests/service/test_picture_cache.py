@@ -153,6 +153,20 @@ def test_the_key_follows_every_input() -> None:
     assert picture_cache.render(_job(np.array([1.0, 2.0]))) == b"t:6.0"
 
 
+def test_the_key_of_text_columns_and_number_lists_is_unambiguous() -> None:
+    """Text columns and lists of floats are hashed in one piece each (speed): the pieces'
+    boundaries and types still count."""
+    def key(*args: object) -> str | None:
+        return picture_key(PictureJob(_job(np.zeros(2)).build, args, {}))
+
+    assert key(np.array(["ab", "c"], dtype=object)) != key(np.array(["a", "bc"], dtype=object))
+    assert key(np.array(["a", "b"], dtype=object)) != key(np.array(["a", None], dtype=object))
+    assert key(np.array(["é"], dtype=object)) == key(np.array(["é"], dtype=object))
+    assert key([1.0, 2.0]) != key([1.0, 2]) != key((1.0, 2.0, 0.0))
+    assert key([1.0, 2.0]) != key(np.array([1.0, 2.0]))
+    assert key([1.0, 2.0]) == key([1.0, 2.0]) != key([2.0, 1.0])
+
+
 def test_the_rendered_cache_stays_within_its_bytes() -> None:
     cache = RenderedCache(max_bytes=1000, max_item_bytes=600)
     for i in range(10):
