@@ -148,6 +148,9 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
     """Store the model extended by the verdict's cause (a new physics model)."""
     if diagnosis.verdict == "none":
         return None, "the verdict is 'none': no extension improves the model materially"
+    if diagnosis.verdict == "ambiguous":
+        return None, ("the verdict is 'ambiguous': no tested margin separates "
+                      f"{', '.join(diagnosis.candidates)}; nothing to extend the model by")
     finding = diagnosis.finding(diagnosis.verdict)
     parameter, value = finding.extension["parameter"], finding.extension["value"]
     sim = simulate({parameter: value})
@@ -192,12 +195,12 @@ def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
             row = session.get(db.Model, saved)
             assert row is not None
             saved_model = store.model_out(session, row)
-    ranked = [f for f in diagnosis.findings if f.cause != diagnosis.verdict]
     return DiagnosisOut(
         model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
         n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
-        selected=[d["verdict"]] if d["verdict"] != "none" else [],
-        runner_up=ranked[0].cause if ranked else None,
+        selected=[d["verdict"]] if d["verdict"] not in ("none", "ambiguous") else [],
+        runner_up=diagnosis.runner_up, margin=diagnosis.margin,
+        margin_p_value=diagnosis.margin_p_value, candidates=list(diagnosis.candidates),
         null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
                   "Holm's correction",
         saved_model=saved_model, save_reason=reason)

@@ -84,9 +84,9 @@ def _feed(h: Any, value: Any) -> None:
             items = value.ravel().tolist()
             if all(type(item) is str for item in items):
                 # a text column (wheel ids, routes) in one update: lengths, then the bytes
-                data = [item.encode("utf-8", "surrogatepass") for item in items]
-                h.update(b"Z" + np.fromiter(map(len, data), np.int64, len(data)).tobytes())
-                h.update(b"".join(data))
+                encoded = [item.encode("utf-8", "surrogatepass") for item in items]
+                h.update(b"Z" + np.array([len(e) for e in encoded], np.int64).tobytes())
+                h.update(b"".join(encoded))
             else:
                 for item in items:
                     _feed(h, item)

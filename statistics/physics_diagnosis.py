@@ -36,6 +36,7 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
+from wearcast.statistics.finder_scoring import group_sums, sign_flip_p
 from wearcast.statistics.findings import FinderResult, Finding, Gain, bootstrap_gain_interval
 from wearcast.statistics.physics_comparison import QUANTITIES
 
@@ -124,13 +125,21 @@ NOT_BUILT = {
 
 @dataclass(frozen=True)
 class PhysicsDiagnosis(FinderResult):
-    """verdict (cause or ``none``), findings ranked by gain, skipped causes with reasons, the
-    null model's fitted scale on all data and its error per vehicle."""
+    """verdict (a cause, ``none`` or ``ambiguous``), findings ranked by gain, skipped causes
+    with reasons, the null model's fitted scale on all data and its error per vehicle; the
+    runner-up, the margin over it and its p-value, and the ``candidates`` of an ambiguous
+    verdict (see ``_verdict``)."""
 
     null_fit: dict[str, Any] = field(default_factory=dict)
+    runner_up: str | None = None
+    margin: float | None = None
+    margin_p_value: float | None = None
+    candidates: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {**super().to_dict(), "null_fit": self.null_fit}
+        return {**super().to_dict(), "null_fit": self.null_fit, "runner_up": self.runner_up,
+                "margin": self.margin, "margin_p_value": self.margin_p_value,
+                "candidates": list(self.candidates)}
 
 
 class _Series:
@@ -358,6 +367,42 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
              "values_run": [v for v in cause.values]},
             ext, gain, significant, material))
     out.sort(key=lambda f: -f.gain.relative)
-    chosen = [f for f in out if f.significant and f.material]
-    return PhysicsDiagnosis(chosen[0].cause if chosen else "none", tuple(out), skipped,
-                            int(km.size), int(groups.size), group_by, null_fit)
+    after_of = {cause.name: after for cause, after in rows}
+    verdict, runner_up, margin, margin_p, candidates = _verdict(out, after_of, unit, alpha, rng)
+    return PhysicsDiagnosis(verdict, tuple(out), skipped, int(km.size), int(groups.size),
+                            group_by, null_fit, runner_up=runner_up, margin=margin,
+                            margin_p_value=margin_p, candidates=candidates)
+
+
+def _verdict(ranked: Sequence[Finding], after_of: Mapping[str, NDArray], unit: NDArray,
+             alpha: float, rng: np.random.Generator
+             ) -> tuple[str, str | None, float | None, float | None, tuple[str, ...]]:
+    """(verdict, runner_up, margin, margin_p_value, candidates) from the findings ranked by
+    gain.
+
+    The best significant and material cause is named only if it also beats every other
+    significant and material cause by a tested margin: the held-out error of the other minus
+    the best's, summed per test unit (vehicle, or point below 5 vehicles), one-sided
+    sign-flip randomisation p < ``alpha`` (``finder_scoring.sign_flip_p``, as the hybrid
+    finder's margin test). Otherwise the verdict is ``ambiguous`` and ``candidates`` lists
+    the best and the causes it could not be separated from (two causes the measured series
+    cannot tell apart, e.g. friction level and running-direction share on FT/qR only).
+    ``runner_up`` is the best other cause whatever its significance, ``margin`` the
+    difference of their relative gains.
+    """
+    chosen = [f for f in ranked if f.significant and f.material]
+    if not chosen:
+        return "none", None, None, None, ()
+    best = chosen[0]
+    others = [f for f in ranked if f.cause != best.cause]
+    runner = others[0] if others else None
+    p_of = {f.cause: sign_flip_p(group_sums(after_of[f.cause] - after_of[best.cause], unit),
+                                 4000, rng)
+            for f in chosen[1:]}
+    unseparated = tuple(c for c, p in p_of.items() if p >= alpha)
+    margin = None if runner is None else float(best.gain.relative - runner.gain.relative)
+    margin_p = None if runner is None else p_of.get(runner.cause)
+    if unseparated:
+        return "ambiguous", runner.cause if runner else None, margin, margin_p, (
+            best.cause, *unseparated)
+    return best.cause, runner.cause if runner else None, margin, margin_p, ()

@@ -12,6 +12,7 @@ import pytest
 from wearcast.statistics.physics_diagnosis import (
     CATALOGUE,
     SERIES,
+    PhysicsCause,
     diagnose_physics,
     fit_wear_scale,
 )
@@ -64,6 +65,38 @@ def test_a_hidden_cause_is_named_with_its_size(params, cause):
     assert f.extension["value"] == pytest.approx(value, abs=0.15)
     assert f.extension["wear_scale"] == pytest.approx(1.3, rel=0.15)
     assert d.group_by == "vehicle" and d.n_groups == 6
+
+
+def test_two_causes_the_series_cannot_tell_apart_are_answered_ambiguous():
+    # a second cause acting exactly as flange lubrication does: both are significant and
+    # material, no margin separates them, so neither is named
+    def simulate(params):
+        return _Series({"flange_wear_factor": params.get("flange_wear_factor",
+                                                         params.get("twin_factor", 1.0))})
+
+    lubrication = next(c for c in CATALOGUE if c.name == "flange_lubrication")
+    twin = PhysicsCause("twin", "acts as flange lubrication", "twin_factor",
+                        lubrication.values, 1.0)
+    d = diagnose_physics(simulate, _measured({"flange_wear_factor": 0.4}, scale=1.3),
+                         catalogue=(lubrication, twin), n_bootstrap=300)
+    assert d.verdict == "ambiguous", d.to_dict()
+    assert set(d.candidates) == {"flange_lubrication", "twin"}
+    assert d.runner_up in {"flange_lubrication", "twin"} and d.margin == pytest.approx(0.0)
+    assert d.margin_p_value is not None and d.margin_p_value >= 0.05
+    # alone, the same cause is named, with no runner-up to separate it from
+    alone = diagnose_physics(simulate, _measured({"flange_wear_factor": 0.4}, scale=1.3),
+                             catalogue=(lubrication,), n_bootstrap=300)
+    assert alone.verdict == "flange_lubrication" and alone.candidates == ()
+
+
+def test_a_named_cause_beats_its_runner_up_by_a_tested_margin():
+    d = diagnose_physics(_Series, _measured({"flange_wear_factor": 0.4}, scale=1.3),
+                         n_bootstrap=300)
+    assert d.verdict == "flange_lubrication"
+    assert d.runner_up is not None and d.runner_up != d.verdict
+    assert d.margin is not None and d.margin > 0
+    body = d.to_dict()
+    assert {"runner_up", "margin", "margin_p_value", "candidates"} <= set(body)
 
 
 @pytest.mark.parametrize("seed", [2, 3])
