@@ -8,7 +8,8 @@ with 4 irregular mileages each (200-1,500 km) and 0.02 mm noise on FT and qR. Th
 (``statistics.physics_diagnosis``) runs the same loop at its catalogue values (flange wear
 factor 0.25 / 0.5 / 1, friction 0.3 / 0.4 / 0.5, Hertz / Kik-Piotrowski patch, direction share
 0.5 / 1) and prints, per hidden cause, the verdict and every finding (relative held-out gain,
-interval low end, Holm p, fitted value and scale).
+interval low end, Holm p, fitted value and scale), the runner-up, the margin over it and the
+margin test's p (a cause is named only when that margin is significant; else ``ambiguous``).
 """
 
 from __future__ import annotations
@@ -40,8 +41,12 @@ def main() -> None:
     for hidden in HIDDEN:
         measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02)
         d = diagnose_physics(simulate, measured, catalogue=CATALOGUE, n_bootstrap=500)
-        print(f"hidden {hidden or 'nothing'} (scale 1.2) -> verdict {d.verdict}; null scale "
-              f"{d.null_fit['wear_scale']:.3f}")
+        margin = "" if d.margin is None else (
+            f"; runner-up {d.runner_up}, margin {d.margin:+.3f}"
+            + ("" if d.margin_p_value is None else f" (p {d.margin_p_value:.3f})"))
+        candidates = f" {list(d.candidates)}" if d.candidates else ""
+        print(f"hidden {hidden or 'nothing'} (scale 1.2) -> verdict {d.verdict}{candidates}; "
+              f"null scale {d.null_fit['wear_scale']:.3f}{margin}")
         for f in d.findings:
             print(f"   {f.cause:24s} gain {f.gain.relative:+.3f} (low {f.gain.ci95_low:+.3f}) "
                   f"p_holm {f.evidence['p_holm']:.4f} value {f.extension['value']} scale "
