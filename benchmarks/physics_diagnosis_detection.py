@@ -1,6 +1,7 @@
 """Which physical causes the physics diagnosis names when the whole-vehicle loop hides them.
 
-Run: .venv/bin/python benchmarks/physics_diagnosis_detection.py
+Run: .venv/bin/python benchmarks/physics_diagnosis_detection.py [--flange-height]
+(``--flange-height``: FH measured too, beside FT and qR)
 
 Truth: ``simulate_vehicle_wear`` (metro_b, a 250 m curve in both directions on 30 % of the
 route, USFD, D_step 1 mm, 3,000 km) with one cause injected, a wear scale of 1.2, 5 vehicles
@@ -33,13 +34,19 @@ HIDDEN = ({}, {"flange_wear_factor": 0.5}, {"friction": 0.5}, {"patch_width": "k
 
 
 def main() -> None:
+    import sys
+
+    flange_height = "--flange-height" in sys.argv[1:]
+    print("measured: FT, qR" + (" and FH" if flange_height else ""))
+
     def report(params, seconds):
         print(f"  loop run {dict(params) or 'null'}: {seconds:.0f} s", flush=True)
 
     simulate = cached_vehicle_simulator(ROUTE, "metro_b", law="usfd", mileage_km=3000.0,
                                         depth_per_step_mm=1.0, on_run=report)
     for hidden in HIDDEN:
-        measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02)
+        measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02,
+                                          flange_height=flange_height)
         d = diagnose_physics(simulate, measured, catalogue=CATALOGUE, n_bootstrap=500)
         margin = "" if d.margin is None else (
             f"; runner-up {d.runner_up}, margin {d.margin:+.3f}"

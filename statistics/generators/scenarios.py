@@ -156,12 +156,14 @@ def cached_vehicle_simulator(route: Sequence[CurveClass], vehicle: str = "metro_
 
 def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5,
                             wear_scale: float = 1.2, noise_mm: float = 0.02,
-                            seed: int = 7) -> pd.DataFrame:
+                            seed: int = 7, flange_height: bool = False) -> pd.DataFrame:
     """Vehicle-averaged flange thickness and qR [mm] "measured" from a loop run.
 
     Per vehicle: 0 km and four mileages uniform in 200–1500 km; the truth is the run's mean
     Sd and qR at ``wear_scale`` times the mileage, plus Gaussian noise of ``noise_mm``.
-    Columns ``vehicle, distance_km, FT_mm, QR_mm`` (what ``diagnose_physics`` reads).
+    Columns ``vehicle, distance_km, FT_mm, QR_mm`` (what ``diagnose_physics`` reads), and
+    ``FH_mm`` (the mean Sh, same noise) with ``flange_height`` — as seed 003 Table 2 and
+    EN 15313 depot measurements give it.
     """
     rng = np.random.default_rng(seed)
     rows = []
@@ -169,9 +171,15 @@ def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5
         km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
         ft_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("sd_mm"))
         qr_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("qr_mm"))
+        ft_mm = ft_mm + rng.normal(0, noise_mm, km.size)
+        qr_mm = qr_mm + rng.normal(0, noise_mm, km.size)
         rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
-                 for k, a, b in zip(km, ft_mm + rng.normal(0, noise_mm, km.size),
-                                    qr_mm + rng.normal(0, noise_mm, km.size), strict=True)]
+                 for k, a, b in zip(km, ft_mm, qr_mm, strict=True)]
+        if flange_height:
+            fh_mm = (np.interp(wear_scale * km, truth.mileage_km, truth.mean("sh_mm"))
+                     + rng.normal(0, noise_mm, km.size))
+            for row, fh in zip(rows[-km.size:], fh_mm, strict=True):
+                row["FH_mm"] = fh
     return pd.DataFrame(rows)
 
 
