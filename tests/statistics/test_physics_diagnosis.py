@@ -203,3 +203,20 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
         assert f.extension["value"] == pytest.approx(0.5, abs=0.05)
         assert f.extension["wear_scale"] == pytest.approx(1.2, rel=0.1)
         assert f.gain.ci95_low > 0.5
+
+
+def test_loop_series_measured_with_flange_height():
+    # the generator of the loop-driven tests: FH is the run's mean Sh at the scaled mileage,
+    # with the same noise as FT and qR, and the rows are otherwise those without it
+    from types import SimpleNamespace
+
+    from wearcast.statistics.generators.scenarios import measured_vehicle_series
+
+    km = np.linspace(0.0, 3000.0, 31)
+    curves = {"sd_mm": 32.5 - 1e-3 * km, "sh_mm": 28.0 + 2e-4 * km, "qr_mm": 10.8 - 1e-3 * km}
+    truth = SimpleNamespace(mileage_km=km, mean=curves.__getitem__)
+    plain = measured_vehicle_series(truth, noise_mm=0.0)
+    with_fh = measured_vehicle_series(truth, noise_mm=0.0, flange_height=True)
+    assert "FH_mm" not in plain and list(with_fh.columns[:4]) == list(plain.columns)
+    pd.testing.assert_frame_equal(with_fh[plain.columns], plain)
+    assert np.allclose(with_fh["FH_mm"], 28.0 + 2e-4 * 1.2 * with_fh["distance_km"])
