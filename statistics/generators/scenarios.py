@@ -166,6 +166,7 @@ def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5
     EN 15313 depot measurements give it.
     """
     rng = np.random.default_rng(seed)
+    fh_rng = np.random.default_rng([seed, 1])  # FH's own noise: the other rows stay the same
     rows = []
     for v in range(n_vehicles):
         km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
@@ -177,7 +178,7 @@ def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5
                  for k, a, b in zip(km, ft_mm, qr_mm, strict=True)]
         if flange_height:
             fh_mm = (np.interp(wear_scale * km, truth.mileage_km, truth.mean("sh_mm"))
-                     + rng.normal(0, noise_mm, km.size))
+                     + fh_rng.normal(0, noise_mm, km.size))
             for row, fh in zip(rows[-km.size:], fh_mm, strict=True):
                 row["FH_mm"] = fh
     return pd.DataFrame(rows)
