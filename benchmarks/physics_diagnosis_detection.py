@@ -8,9 +8,10 @@ route, USFD, D_step 1 mm, 3,000 km) with one cause injected, a wear scale of 1.2
 with 4 irregular mileages each (200-1,500 km) and 0.02 mm noise on FT and qR. The diagnosis
 (``statistics.physics_diagnosis``) runs the same loop at its catalogue values (flange wear
 factor 0.25 / 0.5 / 1, friction 0.3 / 0.4 / 0.5, Hertz / Kik-Piotrowski patch, direction share
-0.5 / 1) and prints, per hidden cause, the verdict and every finding (relative held-out gain,
-interval low end, Holm p, fitted value and scale), the runner-up, the margin over it and the
-margin test's p (a cause is named only when that margin is significant; else ``ambiguous``).
+0.5 / 1, traction torque on the motor axles 0 / 2,400 / 4,800 N m) and prints, per hidden
+cause, the verdict and every finding (relative held-out gain, interval low end, Holm p, fitted
+value and scale), the runner-up, the margin over it and the margin test's p (a cause is named
+only when that margin is significant; else ``ambiguous``).
 """
 
 from __future__ import annotations
@@ -28,9 +29,12 @@ CATALOGUE = (
     PhysicsCause("flange_lubrication", "flange", "flange_wear_factor", (0.25, 0.5, 1.0), 1.0),
     PhysicsCause("friction_level", "friction", "friction", (0.3, 0.4, 0.5), 0.4),
     PhysicsCause("patch_model", "patch", "patch_width", ("hertz", "kik_piotrowski"), "hertz"),
-    PhysicsCause("running_direction_share", "direction", "forward_share", (0.5, 1.0), 0.5))
+    PhysicsCause("running_direction_share", "direction", "forward_share", (0.5, 1.0), 0.5),
+    # 0, 0.15 and 0.3 of the metro_b motor axle's adhesion torque 2 mu Q r (16.0 kN m)
+    PhysicsCause("traction_on_motor_axles", "traction", "traction_torque_nm",
+                 (0.0, 2400.0, 4800.0), 0.0))
 HIDDEN = ({}, {"flange_wear_factor": 0.5}, {"friction": 0.5}, {"patch_width": "kik_piotrowski"},
-          {"forward_share": 1.0})
+          {"forward_share": 1.0}, {"traction_torque_nm": 4000.0})
 
 
 def main() -> None:

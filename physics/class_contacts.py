@@ -109,7 +109,8 @@ def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_gri
     falls back to a neighbour or the previous contact). ``warm_first``: start every point that
     has a last equilibrium from it (Newton at full load, no continuation) and retry the failures
     by continuation from centred wheelsets (faster when the profile changed little)."""
-    cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
+    cases = [curve_case(r, cant, v, "left", torque_nm=vehicle.traction_torque_nm)
+             for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]
     first = None
     if warm_first and warm:

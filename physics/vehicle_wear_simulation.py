@@ -84,6 +84,9 @@ class VehicleWearOptions:
     rail : the rail under every wheel, replacing the preset's: a name (``60E1``, ``60E2``),
         a measured rail or a rail worn by the loop (``rail_head_wear.WornRail``, e.g. a rail
         step of ``rail_feedback.simulate_rail_steps``); None: the preset's
+    traction_torque_nm : driving (+) or braking (-) torque on every axle of every motor bogie
+        [N m], held over the whole route (the mean tractive effort the line demands, seed 001
+        §2.2's traction on motor wheels); trailer bogies roll free; None: the preset's
     """
 
     forward_share: float = 0.5
@@ -93,6 +96,7 @@ class VehicleWearOptions:
     patch_width: str = "hertz"
     application: str = "global"
     rail: Any = None
+    traction_torque_nm: float | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.forward_share <= 1.0:
@@ -101,6 +105,8 @@ class VehicleWearOptions:
             raise ValueError("wear_scale must be > 0 and flange_wear_factor >= 0")
         if self.friction is not None and not 0 < self.friction < 1.5:
             raise ValueError("friction must lie in (0, 1.5)")
+        if self.traction_torque_nm is not None and not np.isfinite(self.traction_torque_nm):
+            raise ValueError("traction_torque_nm must be finite")
 
 
 @dataclass(frozen=True)
@@ -244,6 +250,9 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     bogies = vehicle_bogies(vehicle, opts.friction)
     if opts.rail is not None:
         bogies = [(replace(b, rail_profile=opts.rail), n) for b, n in bogies]
+    if opts.traction_torque_nm is not None:
+        bogies = [(replace(b, traction_torque_nm=float(opts.traction_torque_nm))
+                   if b.bogie_type == "motor" else b, n) for b, n in bogies]
     classes = as_loop_classes(route_classes)
     shares = np.array([c.share for c in classes], dtype=float)
     shares = shares / shares.sum()

@@ -44,13 +44,27 @@ def _friction(state: dict[str, Any]) -> float:
         vehicle_bogies(state["vehicle"])[0][0].friction)
 
 
+def _adhesion_torque_nm(state: dict[str, Any]) -> float | None:
+    """2 mu Q r of the vehicle's motor axle [N m] (None without a motor bogie): the scale of
+    the traction cause's torques."""
+    from wearcast.physics.vehicle_wear_simulation import vehicle_bogies
+
+    motors = [b for b, _ in vehicle_bogies(state["vehicle"], _friction(state))
+              if b.bogie_type == "motor"]
+    if not motors:
+        return None
+    b = motors[0]
+    return 2.0 * b.friction * b.wheel_load_n * b.wheel_radius_m
+
+
 def catalogue(state: dict[str, Any]) -> tuple[Any, ...]:
     """The catalogue with the model's own values as the nulls."""
     opts = state["options"]
     nulls = {"law": state["law"], "forward_share": opts.get("forward_share", 0.5),
              "flange_wear_factor": opts.get("flange_wear_factor", 1.0),
-             "patch_width": opts.get("patch_width", "hertz")}
-    return catalogue_for(_friction(state), nulls)
+             "patch_width": opts.get("patch_width", "hertz"),
+             "traction_torque_nm": opts.get("traction_torque_nm") or 0.0}
+    return catalogue_for(_friction(state), nulls, _adhesion_torque_nm(state))
 
 
 def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> int:

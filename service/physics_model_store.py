@@ -56,7 +56,7 @@ KIND = "physics_model"
 MAX_RUNS = 3
 #: Options of the run a request sets (``VehicleWearOptions`` fields).
 OPTION_FIELDS = ("forward_share", "flange_wear_factor", "friction", "patch_width",
-                 "application")
+                 "application", "traction_torque_nm")
 
 
 # --- validating and queueing ----------------------------------------------------------------

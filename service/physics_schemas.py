@@ -57,6 +57,9 @@ class PhysicsSimulationIn(Strict):
         "wheel-rail friction replacing the preset's"))
     patch_width: Literal["hertz", "kik_piotrowski"] = "hertz"
     application: Literal["global", "local"] = "global"
+    traction_torque_nm: float | None = Field(default=None, ge=-50_000, le=50_000, description=(
+        "driving (+) or braking (-) torque on every axle of the motor bogies [N m], held over "
+        "the whole route (the line's mean tractive effort); default: the preset's (none)"))
 
 
 class PhysicsModelIn(Strict):

@@ -84,13 +84,22 @@ CATALOGUE: tuple[PhysicsCause, ...] = (
                  "patch_width", ("hertz", "kik_piotrowski"), "hertz"),
     PhysicsCause("wear_law", "the wear law and its coefficient map", "law",
                  ("usfd", "archard_kth"), "usfd"),
+    PhysicsCause("traction_on_motor_axles", "the motor axles carry a traction torque the model "
+                 "leaves out (the line's mean tractive effort): torque per motor axle [N m]",
+                 "traction_torque_nm", (0.0, 2000.0, 4000.0), 0.0),
 )
+#: Traction torques of the catalogue as shares of a motor axle's adhesion torque
+#: 2 mu Q r (:func:`catalogue_for`); the default values above are about these shares of the
+#: Minuetto motor axle's (mu 0.28, Q 57.1 kN, r 0.43 m: 13.7 kN m).
+TRACTION_ADHESION_SHARES = (0.0, 0.15, 0.3)
 
 
-def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None
-                  ) -> tuple[PhysicsCause, ...]:
+def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
+                  adhesion_torque_nm: float | None = None) -> tuple[PhysicsCause, ...]:
     """:data:`CATALOGUE` with the friction level around a vehicle's own coefficient mu (its
-    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28).
+    null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28), and, given
+    the motor axle's adhesion torque 2 mu Q r [N m], the traction torques at
+    :data:`TRACTION_ADHESION_SHARES` of it.
 
     ``nulls`` : {parameter: the model's own value} for a model that is not the catalogue's
     default (e.g. ``{"law": "archard_kth", "forward_share": 1.0}``): that value becomes the
@@ -101,6 +110,10 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None
             c = PhysicsCause(c.name, c.summary, c.parameter,
                              (round(0.7 * friction, 4), friction, round(1.4 * friction, 4)),
                              friction)
+        if c.parameter == "traction_torque_nm" and adhesion_torque_nm is not None:
+            c = PhysicsCause(c.name, c.summary, c.parameter,
+                             tuple(round(f * adhesion_torque_nm, 1)
+                                   for f in TRACTION_ADHESION_SHARES), 0.0)
         if nulls and c.parameter in nulls and nulls[c.parameter] is not None:
             null = nulls[c.parameter]
             if c.categorical:
@@ -114,7 +127,6 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None
 
 #: Causes of issue 12 this module cannot build yet, with the reason (reported in ``skipped``).
 NOT_BUILT = {
-    "traction_on_motor_axles": "the loop's operating points carry no traction torque yet",
     "rail_state": "a worn or measured rail can enter the contact (VehicleWearOptions.rail, "
                   "rail_feedback.simulate_rail_steps), but the catalogue has no rail state to "
                   "run it at: no measured rail of the line, and a worn rail per diagnosis "
@@ -381,14 +393,16 @@ def _verdict(ranked: Sequence[Finding], after_of: Mapping[str, NDArray], unit: N
     gain.
 
     The best significant and material cause is named only if it also beats every other
-    significant and material cause by a tested margin: the held-out error of the other minus
-    the best's, summed per test unit (vehicle, or point below 5 vehicles), one-sided
-    sign-flip randomisation p < ``alpha`` (``finder_scoring.sign_flip_p``, as the hybrid
-    finder's margin test). Otherwise the verdict is ``ambiguous`` and ``candidates`` lists
-    the best and the causes it could not be separated from (two causes the measured series
-    cannot tell apart, e.g. friction level and running-direction share on FT/qR only).
-    ``runner_up`` is the best other cause whatever its significance, ``margin`` the
-    difference of their relative gains.
+    cause that explains anything (a positive held-out gain, significant or not) by a tested
+    margin: the held-out error of the other minus the best's, summed per test unit (vehicle,
+    or point below 5 vehicles), one-sided sign-flip randomisation p < ``alpha``
+    (``finder_scoring.sign_flip_p``, as the hybrid finder's margin test); a cause with no
+    gain is worse than the null the best significantly beats. Otherwise the verdict is
+    ``ambiguous`` and ``candidates`` lists the best and the causes it could not be separated
+    from (causes the measured series cannot tell apart, e.g. flange lubrication and traction
+    on the motor axles, which both ease the motor wheels' flanges). ``runner_up`` is the
+    other cause with the largest gain, ``margin`` the difference of their relative gains
+    (negative when a cause that is not significant gains more).
     """
     chosen = [f for f in ranked if f.significant and f.material]
     if not chosen:
@@ -398,7 +412,7 @@ def _verdict(ranked: Sequence[Finding], after_of: Mapping[str, NDArray], unit: N
     runner = others[0] if others else None
     p_of = {f.cause: sign_flip_p(group_sums(after_of[f.cause] - after_of[best.cause], unit),
                                  4000, rng)
-            for f in chosen[1:]}
+            for f in others if f.gain.relative > 0}
     unseparated = tuple(c for c, p in p_of.items() if p >= alpha)
     margin = None if runner is None else float(best.gain.relative - runner.gain.relative)
     margin_p = None if runner is None else p_of.get(runner.cause)

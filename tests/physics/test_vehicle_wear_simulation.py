@@ -74,6 +74,23 @@ def test_wear_scale_and_flange_lubrication_act_in_the_right_direction(symmetric)
         VehicleWearOptions(forward_share=1.5)
 
 
+@pytest.mark.slow
+def test_traction_torque_acts_on_the_motor_bogie_only(symmetric):
+    # 0.3 of metro_b's motor-axle adhesion torque (2 mu Q r = 16.0 kN m): the motor wheels'
+    # flange wear changes (measured when written: Sd at 1,500 km 32.255 -> 32.459 mm, the
+    # longitudinal creep force takes adhesion the steering needed), the trailer's moves only
+    # by the shared adaptive step (< 0.02 mm)
+    driven = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                   depth_per_step_mm=STEP,
+                                   options=VehicleWearOptions(traction_torque_nm=4800.0))
+    motor = [i for i, w in enumerate(driven.wheels) if w.startswith("motor")]
+    trailer = [i for i, w in enumerate(driven.wheels) if w.startswith("trailer")]
+    assert abs(driven.sd_mm[-1, motor] - symmetric.sd_mm[-1, motor]).min() > 0.1
+    assert np.allclose(driven.sd_mm[-1, trailer], symmetric.sd_mm[-1, trailer], atol=0.02)
+    with pytest.raises(ValueError, match="traction_torque_nm"):
+        VehicleWearOptions(traction_torque_nm=float("nan"))
+
+
 class _FakeSimulation:
     """A vehicle simulation's comparison interface with a linear FT loss of 1 mm/1000 km."""
 

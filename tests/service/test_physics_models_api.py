@@ -170,7 +170,8 @@ def test_a_physics_model_is_diagnosed_with_the_physics_contract(built) -> None:
     (finding,) = d["findings"]
     assert finding["cause"] == "patch_model"
     assert {"relative", "ci95_low", "ci95_high"} <= set(finding["gain"])
-    assert "traction_on_motor_axles" in d["skipped"] and d["n_groups"] == 4
+    assert "rail_state" in d["skipped"] and "traction_on_motor_axles" not in d["skipped"]
+    assert d["n_groups"] == 4
     assert d["null_fit"]["wear_scale"] == pytest.approx(SCALE, rel=0.02)
     r = client.post(f"/v1/models/{model['id']}/diagnose", json={"causes": ["traction"]})
     assert _field(r) == "causes[0]"

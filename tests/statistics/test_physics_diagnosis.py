@@ -220,3 +220,17 @@ def test_loop_series_measured_with_flange_height():
     assert "FH_mm" not in plain and list(with_fh.columns[:4]) == list(plain.columns)
     pd.testing.assert_frame_equal(with_fh[plain.columns], plain)
     assert np.allclose(with_fh["FH_mm"], 28.0 + 2e-4 * 1.2 * with_fh["distance_km"])
+
+
+def test_the_traction_cause_is_scaled_to_the_vehicles_adhesion_torque():
+    from wearcast.statistics.physics_diagnosis import TRACTION_ADHESION_SHARES, catalogue_for
+
+    default = next(c for c in catalogue_for(0.28) if c.name == "traction_on_motor_axles")
+    assert default.null == 0.0 and default.values[0] == 0.0
+    scaled = next(c for c in catalogue_for(0.4, adhesion_torque_nm=16_000.0)
+                  if c.name == "traction_on_motor_axles")
+    assert scaled.values == tuple(16_000.0 * f for f in TRACTION_ADHESION_SHARES)
+    # a model that already carries a torque has it as the null, among the values run
+    own = next(c for c in catalogue_for(0.4, {"traction_torque_nm": 1000.0}, 16_000.0)
+               if c.name == "traction_on_motor_axles")
+    assert own.null == 1000.0 and 1000.0 in own.values
