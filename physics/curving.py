@@ -482,7 +482,10 @@ class CurvingResult:
     p0 [MPa], and from FASTSIM on this state tau_max [MPa] and T_gamma [N]; ``in_contact`` marks
     loaded patches. Also: the operating point, ``high_rail_side`` (None on tangent track) and the
     residual norm of the scaled equilibrium and the solver ``state`` (scaled unknowns, used to
-    continue from this solution); ``creep_grid`` the FASTSIM grid of the equilibrium's creep
+    continue from this solution); ``saturation_state`` the equilibrium of the smooth saturation
+    law the solve went through (the start of the Newton solution with FASTSIM's forces; equal
+    to ``state`` without them), the warm start of a later solve (``initial_states``), which
+    runs the saturation law first; ``creep_grid`` the FASTSIM grid of the equilibrium's creep
     forces (None: the saturation law, ``contact.creep``).
 
     ``pipeline`` (with ``contact_pipeline=True``, else None): the contacts of the one contact
@@ -529,6 +532,7 @@ class CurvingResult:
     in_contact: NDArray
     residual_norm: float
     state: NDArray
+    saturation_state: NDArray | None = None
     creep_grid: int | None = None
     pipeline: dict[str, NDArray] | None = None
     pipeline_residual_norm: float = float("nan")
@@ -679,8 +683,9 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     table, tol, fastsim_grid : as :func:`solve_curving`
     skip_failed : return None for the cases that did not converge instead of raising (one
         batch for any number of failures; the wear loop's fallback)
-    initial_states : per case an equilibrium state (``CurvingResult.state``) to start Newton
-        from at the case's own load parameters instead of the continuation from centred
+    initial_states : per case an equilibrium state (``CurvingResult.saturation_state``: the
+        first Newton solution uses the saturation law) to start Newton from at the case's own
+        load parameters instead of the continuation from centred
         wheelsets (None: continuation); the wear loop's warm retry after a profile update
     creep_grid : creep forces of the equilibrium from FASTSIM on an n x n grid (default
         ``DEFAULT_CREEP_GRID``): the continuation runs with the smooth saturation law
@@ -729,6 +734,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         return _bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])
 
     q, norm, ok = continuation_batch(fun, q0, p_start, p_end, tol)
+    q_saturation = q.copy()
     if creep_grid is not None and np.any(ok):
         # the saturation law's equilibrium is the start of Newton with FASTSIM's forces
         def fun_fastsim(q, params):
@@ -813,7 +819,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
             tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
             in_contact=wear["in_contact"][k], residual_norm=float(norm[k]),
-            state=q[k].copy(), creep_grid=creep_grid, pipeline=pipeline[k],
+            state=q[k].copy(), saturation_state=q_saturation[k].copy(),
+            creep_grid=creep_grid, pipeline=pipeline[k],
             pipeline_residual_norm=float(pipeline_norm[k])))
     return results
 
