@@ -105,10 +105,11 @@ def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_gri
                   ) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
     from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
-    ``CurvingResult.saturation_state`` on the previous profile) if it has one, else it is None (the caller
-    falls back to a neighbour or the previous contact). ``warm_first``: start every point that
-    has a last equilibrium from it (Newton at full load, no continuation) and retry the failures
-    by continuation from centred wheelsets (faster when the profile changed little)."""
+    ``CurvingResult.saturation_state`` on the previous profile) if it has one, else it is None
+    (the caller falls back to a neighbour or the previous contact). ``warm_first``: start every
+    point that has a last equilibrium from it (Newton at full load, no continuation) and retry
+    the failures by continuation from centred wheelsets (faster when the profile changed
+    little)."""
     cases = [curve_case(r, cant, v, "left") for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]
     first = None

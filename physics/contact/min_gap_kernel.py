@@ -11,8 +11,8 @@ d roll (N,)); a pose with no wheel sample over the rail gets an infinite gap.
 
 The rigid roll solve of the curving model's contact table (``geometry._solve_roll``, twice per
 iteration over all shifts) spent most of the table's time building the (N, M) gap arrays for
-this minimum; the kernel keeps one row at a time. The numpy path (``geometry._gaps`` +
-``_refine``) is the reference: the two agree to rounding (``tests/physics/test_contact_geometry.py``).
+this minimum; the kernel keeps one row at a time. The numpy path (``geometry._min_gap_numpy``)
+is the reference: the two agree to rounding (``tests/physics/test_contact_geometry.py``).
 """
 
 from __future__ import annotations

@@ -7,6 +7,7 @@ import pytest
 
 from wearcast.physics import curving as cv
 from wearcast.physics.vehicles import GRAVITY_M_S2, vehicle_preset
+from wearcast.physics.wear_measures import equilibrium_wear_measures
 
 SIGN = np.array([1.0, -1.0])  # left wheel at +y
 
@@ -301,7 +302,7 @@ def test_tau_max_in_full_slip_is_mu_p0_with_the_elliptic_bound():
     # full slip (creepage 50x the characteristic one): the traction equals mu p everywhere, so
     # tau_max = mu p0 for the Hertz (elliptic) pressure; the parabolic bound would give 4/3 of it
     a, b, fn, mu = 6.0, 4.0, 80_000.0, 0.3
-    out = cv.contact_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
+    out = equilibrium_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
     p0 = 1.5 * fn / (np.pi * a * b)
     # the grid's element centres miss the patch centre by half an element: (1 - rho^2)^0.5 there
     assert float(out["tau_max_mpa"]) == pytest.approx(mu * p0, rel=2e-3)
