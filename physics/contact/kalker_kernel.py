@@ -1,4 +1,5 @@
-"""Kalker's creepage coefficients as a compiled kernel (one pass per contact).
+"""Kalker's creepage coefficients, and the creep forces of his linear theory saturated by
+Shen-Hedrick-Elkins, as compiled kernels (one pass per contact).
 
 ``kalker_coefficients_flat(a, b, nu, table, row_shape)`` does per contact what
 ``kalker.kalker_coefficients`` describes (Kalker's table E.3 with CONTACT's interpolation:
@@ -9,7 +10,8 @@ C11, C22, C23, C33 as an (N, 4) array. The numpy implementation
 (``tests/physics/test_kalker.py``). The kernel replaces some twenty numpy passes over small
 arrays: the curving equilibrium calls it for every residual evaluation, most of them one
 state (MINPACK's fallback) whose cost was the passes' overhead
-(``benchmarks/bench_vehicle_wear_aosta.py``).
+(``benchmarks/bench_vehicle_wear_aosta.py``). ``saturated_creep_flat`` adds the linear forces
+and the saturation of ``creep.creep_forces`` (reference ``creep._creep_forces_numpy``).
 """
 
 from __future__ import annotations
@@ -61,4 +63,40 @@ def kalker_coefficients_flat(a: NDArray[np.float64], b: NDArray[np.float64], nu:
                 den = (1.0 - nu) * al + 2.0 * nu
                 out[i, 1] = 2.0 * np.pi / gg * (1.0 + (1.0 - nu) * k_b / den) / den
                 out[i, 2] = 2.0 * np.pi / 3.0 / gg**1.5 / ((1.0 - nu) * al - 2.0 + 4.0 * nu)
+    return out
+
+
+@njit(cache=True)
+def saturated_creep_flat(xi: NDArray[np.float64], eta: NDArray[np.float64],
+                         phi_per_mm: NDArray[np.float64], a: NDArray[np.float64],
+                         b: NDArray[np.float64], normal_force_n: NDArray[np.float64],
+                         mu: NDArray[np.float64], shear_modulus_mpa: float, nu: float,
+                         table: NDArray[np.float64], row_shape: NDArray[np.float64]
+                         ) -> NDArray[np.float64]:
+    """Kalker's linear creep forces saturated by Shen-Hedrick-Elkins per contact
+    (``creep.creep_forces``, whose numpy form is ``creep._creep_forces_numpy``): columns Fx [N],
+    Fy [N], Mz [N mm] and the saturation ratio, shape (N, 4); 1-D inputs of one length."""
+    c = kalker_coefficients_flat(a, b, nu, table, row_shape)
+    n = a.size
+    out = np.empty((n, 4))
+    g = shear_modulus_mpa
+    for i in range(n):
+        ab = a[i] * b[i]
+        fx = -g * ab * c[i, 0] * xi[i]
+        fy = -g * ab * c[i, 1] * eta[i] - g * ab**1.5 * c[i, 2] * phi_per_mm[i]
+        mz = g * ab**1.5 * c[i, 2] * eta[i] - g * ab**2 * c[i, 3] * phi_per_mm[i]
+        f_lin = math.hypot(fx, fy)
+        limit = mu[i] * normal_force_n[i]
+        if f_lin > 0:
+            u = f_lin / limit if limit > 0 else np.inf
+            if u < 3.0:
+                ratio = 1.0 - u / 3.0 + u**2 / 27.0
+            else:
+                ratio = 1.0 / u
+        else:
+            ratio = 1.0 if limit > 0 else 0.0
+        out[i, 0] = ratio * fx
+        out[i, 1] = ratio * fy
+        out[i, 2] = ratio * mz
+        out[i, 3] = ratio
     return out

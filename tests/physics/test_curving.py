@@ -330,3 +330,25 @@ def test_compiled_candidates_equal_the_numpy_reference(wheel):
         if name is None:
             continue
         assert np.allclose(cols[name], r, rtol=1e-9, atol=1e-9), name
+
+
+def test_saturation_state_is_the_saturation_law_equilibrium(trailer, curve_500):
+    # the warm start of a later solve (CurvingResult.saturation_state) is the equilibrium of the
+    # smooth saturation law the solve went through, not FASTSIM's (the state)
+    from wearcast.physics.bogie_equations import bogie_residual
+
+    res = curve_500[0]
+    case = cv.curve_case(500.0, 80.0, None, "left", 0.58, trailer.traction_torque_nm)
+    table = cv.vehicle_contact_table(trailer)
+
+    def norm(q, creep_grid):
+        r = bogie_residual(q[None, :], trailer, table, np.array([case.curvature_per_m]),
+                           np.array([case.unbalanced_acceleration_m_s2]),
+                           np.array([case.torque_nm]), creep_grid=creep_grid)
+        return float(np.linalg.norm(r))
+
+    assert res.creep_grid == cv.DEFAULT_CREEP_GRID
+    assert norm(res.saturation_state, None) < cv.DEFAULT_TOLERANCE
+    assert norm(res.state, None) > 10 * cv.DEFAULT_TOLERANCE
+    smooth = cv.solve_curving(trailer, 500.0, creep_grid=None)
+    assert np.array_equal(smooth.saturation_state, smooth.state)
