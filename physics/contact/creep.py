@@ -92,7 +92,8 @@ def creep_forces(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: Arr
     if np.any(args[3] <= 0) or np.any(args[4] <= 0):
         raise ValueError("semi-axes a_mm and b_mm must be positive")
     shape = args[0].shape
-    out = saturated_creep_flat(*(np.ascontiguousarray(v.reshape(-1)) for v in args),
+    flat = [np.ascontiguousarray(v.reshape(-1)) for v in args]
+    out = saturated_creep_flat(flat[0], flat[1], flat[2], flat[3], flat[4], flat[5], flat[6],
                                float(shear_modulus_mpa), float(poisson), KALKER_TABLE,
                                KALKER_ROW_SHAPE)
     fx, fy, mz, ratio = (out[:, i].reshape(shape) for i in range(4))
