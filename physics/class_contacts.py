@@ -105,10 +105,11 @@ def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_gri
                   ) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
     from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
-    ``CurvingResult.state`` on the previous profile) if it has one, else it is None (the caller
-    falls back to a neighbour or the previous contact). ``warm_first``: start every point that
-    has a last equilibrium from it (Newton at full load, no continuation) and retry the failures
-    by continuation from centred wheelsets (faster when the profile changed little)."""
+    ``CurvingResult.saturation_state`` on the previous profile) if it has one, else it is None
+    (the caller falls back to a neighbour or the previous contact). ``warm_first``: start every
+    point that has a last equilibrium from it (Newton at full load, no continuation) and retry
+    the failures by continuation from centred wheelsets (faster when the profile changed
+    little). The vehicle's traction torque acts at every point."""
     cases = [curve_case(r, cant, v, "left", torque_nm=vehicle.traction_torque_nm)
              for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]
@@ -195,7 +196,7 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
     solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm,
                                             warm_first), strict=True))
     states = dict(warm or {})
-    states.update({p: r.state for p, r in solved.items() if r is not None})
+    states.update({p: r.saturation_state for p, r in solved.items() if r is not None})
     good = [p for p, r in solved.items() if r is not None]
     if not good and not prev:
         raise CurvingConvergenceError("quasi-static curving did not converge for any class",

@@ -9,9 +9,9 @@ with the smoothing correction -g'' sigma^2 / 2; their gaps above the best one; t
 are merged with); the slots ordered field side first (largest wheel y; missing candidates
 last). Returns wheel y [mm], gap [mm], g'' [1/mm] and weight, each (N, n_slots).
 
-The numpy implementation (``curving._candidate_slots_numpy``) is the reference: the two agree
-to rounding (``tests/physics/test_curving.py``); the kernel avoids building (N, n_y) arrays
-for every query, which was 56-59 % of a curve-radius table's time
+The numpy implementation (``curving_table.ContactTable._candidate_slots_numpy``) is the
+reference: the two agree to rounding (``tests/physics/test_curving.py``); the kernel avoids
+building (N, n_y) arrays for every query, which was 56-59 % of a curve-radius table's time
 (``benchmarks/bench_wear_tables.py``).
 """
 

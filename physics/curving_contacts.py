@@ -9,7 +9,7 @@ locus -> patches merged or split by the interpenetration region -> non-Hertzian 
 -> FASTSIM) evaluated at the curving's pose of each wheel: the wheelset's centre shift, yaw,
 roll, rolling ratio, the track curvature and the wheel's vertical load -- the table's
 equilibrium pose, or the equilibrium of the pipeline's own forces
-(``curving._pipeline_equilibrium``).
+(``pipeline_equilibrium.pipeline_force_equilibrium``).
 At the table's pose on a flange the table loads the gap minimum near the root (contact angle
 30-50 deg) where the pipeline's patch lies up the flank (66-70 deg), and the pipeline's forces
 do not balance the state; at the equilibrium of the pipeline's forces (a smaller roll) its

@@ -29,8 +29,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.contact.fastsim import FastsimResult
+from wearcast.physics.contact.fastsim import Bound, FastsimResult, fastsim
+from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 
+#: Traction bound of the FASTSIM solution tau_max is read from: the elliptic bound mu p(x, y) has
+#: the Hertz pressure's shape, so in the slip zone tau_max <= mu p0 as in the exact (variational)
+#: solution; the parabolic bound (FASTSIM's default for forces) peaks at 4/3 mu p0 and overstates
+#: tau_max by up to 33 % (tests/physics/test_curving.py, full slip).
+TAU_MAX_BOUND: Bound = "elliptic"
 #: Seed 004 Table 1: KTH wear coefficients per zone (mild 1, severe, mild 2, seizure) [-].
 KTH_COEFFICIENTS = (1.43e-4, 1.00e-3, 1.43e-4, 1.00e-2)
 #: KTH map sliding-velocity boundaries v1, v2 [m/s] (seed 000 §III).
@@ -200,6 +206,46 @@ def krause_poll_index(t_gamma_n: ArrayLike, rolling_speed_m_s: ArrayLike,
     rate = c * tg * 1e9  # m^3 per metre rolled -> mm^3/m
     return KrausePollIndex(power_density_w_per_mm2=density, coefficient_m3_per_j=c,
                            regime=np.where(severe, "severe", "mild"), wear_rate_mm3_per_m=rate)
+
+
+def equilibrium_wear_measures(xi, eta, phi_per_mm, a_mm, b_mm, normal_force_n, fx_n, fy_n, mz_nmm,
+                              mu, fastsim_grid: int = 20) -> dict[str, NDArray]:
+    """Tγ, τmax and p0 per contact of a curving equilibrium (``curving``); FASTSIM batched
+    over the loaded contacts.
+
+    Parameters
+    ----------
+    xi, eta [-], phi_per_mm [1/mm], a_mm, b_mm [mm], normal_force_n [N], creep forces
+    fx_n, fy_n [N] and spin moment mz_nmm [N mm] of the equilibrium: any common shape
+    mu : friction coefficient; fastsim_grid : n for the n x n FASTSIM grid
+
+    Returns
+    -------
+    dict with ``t_gamma_n`` = |Fx xi| + |Fy eta| + |Mz phi| [N] (seed 004 eq. 1),
+    ``tau_max_mpa`` the largest surface shear traction of the FASTSIM solution [MPa]
+    (elliptic traction bound ``TAU_MAX_BOUND``, CONTACT's flexibilities; seed 001 §2.2,
+    Al-Maliki), ``p0_mpa`` the Hertz
+    peak pressure 3N/(2 pi a b), ``in_contact`` (loaded with at least 1 N). Unloaded contacts
+    get zeros.
+    """
+    shape = np.shape(normal_force_n)
+    fn = np.asarray(normal_force_n, dtype=float).reshape(-1)
+    loaded = fn >= 1.0
+    flat = [np.broadcast_to(np.asarray(v, dtype=float), shape).reshape(-1)
+            for v in (xi, eta, phi_per_mm, a_mm, b_mm, fx_n, fy_n, mz_nmm)]
+    t_gamma_n = np.where(loaded, t_gamma(flat[5], flat[6], flat[7], flat[0], flat[1],
+                                         flat[2]), 0.0)
+    tau = np.zeros(fn.size)
+    p0 = np.zeros(fn.size)
+    if np.any(loaded):
+        sel = [v[loaded] for v in flat[:5]]
+        fs = fastsim(sel[0], sel[1], sel[2], sel[3], sel[4], fn[loaded], mu,
+                     STEEL_SHEAR_MODULUS_MPA, n_x=fastsim_grid, n_y=fastsim_grid,
+                     bound=TAU_MAX_BOUND)
+        tau[loaded] = tau_max(fs)
+        p0[loaded] = 1.5 * fn[loaded] / (np.pi * sel[3] * sel[4])
+    return {"t_gamma_n": t_gamma_n.reshape(shape), "tau_max_mpa": tau.reshape(shape),
+            "p0_mpa": p0.reshape(shape), "in_contact": loaded.reshape(shape)}
 
 
 @dataclass(frozen=True)

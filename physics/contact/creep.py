@@ -30,7 +30,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.fastsim import Bound, FastsimResult, fastsim
-from wearcast.physics.contact.kalker import linear_creep_forces
+from wearcast.physics.contact.kalker import KALKER_ROW_SHAPE, KALKER_TABLE, linear_creep_forces
+from wearcast.physics.contact.kalker_kernel import saturated_creep_flat
 
 
 @dataclass(frozen=True)
@@ -76,12 +77,37 @@ def creep_forces(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: Arr
 
     Returns
     -------
-    CreepForces (Fx, Fy [N], Mz [N*mm], saturation factor); vectorised, smooth.
+    CreepForces (Fx, Fy [N], Mz [N*mm], saturation factor); vectorised, smooth. Evaluated per
+    contact by the compiled kernel ``kalker_kernel.saturated_creep_flat``
+    (``_creep_forces_numpy`` is its numpy reference).
     """
     fn = np.asarray(normal_force_n, dtype=float)
     mu = np.asarray(mu, dtype=float)
     if np.any(fn < 0) or np.any(mu < 0):
         raise ValueError("normal_force_n and mu must be >= 0")
+    if not 0.0 <= poisson <= 0.5:
+        raise ValueError(f"poisson must lie in [0, 0.5] for Kalker's table, got {poisson}")
+    args = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in
+                                 (xi, eta, phi_per_mm, a_mm, b_mm)), fn, mu)
+    if np.any(args[3] <= 0) or np.any(args[4] <= 0):
+        raise ValueError("semi-axes a_mm and b_mm must be positive")
+    shape = args[0].shape
+    flat = [np.ascontiguousarray(v.reshape(-1)) for v in args]
+    out = saturated_creep_flat(flat[0], flat[1], flat[2], flat[3], flat[4], flat[5], flat[6],
+                               float(shear_modulus_mpa), float(poisson), KALKER_TABLE,
+                               KALKER_ROW_SHAPE)
+    fx, fy, mz, ratio = (out[:, i].reshape(shape) for i in range(4))
+    return CreepForces(fx_n=fx, fy_n=fy, mz_nmm=mz, saturation=ratio)
+
+
+def _creep_forces_numpy(xi: ArrayLike, eta: ArrayLike, phi_per_mm: ArrayLike, a_mm: ArrayLike,
+                        b_mm: ArrayLike, normal_force_n: ArrayLike, mu: ArrayLike,
+                        shear_modulus_mpa: float = 82_000.0, poisson: float = 0.28
+                        ) -> CreepForces:
+    """Reference (numpy) implementation of :func:`creep_forces` (same arguments and result),
+    the check of the compiled kernel ``kalker_kernel.saturated_creep_flat``."""
+    fn = np.asarray(normal_force_n, dtype=float)
+    mu = np.asarray(mu, dtype=float)
     lin = linear_creep_forces(xi, eta, phi_per_mm, a_mm, b_mm, shear_modulus_mpa, poisson)
     f_lin = np.hypot(lin.fx_n, lin.fy_n)
     limit = mu * fn

@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact.min_gap_kernel import min_gap_no_yaw
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
 
 _FloatArray = NDArray[np.float64]
@@ -277,7 +278,21 @@ def _refine(gap: _FloatArray, idx: NDArray[np.intp]) -> tuple[_FloatArray, _Floa
 
 def _min_gap(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray, r0: float
              ) -> tuple[_FloatArray, _FloatArray]:
-    """Minimum gap (N,) and its derivative with respect to roll (N,) (yaw neglected in it)."""
+    """Minimum gap (N,) and its derivative with respect to roll (N,) (yaw neglected in it).
+
+    Without yaw (the cross-section) from the compiled kernel ``min_gap_kernel.min_gap_no_yaw``
+    (one pose at a time), else from the (N, M) gaps (``_min_gap_numpy``, the kernel's
+    reference)."""
+    if not np.any(yaw != 0.0):
+        return min_gap_no_yaw(side.y_ws, side.z_ws, side.rail_y, side.rail_z, side.rail_slope,
+                              np.ascontiguousarray(shift, dtype=float),
+                              np.ascontiguousarray(roll, dtype=float), float(r0))
+    return _min_gap_numpy(side, shift, roll, yaw, r0)
+
+
+def _min_gap_numpy(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray,
+                   r0: float) -> tuple[_FloatArray, _FloatArray]:
+    """:func:`_min_gap` from the (N, M) gap array (any yaw)."""
     gap, y = _gaps(side, shift, roll, yaw, r0)
     idx = np.argmin(gap, axis=1)
     value, _ = _refine(gap, idx)

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact.kalker_kernel import kalker_coefficients_flat
+
 # Rows in order of increasing "shape parameter" s: s = g - 1 in [-0.9, 0] for a <= b
 # (g = a/b = 0.1 ... 1.0), s = 1 - g in (0, 0.9] for a > b (g = b/a = 0.9 ... 0.1).
 # Columns per coefficient: nu = 0, 0.25, 0.5.
@@ -112,8 +114,21 @@ def kalker_coefficients(a_mm: ArrayLike, b_mm: ArrayLike, poisson: float = 0.28
     -------
     KalkerCoefficients, broadcast over a and b.
 
-    Kalker's table E.3 with CONTACT's interpolation (module docstring).
+    Kalker's table E.3 with CONTACT's interpolation (module docstring), evaluated by the
+    compiled kernel ``kalker_kernel.kalker_coefficients_flat`` (``_kalker_coefficients_numpy``
+    is its numpy reference).
     """
+    a, b = _checked_semi_axes(a_mm, b_mm, poisson)
+    c = kalker_coefficients_flat(np.ascontiguousarray(a.reshape(-1)),
+                                 np.ascontiguousarray(b.reshape(-1)), float(poisson),
+                                 KALKER_TABLE, KALKER_ROW_SHAPE)
+    c11, c22, c23, c33 = (c[:, i].reshape(a.shape) for i in range(4))
+    return KalkerCoefficients(c11=c11, c22=c22, c23=c23, c33=c33)
+
+
+def _checked_semi_axes(a_mm: ArrayLike, b_mm: ArrayLike, poisson: float
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """a, b as float arrays broadcast together; refuses nu outside [0, 0.5] and a, b <= 0."""
     if not 0.0 <= poisson <= 0.5:
         raise ValueError(f"poisson must lie in [0, 0.5] for Kalker's table, got {poisson}")
     a = np.asarray(a_mm, dtype=float)
@@ -121,6 +136,14 @@ def kalker_coefficients(a_mm: ArrayLike, b_mm: ArrayLike, poisson: float = 0.28
     if np.any(a <= 0) or np.any(b <= 0):
         raise ValueError("semi-axes a_mm and b_mm must be positive")
     a, b = np.broadcast_arrays(a, b)
+    return a, b
+
+
+def _kalker_coefficients_numpy(a_mm: ArrayLike, b_mm: ArrayLike, poisson: float = 0.28
+                               ) -> KalkerCoefficients:
+    """Reference (numpy) implementation of :func:`kalker_coefficients` (same arguments and
+    result), the check of the compiled kernel."""
+    a, b = _checked_semi_axes(a_mm, b_mm, poisson)
     a_le_b = a <= b
     g = np.where(a_le_b, a / b, b / a)
     shape = np.where(a_le_b, g - 1.0, 1.0 - g)

@@ -181,3 +181,23 @@ def test_yaw_mirror_symmetry_and_lead(wheelset):
     assert np.all(flat.left.primary.x_track_mm == 0.0)
     with pytest.raises(ValueError, match="yaw"):
         contact_table(wheelset, shifts, yaw_rad=0.5)
+
+
+def test_min_gap_kernel_matches_numpy_reference():
+    # the compiled minimum gap without yaw (min_gap_kernel) against the (N, M) numpy gaps, on
+    # both sides, over shifts that put the flange on the gauge corner and rolls of both signs
+    from wearcast.physics.contact import geometry as geo
+    from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+
+    wt = wheelset_track(wheel_curve_from_height(s1002_height_mm, (-55.0, 45.0)), "60E1",
+                        1.0 / 40.0, 460.0)
+    rng = np.random.default_rng(1)
+    shift = rng.uniform(-17.0, 17.0, 300)
+    roll = rng.uniform(-0.02, 0.02, 300)
+    for side in geo._prepare(wt):
+        got = geo._min_gap(side, shift, roll, np.zeros(300), 460.0)
+        ref = geo._min_gap_numpy(side, shift, roll, np.zeros(300), 460.0)
+        assert np.all(np.isfinite(got[0]))
+        np.testing.assert_allclose(got[0], ref[0], rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(got[1], ref[1], rtol=1e-12, atol=1e-12)

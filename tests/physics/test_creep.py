@@ -69,3 +69,29 @@ def test_large_spin_is_the_known_weakness():
     fs = creep_forces_fastsim(0.0, 0.0, phi, A, B, FN, MU, n_x=60, n_y=60)
     assert abs(she.fy_n) / (MU * FN) > 0.99
     assert 0.4 < abs(fs.fy_n) / (MU * FN) < 0.6
+
+
+def test_compiled_kernel_matches_numpy_reference():
+    # the compiled saturated forces (kalker_kernel.saturated_creep_flat) against the numpy
+    # reference: linear range, saturation, spin, unloaded patches and zero friction, broadcast
+    from wearcast.physics.contact.creep import _creep_forces_numpy
+
+    rng = np.random.default_rng(3)
+    n = 500
+    xi, eta = rng.normal(0.0, 3e-3, (2, n))
+    phi = rng.normal(0.0, 2e-4, n)
+    a, b = rng.uniform(0.5, 12.0, (2, n))
+    fn = np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0.0, 1e5, n))
+    xi[:5] = 0.0
+    eta[:5] = 0.0
+    phi[:5] = 0.0
+    for mu in (0.3, np.where(rng.random(n) < 0.1, 0.0, 0.35)):
+        got = creep_forces(xi, eta, phi, a, b, fn, mu)
+        ref = _creep_forces_numpy(xi, eta, phi, a, b, fn, mu)
+        for name in ("fx_n", "fy_n", "mz_nmm", "saturation"):
+            np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=1e-12,
+                                       atol=1e-9)
+    shaped = creep_forces(xi[:6].reshape(2, 3), 0.0, 0.0, 6.0, 4.0, 80_000.0, 0.3)
+    assert shaped.fx_n.shape == (2, 3)
+    with pytest.raises(ValueError):
+        creep_forces(1e-3, 0.0, 0.0, 0.0, 4.0, 80_000.0, 0.3)

@@ -7,6 +7,7 @@ import pytest
 
 from wearcast.physics import curving as cv
 from wearcast.physics.vehicles import GRAVITY_M_S2, vehicle_preset
+from wearcast.physics.wear_measures import equilibrium_wear_measures
 
 SIGN = np.array([1.0, -1.0])  # left wheel at +y
 
@@ -301,7 +302,7 @@ def test_tau_max_in_full_slip_is_mu_p0_with_the_elliptic_bound():
     # full slip (creepage 50x the characteristic one): the traction equals mu p everywhere, so
     # tau_max = mu p0 for the Hertz (elliptic) pressure; the parabolic bound would give 4/3 of it
     a, b, fn, mu = 6.0, 4.0, 80_000.0, 0.3
-    out = cv.contact_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
+    out = equilibrium_wear_measures(0.05, 0.0, 0.0, a, b, fn, 0.0, 0.0, 0.0, mu, fastsim_grid=40)
     p0 = 1.5 * fn / (np.pi * a * b)
     # the grid's element centres miss the patch centre by half an element: (1 - rho^2)^0.5 there
     assert float(out["tau_max_mpa"]) == pytest.approx(mu * p0, rel=2e-3)
@@ -329,3 +330,25 @@ def test_compiled_candidates_equal_the_numpy_reference(wheel):
         if name is None:
             continue
         assert np.allclose(cols[name], r, rtol=1e-9, atol=1e-9), name
+
+
+def test_saturation_state_is_the_saturation_law_equilibrium(trailer, curve_500):
+    # the warm start of a later solve (CurvingResult.saturation_state) is the equilibrium of the
+    # smooth saturation law the solve went through, not FASTSIM's (the state)
+    from wearcast.physics.bogie_equations import bogie_residual
+
+    res = curve_500[0]
+    case = cv.curve_case(500.0, 80.0, None, "left", 0.58, trailer.traction_torque_nm)
+    table = cv.vehicle_contact_table(trailer)
+
+    def norm(q, creep_grid):
+        r = bogie_residual(q[None, :], trailer, table, np.array([case.curvature_per_m]),
+                           np.array([case.unbalanced_acceleration_m_s2]),
+                           np.array([case.torque_nm]), creep_grid=creep_grid)
+        return float(np.linalg.norm(r))
+
+    assert res.creep_grid == cv.DEFAULT_CREEP_GRID
+    assert norm(res.saturation_state, None) < cv.DEFAULT_TOLERANCE
+    assert norm(res.state, None) > 10 * cv.DEFAULT_TOLERANCE
+    smooth = cv.solve_curving(trailer, 500.0, creep_grid=None)
+    assert np.array_equal(smooth.saturation_state, smooth.state)

@@ -71,3 +71,21 @@ def test_linear_forces_odd_in_creepage():
     assert (f1.fx_n, f1.fy_n, f1.mz_nmm) == pytest.approx((-f2.fx_n, -f2.fy_n, -f2.mz_nmm))
     c = kalker_coefficients(6.0, 4.0)
     assert f1.fx_n == pytest.approx(-82_000.0 * 24.0 * c.c11 * 1e-3)
+
+
+def test_compiled_kernel_matches_numpy_reference():
+    # the compiled kernel (kalker_kernel) against the numpy reference over the table's rows,
+    # between them, the slender asymptotes on both sides and several Poisson ratios
+    from wearcast.physics.contact.kalker import _kalker_coefficients_numpy
+
+    rng = np.random.default_rng(7)
+    ratio = np.concatenate([np.geomspace(1e-3, 1e3, 400), rng.uniform(0.05, 20.0, 400),
+                            [0.1, 1.0, 10.0]])
+    a = rng.uniform(0.5, 10.0, ratio.size)
+    for nu in (0.0, 0.25, 0.28, 0.5):
+        got = kalker_coefficients(a, a / ratio, nu)
+        ref = _kalker_coefficients_numpy(a, a / ratio, nu)
+        for name in ("c11", "c22", "c23", "c33"):
+            np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=1e-12,
+                                       atol=0.0)
+    assert np.shape(kalker_coefficients(np.ones((2, 3)), 2.0).c23) == (2, 3)
