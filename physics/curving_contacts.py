@@ -26,19 +26,19 @@ curving's F_y.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.bogie_equations import BogieContacts
 from wearcast.physics.contact.geometry import WheelsetTrack
 from wearcast.physics.contact.pose_contact import Pose, PoseContact, contact_at_poses
 from wearcast.physics.vocabulary import SIDES
 
-#: Fields of :class:`PipelineContacts`, each (cases, 2 wheelsets, 2 sides, slots).
-PATCH_FIELDS = ("normal_n", "angle_rad", "wheel_y_mm", "rail_y_mm", "lateral_mm", "radius_m",
-                "xi", "eta", "phi_per_mm", "fx_n", "fy_n", "mz_nmm", "a_mm", "b_mm",
-                "peak_pressure_mpa")
+#: Fields of :class:`PipelineContacts`, each (cases, 2 wheelsets, 2 sides, slots): the bogie
+#: equations' per-contact quantities (``BogieContacts``) and the peak pressure.
+PATCH_FIELDS = (*(f.name for f in fields(BogieContacts)), "peak_pressure_mpa")
 #: Patch slots per wheel (field side first), as the curving table's candidates.
 N_SLOTS = 3
 
@@ -49,7 +49,7 @@ class PipelineContactError(RuntimeError):
 
 
 @dataclass(frozen=True)
-class PipelineContacts:
+class PipelineContacts(BogieContacts):
     """Per-patch arrays (cases, 2 wheelsets, 2 sides (left, right), ``N_SLOTS``), field side
     first, unused slots zero (curving's signs, module docstring): normal force [N], contact
     angle [rad], patch centre on the wheel [mm] (pressure centre), on the rail (the curving
@@ -58,20 +58,6 @@ class PipelineContacts:
     equivalent ellipse a, b [mm], peak pressure [MPa]; ``ok`` (cases,) whether every wheel of
     the case was solved; ``errors`` the message per failed case."""
 
-    normal_n: NDArray
-    angle_rad: NDArray
-    wheel_y_mm: NDArray
-    rail_y_mm: NDArray
-    lateral_mm: NDArray
-    radius_m: NDArray
-    xi: NDArray
-    eta: NDArray
-    phi_per_mm: NDArray
-    fx_n: NDArray
-    fy_n: NDArray
-    mz_nmm: NDArray
-    a_mm: NDArray
-    b_mm: NDArray
     peak_pressure_mpa: NDArray
     ok: NDArray
     errors: dict[int, str]
