@@ -107,3 +107,48 @@ def test_csv_answers_are_published_in_the_openapi(client: TestClient) -> None:
         assert "text/csv" in content and "application/json" in content, path
     r = client.get("/v1/fleet/state", params={"format": "csv"})
     assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
+
+
+def _walk(node: object, path: str = ""):  # type: ignore[no-untyped-def]
+    if isinstance(node, dict):
+        yield path, node
+        for key, value in node.items():
+            yield from _walk(value, f"{path}/{key}")
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _walk(value, f"{path}/{i}")
+
+
+def test_the_openapi_publishes_what_the_server_refuses(client: TestClient) -> None:
+    """Integer bounds are integers in the 64-bit range (pydantic wrote ``le=2**63 - 1`` as the
+    float 2**63), admin bodies refuse unknown fields, profiles need 10 points, the vehicle
+    presets are an enum and path/query strings hold no NUL byte."""
+    spec = client.get("/openapi.json").json()
+    for where, node in _walk(spec):
+        if node.get("type") == "integer" and "/headers/" not in where:
+            for key in ("minimum", "maximum"):
+                assert isinstance(node[key], int), (where, key, node[key])
+                assert -(2**63) <= node[key] <= 2**63 - 1, (where, key, node[key])
+    schemas = spec["components"]["schemas"]
+    for name in ("ApiKeyIn", "SupersedeIn"):
+        assert schemas[name]["additionalProperties"] is False, name
+    y_mm = schemas["MeasurementIn"]["properties"]["y_mm"]["anyOf"][0]
+    assert y_mm["minItems"] == 10
+    assert "metro_b" in schemas["PhysicsModelIn"]["properties"]["vehicle"]["enum"]
+    reference = next(p for p in spec["paths"]["/v1/rails"]["get"]["parameters"]
+                     if p["name"] == "reference")["schema"]["anyOf"][0]
+    assert reference["pattern"] == "^[^\\x00]*$"
+
+    r = client.post("/v1/admin/batches/1/supersede", json={"by": 2**63 - 1 + 192})
+    assert r.status_code == 422 and _problem_fields(r) == ["by"], r.text
+    r = client.post("/v1/admin/api-keys", json={"name": "k", "scopes": ["read"], "x": 2**70})
+    assert r.status_code == 422 and "x" in _problem_fields(r), r.text
+    r = client.post("/v1/measurements", json={
+        "wheel_id": "W", "vehicle_id": "V", "bogie_type": "motor", "axle": 1, "side": "left",
+        "mileage_km": 10, "y_mm": [], "z_mm": []})
+    assert r.status_code == 422 and set(_problem_fields(r)) == {"y_mm", "z_mm"}, r.text
+    r = client.post("/v1/models", json={"kind": "physics", "name": "p", "vehicle": "tram",
+                                        "route_id": 1})
+    assert r.status_code == 422 and "vehicle" in _problem_fields(r), r.text
+    r = client.get("/v1/rails", params={"reference": "a\x00b"})
+    assert r.status_code == 422 and _problem_fields(r) == ["reference"], r.text
