@@ -152,3 +152,20 @@ def test_the_openapi_publishes_what_the_server_refuses(client: TestClient) -> No
     assert r.status_code == 422 and "vehicle" in _problem_fields(r), r.text
     r = client.get("/v1/rails", params={"reference": "a\x00b"})
     assert r.status_code == 422 and _problem_fields(r) == ["reference"], r.text
+
+
+def test_ids_beyond_32_bits_are_looked_up_not_refused(client: TestClient) -> None:
+    """PostgreSQL's INTEGER is 32-bit: an id such as 2**40 made the lookup fail ("integer out
+    of range", a 422 naming no field); ids are BIGINT there now (migration 0008), as the
+    OpenAPI publishes, so it is a 404 naming the id on both databases."""
+    for big in (2**31, 2**40, 2**63 - 2):
+        for path in (f"/v1/measurements/{big}", f"/v1/models/{big}", f"/v1/jobs/{big}",
+                     f"/v1/wear-tables/{big}", f"/v1/rails/{big}", f"/v1/plans/{big}",
+                     f"/v1/simulations/{big}", f"/v1/coefficient-fits/{big}"):
+            r = client.get(path)
+            assert r.status_code == 404, (path, r.status_code, r.text)
+            assert _problem_fields(r) != ["body"], (path, r.text)
+        r = client.delete(f"/v1/admin/api-keys/{big}")
+        assert r.status_code == 404, (big, r.status_code, r.text)
+        r = client.get("/v1/fleet/wheels/W1", params={"model_id": str(big)})
+        assert r.status_code in (404, 422) and _problem_fields(r) != ["body"], r.text
