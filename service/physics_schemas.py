@@ -12,7 +12,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, Tag, field_validator
+from pydantic import BaseModel, Discriminator, Field, JsonValue, Tag, field_validator
 
 from wearcast.physics.vehicles import preset_names
 from wearcast.service.job_schemas import JobStatusOut
@@ -68,7 +68,7 @@ class PhysicsModelIn(Strict):
     vehicle: str = Field(min_length=1, max_length=50, description=(
         "vehicle preset (physics/vehicles.py): its whole vehicle's bogies (the Minuetto: two "
         "motor and two trailer bogies; other presets one of each)"),
-        json_schema_extra={"enum": preset_names()})  # published; refused by _preset
+        json_schema_extra={"enum": list[JsonValue](preset_names())})  # refused by _preset
     route_id: int | Annotated[str, Field(max_length=200)] | None = Field(default=None,
         description="a stored route (id or name): its curve classes are simulated")
     law: WearLawName = Field(default="usfd", description=(

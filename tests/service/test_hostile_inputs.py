@@ -169,3 +169,14 @@ def test_ids_beyond_32_bits_are_looked_up_not_refused(client: TestClient) -> Non
         assert r.status_code == 404, (big, r.status_code, r.text)
         r = client.get("/v1/fleet/wheels/W1", params={"model_id": str(big)})
         assert r.status_code in (404, 422) and _problem_fields(r) != ["body"], r.text
+
+
+def test_contact_with_the_smallest_positive_wheel_load_ends(client: TestClient) -> None:
+    """A wheel load of 5e-324 N (schema-valid: > 0) made the Hertz-like first guess of the
+    approach underflow to 0 mm, which the search then doubled for ever (a request that never
+    ended). It now starts from ``MIN_APPROACH_MM`` and answers."""
+    r = client.post("/v1/contact", json={"friction": 0.3, "poses": [
+        {"shift_mm": 0.0, "wheel_load_n": 5e-324}]})
+    assert r.status_code < 500, r.text
+    if r.status_code >= 400:
+        assert _problem_fields(r), r.text
