@@ -122,14 +122,23 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
 
 
 INT64 = (-(2**63), 2**63 - 1)
+#: A string without NUL bytes (ECMA-262 and Python regular expressions read it alike).
+NO_NUL_PATTERN = "^[^\\x00]*$"
 
 
 def _bound_integers(schema: Any) -> None:
-    """Publish the 64-bit range on every integer without bounds (the server refuses others)."""
+    """Publish the 64-bit range on every integer without bounds (the server refuses others),
+    and every integer's bounds as integers inside that range: pydantic writes ``le=2**63 - 1``
+    as the float 9.223372036854776e18, which is 2**63, so a client reading the schema would
+    take integers the server refuses for one."""
     if isinstance(schema, dict):
         if schema.get("type") == "integer":
             schema.setdefault("minimum", INT64[0])
             schema.setdefault("maximum", INT64[1])
+            for key in ("minimum", "maximum"):
+                bound = schema[key]
+                if isinstance(bound, float) and bound.is_integer():
+                    schema[key] = min(max(int(bound), INT64[0]), INT64[1])
         for value in schema.values():
             _bound_integers(value)
     elif isinstance(schema, list):
@@ -138,10 +147,13 @@ def _bound_integers(schema: Any) -> None:
 
 
 def _bound_strings(schema: Any, max_length: int) -> None:
-    """Publish the longest path or query value the request guard lets through."""
+    """Publish the longest path or query value the request guard lets through, and that it
+    holds no NUL byte (the guard refuses those too)."""
     if isinstance(schema, dict):
         if schema.get("type") == "string":
             schema["maxLength"] = min(schema.get("maxLength", max_length), max_length)
+            if "format" not in schema and "enum" not in schema:
+                schema.setdefault("pattern", NO_NUL_PATTERN)
         for key in ("anyOf", "oneOf", "allOf"):
             for value in schema.get(key, []):
                 _bound_strings(value, max_length)

@@ -24,6 +24,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service.db import Database
 from wearcast.service.errors import ApiError
+from wearcast.service.id_text import decimal_id
 from wearcast.service.rail_cli import RailIdOption
 from wearcast.service.settings import Settings
 
@@ -75,7 +76,8 @@ def _json_option(text: str | None, name: str) -> dict[str, Any]:
 
 
 def _route_ref(value: str) -> int | str:
-    return int(value) if value.isdigit() else value
+    number = decimal_id(value)
+    return value if number is None else number
 
 
 @app.command()

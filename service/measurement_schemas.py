@@ -40,8 +40,9 @@ class MeasurementIn(Strict):
     reference_profile: str = Field(default="S1002", max_length=100)
     covariates: dict[str, FilterValue] = Field(default_factory=dict, max_length=100)
     diameter_mm: float | None = Field(default=None, gt=0, le=2000)
-    y_mm: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
-    z_mm: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
+    # at least 10 points, published as minItems so the contract says what the check below says
+    y_mm: list[float] | None = Field(default=None, min_length=10, max_length=MAX_PROFILE_POINTS)
+    z_mm: list[float] | None = Field(default=None, min_length=10, max_length=MAX_PROFILE_POINTS)
     sd_mm: float | None = None
     sh_mm: float | None = None
     qr_mm: float | None = None

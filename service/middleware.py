@@ -112,12 +112,22 @@ def _query_problem(query: bytes, max_chars: int) -> dict[str, Any] | None:
     return None
 
 
+def _in_int64(digits: str) -> bool:
+    """Whether a decimal integer (``_DIGITS``) lies in the signed 64-bit range: -2**63 is in
+    it, and leading zeros count for nothing however many there are."""
+    sign = -1 if digits.startswith("-") else 1
+    magnitude = digits.lstrip("+-").lstrip("0")
+    if len(magnitude) > 19:  # beyond 19 significant digits: out of range, without int()
+        return False
+    return -(2**63) <= sign * int(magnitude or "0") <= INT64_MAX
+
+
 def _value_problem(value: str, max_chars: int) -> str | None:
     if "\x00" in value:
         return "holds a NUL byte"
     if len(value) > max_chars:
         return f"longer than {max_chars} characters"
-    if _DIGITS.match(value) and abs(int(value[:40])) > INT64_MAX:
+    if _DIGITS.match(value) and not _in_int64(value):
         return "integer out of the 64-bit range"
     return None
 

@@ -27,6 +27,7 @@ from wearcast.service import models_db as db
 from wearcast.service import route_store, wear_table_store
 from wearcast.service.cache import LruCache
 from wearcast.service.errors import ApiError, NotFound, Unprocessable, from_value_error
+from wearcast.service.id_text import decimal_id
 from wearcast.statistics import hybrid, hybrid_prediction
 from wearcast.statistics.extension import ExtendedModel
 from wearcast.statistics.routes import Route
@@ -244,7 +245,7 @@ def load_inputs(session: Session, model_id: int, route_id: int | str | None,
     stored = RouteInputs(route_store.to_domain(row), row.name, dict(row.attributes or {}))
     # a string of digits that named a route (no route had that id) may name another route
     # once a route with that id exists: only lookups that cannot change are kept
-    if isinstance(route_id, int) or not route_id.isdigit() or row.id == int(route_id):
+    if isinstance(route_id, int) or decimal_id(route_id) in (None, row.id):
         _hot_routes.put((url, *_route_ref(route_id)), stored)
     return inputs, stored
 

@@ -16,6 +16,7 @@ from typing import Any
 
 from sqlalchemy import (
     JSON,
+    BigInteger,
     Boolean,
     Date,
     DateTime,
@@ -42,6 +43,12 @@ NAMING_CONVENTION = {
 }
 
 
+#: Row ids (and columns holding them): 64-bit, the range the OpenAPI publishes for every id.
+#: SQLite's INTEGER is 64-bit already (and an INTEGER PRIMARY KEY must stay spelled so to be
+#: the rowid); PostgreSQL's INTEGER is 32-bit, so there an id is a BIGINT (migration 0008).
+IdInteger = Integer().with_variant(BigInteger(), "postgresql")
+
+
 class Base(DeclarativeBase):
     metadata = MetaData(naming_convention=NAMING_CONVENTION)
     type_annotation_map = {dict[str, Any]: JSON, list[Any]: JSON}
@@ -51,7 +58,7 @@ class ImportBatch(Base):
     """One upload: its checksum (content of file + manifest) and idempotency key are unique."""
 
     __tablename__ = "import_batches"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     checksum_sha256: Mapped[str] = mapped_column(String(64), unique=True)
     idempotency_key: Mapped[str | None] = mapped_column(String(200), unique=True)
     file_name: Mapped[str] = mapped_column(String(500))
@@ -67,7 +74,7 @@ class RawFile(Base):
     """An uploaded file, kept on disk under ``<data_dir>/raw/<sha[:2]>/<sha>``."""
 
     __tablename__ = "raw_files"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     batch_id: Mapped[int] = mapped_column(ForeignKey("import_batches.id", ondelete="CASCADE"),
                                           index=True)
     role: Mapped[str] = mapped_column(String(20))  # "file" or "manifest"
@@ -101,7 +108,7 @@ class Plan(Base):
     """A lathe plan: its request (``spec``) and the computed plan (``result``)."""
 
     __tablename__ = "plans"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     fleet_id: Mapped[str | None] = mapped_column(String(200), index=True)
     spec: Mapped[dict[str, Any]] = mapped_column(JSON)
     result: Mapped[dict[str, Any]] = mapped_column(JSON, deferred=True)
@@ -126,7 +133,7 @@ class Measurement(Base):
     __tablename__ = "measurements"
     __table_args__ = (UniqueConstraint("wheel_id", "mileage_km",
                                        name="uq_measurements_wheel_id_mileage_km"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     batch_id: Mapped[int | None] = mapped_column(ForeignKey("import_batches.id"), index=True)
     wheel_id: Mapped[str] = mapped_column(ForeignKey("wheels.wheel_id"), index=True)
     mileage_km: Mapped[float] = mapped_column(Float)
@@ -172,7 +179,7 @@ class Route(Base):
     """A route as curve classes (shares sum to 1) with free attributes."""
 
     __tablename__ = "routes"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str] = mapped_column(String(200), unique=True)
     classes: Mapped[list[Any]] = mapped_column(JSON)
     segments: Mapped[list[Any] | None] = mapped_column(JSON)
@@ -192,7 +199,7 @@ class WearTable(Base):
     """
 
     __tablename__ = "wear_tables"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str] = mapped_column(String(200))
     source: Mapped[str] = mapped_column(String(500))
     sha256: Mapped[str] = mapped_column(String(64))
@@ -208,7 +215,7 @@ class WearTable(Base):
 class WearTableRow(Base):
     __tablename__ = "wear_table_rows"
     __table_args__ = (Index("ix_wear_table_rows_table", "wear_table_id"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     wear_table_id: Mapped[int] = mapped_column(ForeignKey("wear_tables.id", ondelete="CASCADE"))
     bogie_type: Mapped[str] = mapped_column(String(20))
     wheelset: Mapped[str] = mapped_column(String(20))
@@ -229,7 +236,7 @@ class Model(Base):
     """
 
     __tablename__ = "models"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str] = mapped_column(String(200))
     kind: Mapped[str] = mapped_column(String(20), default="hybrid", server_default="hybrid")
     measure: Mapped[str | None] = mapped_column(String(20))
@@ -259,7 +266,7 @@ class Simulation(Base):
     """
 
     __tablename__ = "simulations"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str | None] = mapped_column(String(200))
     spec: Mapped[dict[str, Any]] = mapped_column(JSON)
     status: Mapped[str] = mapped_column(String(20), index=True)
@@ -273,7 +280,7 @@ class Simulation(Base):
     finished_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
     # job control (migration 0003_service): who owns it, a cancel request, its time limit,
     # and the last sign of life of the worker running it
-    owner_key_id: Mapped[int | None] = mapped_column(Integer, index=True)
+    owner_key_id: Mapped[int | None] = mapped_column(IdInteger, index=True)
     cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False,
                                                    server_default=false())
     timeout_s: Mapped[float | None] = mapped_column(Float)
@@ -297,7 +304,7 @@ class Rail(Base):
 
     __tablename__ = "rails"
     __table_args__ = (UniqueConstraint("sha256", "part", name="uq_rails_sha256_part"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str] = mapped_column(String(200))
     source_file: Mapped[str] = mapped_column(String(500))
     part: Mapped[int] = mapped_column(Integer, default=0)
@@ -330,7 +337,7 @@ class ReferenceProfile(Base):
     (:mod:`wearcast.physics.profiles.references`) and not stored."""
 
     __tablename__ = "reference_profiles"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     name: Mapped[str] = mapped_column(String(100), unique=True)
     description: Mapped[str | None] = mapped_column(String(500))
     source: Mapped[str | None] = mapped_column(String(500))

@@ -12,8 +12,9 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, Tag, field_validator
+from pydantic import BaseModel, Discriminator, Field, JsonValue, Tag, field_validator
 
+from wearcast.physics.vehicles import preset_names
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.model_schemas import ModelIn
 from wearcast.service.schema_base import Filter, Strict
@@ -69,7 +70,8 @@ class PhysicsModelIn(Strict):
     name: str = Field(min_length=1, max_length=200)
     vehicle: str = Field(min_length=1, max_length=50, description=(
         "vehicle preset (physics/vehicles.py): its whole vehicle's bogies (the Minuetto: two "
-        "motor and two trailer bogies; other presets one of each)"))
+        "motor and two trailer bogies; other presets one of each)"),
+        json_schema_extra={"enum": list[JsonValue](preset_names())})  # refused by _preset
     route_id: int | Annotated[str, Field(max_length=200)] | None = Field(default=None,
         description="a stored route (id or name): its curve classes are simulated")
     law: WearLawName = Field(default="usfd", description=(
@@ -80,8 +82,6 @@ class PhysicsModelIn(Strict):
     @field_validator("vehicle")
     @classmethod
     def _preset(cls, name: str) -> str:
-        from wearcast.physics.vehicles import preset_names
-
         if name not in preset_names():
             raise ValueError(f"unknown vehicle preset {name!r}; known: "
                              f"{', '.join(preset_names())}")

@@ -11,6 +11,8 @@ from typing import Annotated, Any
 
 import typer
 
+from wearcast.service.id_text import decimal_id
+
 plan_app = typer.Typer(help="maintenance planning: fleet state and lathe plans",
                        no_args_is_help=True)
 FleetOption = Annotated[str | None, typer.Option("--fleet", help="fleet id (default: all)")]
@@ -22,7 +24,8 @@ OutOption = Annotated[Path | None, typer.Option(help="write the answer to this f
 
 
 def _route(value: str | None) -> int | str | None:
-    return int(value) if value is not None and value.isdigit() else value
+    number = None if value is None else decimal_id(value)
+    return value if number is None else number
 
 
 def _emit(data: Any, text: str | None, out: Path | None) -> None:

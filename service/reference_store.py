@@ -36,6 +36,7 @@ from wearcast.physics.profiles.references import (
 from wearcast.service import models_db as db
 from wearcast.service.errors import Unprocessable
 from wearcast.service.float32_blobs import f32, floats_of
+from wearcast.service.id_text import decimal_id
 from wearcast.service.import_worker import finite_or_none
 
 #: Names that mean "the wheel's own first measurement".
@@ -120,8 +121,8 @@ def _measurement_spec(measurement_id: int, y_blob: bytes, z_blob: bytes) -> Refe
 def stored_reference_spec(session: Session, name: str) -> ReferenceSpec:
     """The reference a stored measurement names: a catalogue name, an uploaded one, or
     ``own:<measurement id>`` (a wheel's own baseline)."""
-    if name.startswith("own:") and name[4:].isdigit():
-        row = session.get(db.Measurement, int(name[4:]))
+    if name.startswith("own:") and decimal_id(name[4:]) is not None:
+        row = session.get(db.Measurement, decimal_id(name[4:]))
         if row is None or row.y_mm is None or row.z_mm is None:
             raise Unprocessable("reference_profile", f"baseline measurement {name[4:]} is "
                                 "gone")

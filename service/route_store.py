@@ -15,6 +15,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
 from wearcast.service.errors import Conflict, NotFound, Unprocessable, from_value_error
+from wearcast.service.id_text import decimal_id
 from wearcast.service.route_schemas import RouteIn, RouteOut, RouteSpec
 from wearcast.statistics import routes as stat_routes
 
@@ -58,8 +59,9 @@ def create_route(session: Session, body: RouteIn) -> db.Route:
 
 def find_route(session: Session, id_or_name: int | str) -> db.Route | None:
     """A stored route by its id (an int or a string of digits) or its unique name."""
-    if isinstance(id_or_name, int) or (isinstance(id_or_name, str) and id_or_name.isdigit()):
-        row = session.get(db.Route, int(id_or_name))
+    number = id_or_name if isinstance(id_or_name, int) else decimal_id(id_or_name)
+    if number is not None:
+        row = session.get(db.Route, number)
         if row is not None:
             return row
     return session.scalar(select(db.Route).where(db.Route.name == str(id_or_name)))
@@ -100,8 +102,9 @@ _ROUTE_KEY_BY_NAME = (select(db.Route.id, db.Route.name, db.Route.created_at)
 
 def _stored_route_key(session: Session, id_or_name: int | str) -> tuple[int, str, Any] | None:
     """(id, name, created_at) of a stored route by id or name, as :func:`find_route`."""
-    if isinstance(id_or_name, int) or (isinstance(id_or_name, str) and id_or_name.isdigit()):
-        found = session.execute(_ROUTE_KEY_BY_ID, {"route_id": int(id_or_name)}).first()
+    number = id_or_name if isinstance(id_or_name, int) else decimal_id(id_or_name)
+    if number is not None:
+        found = session.execute(_ROUTE_KEY_BY_ID, {"route_id": number}).first()
         if found is not None:
             return found[0], found[1], found[2]
     found = session.execute(_ROUTE_KEY_BY_NAME, {"name": str(id_or_name)}).first()

@@ -160,6 +160,9 @@ class _PlaneSamples:
     b: _FloatArray       # lateral relative curvature B = -(1/2) d2 g / ds2 along the plane [1/mm]
 
 
+#: Smallest approach [mm] the search for the approach carrying a wheel load starts from.
+MIN_APPROACH_MM = 1e-12
+
 def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: float
                    ) -> _PlaneSamples:
     m = locus.gap_mm.shape[1]
@@ -537,6 +540,9 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
         else:
             # Hertz-like first guess from a 10 kN wheel on a tread: d ~ 0.03 mm (W/10 kN)^(2/3)
             hi = 0.03 * (load / 1e4) ** (2.0 / 3.0)
+        # a first guess that underflowed to 0 (a load near the smallest float) would be
+        # doubled for ever: start the doubling from the smallest approach tried
+        hi = max(hi, MIN_APPROACH_MM)
         f_hi, patches = solve(hi)
         f_hi -= load
         while f_hi < 0:

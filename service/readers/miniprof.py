@@ -142,7 +142,7 @@ def _parse_points(lines: list[tuple[int, str]], file_name: str, header: dict[str
     if len(rows) < 2:
         raise ImportFileError(file_name, f"no profile points found{where}")
     declared = header.get("XYPoints", "").strip()
-    if check_count and declared.isdigit() and int(declared) != len(rows):
+    if check_count and declared_count_differs(declared, len(rows)):
         raise ImportFileError(file_name, f"header says XYPoints={declared} but {len(rows)} "
                               f"points were read{where} (truncated file?)", field="XYPoints")
     points = np.asarray(rows, dtype=np.float64)
@@ -271,6 +271,14 @@ def _old(lines: list[str], file_name: str) -> tuple[dict[str, str], np.ndarray, 
     numbered = [(i + 1, lines[i]) for i in range(start, len(lines))]
     x, y = _parse_points(numbered, file_name, {})
     return header, x, y
+
+
+def declared_count_differs(declared: str, count: int) -> bool:
+    """Whether a header count (``XYPoints``) is a number of ASCII digits other than ``count``;
+    compared as text, so a count of thousands of digits or in superscripts cannot fail."""
+    if not (declared.isascii() and declared.isdigit()):
+        return False
+    return declared.lstrip("0") != str(count).lstrip("0")
 
 
 def _old_instrument(header: dict[str, str]) -> tuple[str | None, date | None]:

@@ -48,6 +48,7 @@ from wearcast.service.readers.miniprof import (
     _key_value,
     _numbers,
     _parse_date,
+    declared_count_differs,
     parse_miniprof,
     to_wheel_frame,
 )
@@ -311,7 +312,7 @@ def read_rail_file(data: bytes, file_name: str,
         for p in mp.parts:
             file_warnings = []
             declared = p.header.get("XYPoints", "").strip()
-            if declared.isdigit() and int(declared) != p.x_mm.size:
+            if declared_count_differs(declared, p.x_mm.size):
                 file_warnings.append(f"{file_name}#{p.number}: header says XYPoints="
                                      f"{declared}, {p.x_mm.size} points read")
             parts.append(_part(mp, p.number, p.header, p.x_mm, p.y_mm, (), file_warnings,
@@ -321,7 +322,7 @@ def read_rail_file(data: bytes, file_name: str,
     notes, note_warning = _point_notes(text, mp.x_mm.size)
     file_warnings = [note_warning] if note_warning else []
     declared = header.get("XYPoints", "").strip()
-    if declared.isdigit() and int(declared) != mp.x_mm.size:
+    if declared_count_differs(declared, mp.x_mm.size):
         added = sum(n.added for n in notes)
         file_warnings.append(f"header says XYPoints={declared}, {mp.x_mm.size} points read"
                              + (f" ({added} noted as added by hand)" if added else ""))

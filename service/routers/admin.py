@@ -15,13 +15,14 @@ from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Conflict, NotFound
 from wearcast.service.middleware import write_audit
 from wearcast.service.models_access import ApiKey, AuditRecord
+from wearcast.service.schema_base import Strict
 
 router = APIRouter(prefix="/admin", tags=["admin"])
 Scope = Literal["read", "write", "admin"]
 EntityId = Annotated[int, Path(ge=1, le=2**63 - 1)]
 
 
-class ApiKeyIn(BaseModel):
+class ApiKeyIn(Strict):
     name: str = Field(min_length=1, max_length=200)
     scopes: list[Scope] = Field(min_length=1, max_length=3)
 
@@ -59,7 +60,7 @@ class RemovedOut(BaseModel):
     audit_id: int
 
 
-class SupersedeIn(BaseModel):
+class SupersedeIn(Strict):
     by: int = Field(ge=1, le=2**63 - 1, description="id of the row that replaces this one")
     reason: str | None = Field(default=None, max_length=1000)
 

@@ -14,14 +14,19 @@ from fastapi import APIRouter, Query, Response
 
 from wearcast.service import planning_store
 from wearcast.service.deps import SessionDep
+from wearcast.service.id_text import decimal_id
 from wearcast.service.planning_schemas import FleetIn, PlanIn, VehicleIn
 
 router = APIRouter(tags=["planning"])
 Format = Literal["json", "csv"]
+#: ``format=csv`` answers ``text/csv``: published beside the JSON answer.
+_CSV_ANSWER: dict[int | str, dict[str, Any]] = {
+    200: {"content": {"text/csv": {"schema": {"type": "string"}}}}}
 
 
 def _route_ref(value: str | None) -> int | str | None:
-    return int(value) if value is not None and value.isdigit() else value
+    number = None if value is None else decimal_id(value)
+    return value if number is None else number
 
 
 @router.put("/fleets/{fleet_id}")
@@ -39,7 +44,7 @@ def put_vehicle(vehicle_id: str, body: VehicleIn, session: SessionDep) -> dict[s
     return planning_store.put_vehicle(session, vehicle_id, body)
 
 
-@router.get("/fleet/state", response_model=None)
+@router.get("/fleet/state", response_model=None, responses=_CSV_ANSWER)
 def fleet_state(session: SessionDep, fleet_id: str | None = None,
                 model_id: int | None = None, route_id: str | None = None,
                 today: dt.date | None = None, format: Format = "json"
@@ -71,7 +76,7 @@ def list_plans(session: SessionDep) -> list[dict[str, Any]]:
     return planning_store.list_plans(session)
 
 
-@router.get("/plans/{plan_id}", response_model=None)
+@router.get("/plans/{plan_id}", response_model=None, responses=_CSV_ANSWER)
 def get_plan(plan_id: int, session: SessionDep,
              format: Annotated[Format, Query()] = "json") -> dict[str, Any] | Response:
     plan = planning_store.get_plan(session, plan_id)
