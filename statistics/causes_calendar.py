@@ -98,9 +98,25 @@ class SeasonalFriction(Cause):
         return ["a_cos", "b_sin"]
 
     def features(self, data: FinderData, theta: Array) -> Array:
-        x = data.season()
-        if x is None:
-            return np.zeros((data.n, 2, 2))
+        """``season_features`` centred within each wheel life (``residuals.life_ids``), as
+        ``nonlinear_progression`` centres log mileage: the amplitude is estimated from how
+        each wheel's wear departs from linear growth as the seasons of its intervals change,
+        never from differences between wheels. The wheels of a unit share a calendar, so
+        the between-wheel part of the feature takes a few distinct values (one per unit or
+        start date) that a vehicle's or wheel's random wear level mimics as readily as a
+        season does; kept, it lets that nuisance pass for a season in the resampled
+        datasets and hides a real one (alt generator, amplitude 0.2). The saved extension
+        applies the uncentred factor (1 + a cos wt + b sin wt) over each interval's days."""
+        if "life_centred_season" not in data.cache:
+            x = data.season()
+            if x is None:
+                return np.zeros((data.n, 2, 2))
+            s = data.mileage_km
+            pos = s > 0
+            key = np.where(pos, life_ids(data.frame, s), "_")
+            mean = pd.DataFrame(x).groupby(key).transform("mean").to_numpy()
+            data.cache["life_centred_season"] = np.where(pos[:, None], x - mean, 0.0)
+        x = data.cache["life_centred_season"]
         return np.repeat(x[:, None, :], 2, axis=1)
 
     def public(self) -> dict[str, Any]:
