@@ -105,19 +105,31 @@ class SeasonalFriction(Cause):
         the between-wheel part of the feature takes a few distinct values (one per unit or
         start date) that a vehicle's or wheel's random wear level mimics as readily as a
         season does; kept, it lets that nuisance pass for a season in the resampled
-        datasets and hides a real one (alt generator, amplitude 0.2). The saved extension
-        applies the uncentred factor (1 + a cos wt + b sin wt) over each interval's days."""
+        datasets and hides a real one (alt generator, amplitude 0.2).
+
+        A wear level u of a wheel enters the working residual as phi u (``causes``), phi
+        smaller for the small areas early in a life, so the centring is weighted by phi^2
+        per region: the design column phi x is then orthogonal to every wheel life's phi
+        (an unweighted centring leaves a level correlated with a feature that trends
+        through the life). The saved extension's factor is the fitted one."""
         if "life_centred_season" not in data.cache:
             x = data.season()
             if x is None:
                 return np.zeros((data.n, 2, 2))
             s = data.mileage_km
             pos = s > 0
-            key = np.where(pos, life_ids(data.frame, s), "_")
-            mean = pd.DataFrame(x).groupby(key).transform("mean").to_numpy()
-            data.cache["life_centred_season"] = np.where(pos[:, None], x - mean, 0.0)
-        x = data.cache["life_centred_season"]
-        return np.repeat(x[:, None, :], 2, axis=1)
+            key = pd.factorize(pd.Series(np.where(pos, life_ids(data.frame, s), "_")))[0]
+            g = int(key.max()) + 1
+            out = np.zeros((data.n, 2, 2))
+            for r in range(2):
+                w = data.phi[:, r] ** 2
+                den = np.bincount(key, weights=w, minlength=g)
+                for j in range(2):
+                    num = np.bincount(key, weights=w * x[:, j], minlength=g)
+                    mean = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+                    out[:, r, j] = np.where(pos, x[:, j] - mean[key], 0.0)
+            data.cache["life_centred_season"] = out
+        return np.array(data.cache["life_centred_season"])
 
     def public(self) -> dict[str, Any]:
         a, b = (float(v) for v in self.theta_)
