@@ -36,6 +36,10 @@ scores it out of sample and names a cause only when it is specific:
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
+   When the wear-curve (instrument) cause is named alongside area causes, the verdict is
+   the named cause with the largest gain, except that an area cause whose held-out gain
+   over the named instrument's per-instrument area scales is not material is dropped as
+   that instrument's echo (``finder_instrument``; the two gains are in different metrics);
 6. outside the catalogue: when no cause is named but the residuals are structured by wheel
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
