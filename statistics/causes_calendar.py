@@ -98,38 +98,10 @@ class SeasonalFriction(Cause):
         return ["a_cos", "b_sin"]
 
     def features(self, data: FinderData, theta: Array) -> Array:
-        """``season_features`` centred within each wheel life (``residuals.life_ids``), as
-        ``nonlinear_progression`` centres log mileage: the amplitude is estimated from how
-        each wheel's wear departs from linear growth as the seasons of its intervals change,
-        never from differences between wheels. The wheels of a unit share a calendar, so
-        the between-wheel part of the feature takes a few distinct values (one per unit or
-        start date) that a vehicle's or wheel's random wear level mimics as readily as a
-        season does; kept, it lets that nuisance pass for a season in the resampled
-        datasets and hides a real one (alt generator, amplitude 0.2).
-
-        A wear level u of a wheel enters the working residual as phi u (``causes``), phi
-        smaller for the small areas early in a life, so the centring is weighted by phi^2
-        per region: the design column phi x is then orthogonal to every wheel life's phi
-        (an unweighted centring leaves a level correlated with a feature that trends
-        through the life). The saved extension's factor is the fitted one."""
-        if "life_centred_season" not in data.cache:
-            x = data.season()
-            if x is None:
-                return np.zeros((data.n, 2, 2))
-            s = data.mileage_km
-            pos = s > 0
-            key = pd.factorize(pd.Series(np.where(pos, life_ids(data.frame, s), "_")))[0]
-            g = int(key.max()) + 1
-            out = np.zeros((data.n, 2, 2))
-            for r in range(2):
-                w = data.phi[:, r] ** 2
-                den = np.bincount(key, weights=w, minlength=g)
-                for j in range(2):
-                    num = np.bincount(key, weights=w * x[:, j], minlength=g)
-                    mean = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-                    out[:, r, j] = np.where(pos, x[:, j] - mean[key], 0.0)
-            data.cache["life_centred_season"] = out
-        return np.array(data.cache["life_centred_season"])
+        x = data.season()
+        if x is None:
+            return np.zeros((data.n, 2, 2))
+        return np.repeat(x[:, None, :], 2, axis=1)
 
     def public(self) -> dict[str, Any]:
         a, b = (float(v) for v in self.theta_)

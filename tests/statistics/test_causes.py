@@ -136,32 +136,3 @@ def test_lubrication_flags_from_route_attributes_or_column():
 def test_unknown_cause_code_is_refused():
     with pytest.raises(ValueError, match="cause"):
         cz.cause_by_code("gremlins")
-
-
-def test_season_is_fitted_from_within_wheel_changes_not_wheel_levels(scenario):
-    # the wheels of a unit share a calendar, so their mean season differs only between
-    # units: a wear level that follows it between wheels (a vehicle or wheel random
-    # effect) is no season. The fitted feature is centred within each wheel life, so such
-    # a level leaves the amplitude where it was
-    model, df, curves, routes, attrs = scenario
-    data = build_data(model, df, curves, routes, TABLE, route_attributes=attrs)
-    x = cz.SeasonalFriction().features(data, np.zeros(2))
-    life = cz.life_ids(data.frame, data.mileage_km)
-    for r in range(2):   # phi^2-weighted mean 0 over each life, per region
-        w = data.phi[:, r] ** 2
-        sums = pd.DataFrame(w[:, None] * x[:, r, :]).groupby(life).sum().to_numpy()
-        assert np.abs(sums).max() < 1e-9
-    everything = np.ones(data.n, dtype=bool)
-    plain = cz.SeasonalFriction().fit(data, everything).theta_
-    raw = data.season()
-    assert raw is not None
-    level = pd.Series(raw[:, 0]).groupby(life).transform("mean").to_numpy()
-    shifted = df.copy()
-    factor = np.exp(3.0 * level)   # a level 3 x the wheel's mean cos feature
-    for col in ("flange_area_mm2", "tread_area_mm2"):
-        shifted[col] = shifted[col] * factor
-    moved = cz.SeasonalFriction().fit(
-        build_data(model, shifted, curves, routes, TABLE, route_attributes=attrs),
-        everything).theta_
-    assert np.ptp(level) > 0.05
-    assert np.abs(moved - plain).max() < 0.1   # uncentred: a_cos moves by 1.2
