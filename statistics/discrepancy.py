@@ -36,6 +36,10 @@ scores it out of sample and names a cause only when it is specific:
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
+   When the wear-curve (instrument) cause is named alongside area causes, the verdict is
+   the named cause with the largest gain, except that an area cause whose held-out gain
+   over the named instrument's per-instrument area scales is not material is dropped as
+   that instrument's echo (``finder_instrument``; the two gains are in different metrics);
 6. outside the catalogue: when no cause is named but the residuals are structured by wheel
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
@@ -67,6 +71,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
+from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.discrepancy_findings import (
@@ -394,11 +399,25 @@ def diagnose(
         step += 1
 
     names = [c.code for c in selected]
+    echoes: list[str] = []
     if shape_cause is not None and is_named(scored[shape_cause.code], alpha, min_relative_gain,
                                             groups, n_boot, rng):
         names.append(shape_cause.code)
     if names:   # the verdict is the named cause with the largest relative gain
         top = max(names, key=lambda c: scored[c].gain)
+        if shape_cause is not None and shape_cause.code in names and top != shape_cause.code:
+            # the gains are in different metrics: an area cause that gains nothing material
+            # over the named instrument's own area distortion is its echo, not the verdict
+            echo, echo_gain = fi.instrument_echo(
+                data, scored[top].cause,
+                fi.InstrumentAreaScale(shape_cause.instruments(data),  # type: ignore[attr-defined]
+                                       fi.reference_instrument(shape_cause, data, everything)),
+                folds, min_relative_gain)
+            if echo:
+                echoes.append(f"{top} (held-out gain over the instrument's area scales "
+                              f"{echo_gain:.4f})")
+                names.remove(top)
+                top = shape_cause.code
         names = [top] + [c for c in names if c != top]
     # an ambiguous area step does not hide a named wear-curve (instrument) cause: an
     # instrument's geometric error also distorts the areas it measures
@@ -449,6 +468,9 @@ def diagnose(
                            f"sign-flip test over {np.unique(groups).size} {group_by} groups "
                            "(Bonferroni)"
                }[fs.MARGIN_TEST])
+    if echoes:
+        test += ("; named but dropped as the echo of the named instrument error: "
+                 + ", ".join(echoes))
     if expected_progression is not None:
         test += ("; the baseline grows as the expected progression of "
                  f"{expected_progression.source} (not linearly in mileage)")

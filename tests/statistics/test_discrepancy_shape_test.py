@@ -53,3 +53,39 @@ def test_weak_instrument_error_is_named(generator, seed):
         (f.cause, round(f.gain.relative, 3), f.evidence["p_value"]) for f in d.findings]
     f = d.finding("profile_misalignment")
     assert f.evidence["p_value"] <= 0.04 and f.gain.relative >= 0.01
+
+
+def test_area_cause_echoing_a_named_instrument_error_does_not_take_the_verdict():
+    # fleet_twin_alt, lateral scale 0.5 % on LP-2, seed 111: the scale error distorts the
+    # flange areas LP-2 measures, and LP-2 measures all of the greased unit U2, so
+    # flange_lubrication out-gains the instrument on the areas (log-area gain 0.17 vs a
+    # curve-space gain 0.17, not comparable). Over per-instrument area scales it gains
+    # nothing material: it is the instrument's echo
+    d = _diagnosis(scenarios.alt_scenario(fa.AltEffects(instrument_scale=("LP-2", 0.005)),
+                                          111))
+    assert d.verdict == "profile_misalignment"
+    assert "flange_lubrication" not in d.selected
+    assert "echo of the named instrument error: flange_lubrication" in d.null_test
+
+
+def test_instrument_echo_keeps_a_real_area_cause():
+    # the twin with a real traction effect: measured by two instruments that split the
+    # units, traction still gains over their area scales
+    from wearcast.statistics import causes as cz
+    from wearcast.statistics import finder_instrument as fi
+    from wearcast.statistics.discrepancy import _folds
+    from wearcast.statistics.discrepancy_data import build_data
+    s = scenarios.twin_scenario((te.traction(1.3),), (), seed=3,
+                                table=ft.synthetic_wear_table())
+    args, kwargs = s.finder_arguments()
+    data = build_data(*args, **kwargs)
+    inst = data.frame["instrument_id"].astype(str).to_numpy()
+    scale = fi.InstrumentAreaScale(inst, "MP-1")
+    folds = _folds(data.frame["vehicle_id"].astype(str).to_numpy(), 5, 0)
+    echo, gain = fi.instrument_echo(data, cz.cause_by_code("traction"), scale, folds, 0.01)
+    assert not echo and gain > 0.05
+    # the instrument's own area scales are what an instrument-only cause would fit: over
+    # them, a cause that is exactly the instrument gains nothing
+    echo, gain = fi.instrument_echo(data, fi.InstrumentAreaScale(inst, "MP-1"), scale, folds,
+                                    0.01)
+    assert echo and abs(gain) < 1e-6
