@@ -234,3 +234,35 @@ def test_the_traction_cause_is_scaled_to_the_vehicles_adhesion_torque():
     own = next(c for c in catalogue_for(0.4, {"traction_torque_nm": 1000.0}, 16_000.0)
                if c.name == "traction_on_motor_axles")
     assert own.null == 1000.0 and 1000.0 in own.values
+
+
+def test_a_significant_cause_is_not_named_over_one_that_gains_more():
+    # the rule itself: flange lubrication gains more but its test does not reject; traction's
+    # does. Naming traction would be wrong whenever flange is the truth (the loop benchmark
+    # with FH found exactly this), so the verdict is ambiguous.
+    from wearcast.statistics.findings import Finding, Gain
+    from wearcast.statistics.physics_diagnosis import _verdict
+
+    def finding(cause, rel, significant):
+        gain = Gain(1.0, 1.0 - rel, rel, rel - 0.1, rel + 0.1, metric="m")
+        return Finding(cause, cause, {}, {}, gain, significant, True)
+
+    unit = np.repeat(np.array(["V0", "V1", "V2", "V3", "V4"]), 4)
+    before = np.ones(unit.size)
+    after_of = {"flange_lubrication": 0.55 * before, "traction_on_motor_axles": 0.78 * before,
+                "friction_level": 1.1 * before}
+    ranked = [finding("flange_lubrication", 0.45, False),
+              finding("traction_on_motor_axles", 0.22, True),
+              finding("friction_level", -0.1, False)]
+    verdict, runner_up, margin, p, candidates = _verdict(
+        ranked, after_of, unit, 0.05, np.random.default_rng(0))
+    assert verdict == "ambiguous"
+    assert candidates == ("traction_on_motor_axles", "flange_lubrication")
+    assert runner_up == "flange_lubrication" and margin == pytest.approx(-0.23)
+    assert p is not None and p > 0.5
+    # a cause with no gain is not a competitor
+    after_of["flange_lubrication"] = 1.2 * before
+    ranked[0] = finding("flange_lubrication", -0.2, False)
+    ranked.sort(key=lambda f: -f.gain.relative)
+    verdict, *_ = _verdict(ranked, after_of, unit, 0.05, np.random.default_rng(0))
+    assert verdict == "traction_on_motor_axles"
