@@ -216,5 +216,6 @@ def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
         runner_up=diagnosis.runner_up, margin=diagnosis.margin,
         margin_p_value=diagnosis.margin_p_value, candidates=list(diagnosis.candidates),
         null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
-                  "Holm's correction",
+                  "Holm's correction; the margin over every other cause with a gain by a "
+                  "one-sided sign-flip test over the same groups",
         saved_model=saved_model, save_reason=reason)
