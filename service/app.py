@@ -18,6 +18,7 @@ from fastapi.openapi.utils import get_openapi
 
 from wearcast.service.db import Database
 from wearcast.service.errors import PROBLEM_MEDIA_TYPE, Problem, install_handlers
+from wearcast.service.id_text import INT64_MAX, INT64_MIN
 from wearcast.service.middleware import MAX_QUERY_VALUE_CHARS
 from wearcast.service.settings import Settings
 
@@ -121,7 +122,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     return app
 
 
-INT64 = (-(2**63), 2**63 - 1)
+INT64 = (INT64_MIN, INT64_MAX)
 #: A string without NUL bytes (ECMA-262 and Python regular expressions read it alike).
 NO_NUL_PATTERN = "^[^\\x00]*$"
 

@@ -7,15 +7,24 @@ id only when it is ASCII digits whose integer fits that range; anything else is 
 
 from __future__ import annotations
 
-INT64_MAX = 2**63 - 1
+#: The signed 64-bit range of the database's integer columns.
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+
+
+def int64_of_decimal(digits: str) -> int | None:
+    """The integer a decimal string (optional sign, then digits) names when it lies in the
+    signed 64-bit range, else None; leading zeros count for nothing however many there are,
+    and a string beyond 19 significant digits is refused without ``int()``."""
+    sign = -1 if digits.startswith("-") else 1
+    significant = digits.lstrip("+-").lstrip("0")
+    if len(significant) > 19:
+        return None
+    number = sign * int(significant or "0")
+    return number if INT64_MIN <= number <= INT64_MAX else None
 
 
 def decimal_id(value: str) -> int | None:
     """The id a string of ASCII digits (no sign) names, or None when it is not one."""
     if not (value.isascii() and value.isdigit()):
         return None
-    significant = value.lstrip("0")
-    if len(significant) > 19:
-        return None
-    number = int(significant or "0")
-    return number if number <= INT64_MAX else None
+    return int64_of_decimal(value)

@@ -34,13 +34,13 @@ from starlette.requests import Request
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from wearcast.service.errors import ApiError, LimitExceeded, problem_body
+from wearcast.service.id_text import INT64_MAX, INT64_MIN, int64_of_decimal
 from wearcast.service.settings import Settings
 
 log = logging.getLogger(__name__)
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 _DIGITS = re.compile(r"^[+-]?\d+$")
 _LONG_DIGITS = re.compile(rb"\d{19,}")
-INT64_MAX = 2**63 - 1
 MAX_QUERY_VALUE_CHARS = 1000
 
 
@@ -112,22 +112,12 @@ def _query_problem(query: bytes, max_chars: int) -> dict[str, Any] | None:
     return None
 
 
-def _in_int64(digits: str) -> bool:
-    """Whether a decimal integer (``_DIGITS``) lies in the signed 64-bit range: -2**63 is in
-    it, and leading zeros count for nothing however many there are."""
-    sign = -1 if digits.startswith("-") else 1
-    magnitude = digits.lstrip("+-").lstrip("0")
-    if len(magnitude) > 19:  # beyond 19 significant digits: out of range, without int()
-        return False
-    return -(2**63) <= sign * int(magnitude or "0") <= INT64_MAX
-
-
 def _value_problem(value: str, max_chars: int) -> str | None:
     if "\x00" in value:
         return "holds a NUL byte"
     if len(value) > max_chars:
         return f"longer than {max_chars} characters"
-    if _DIGITS.match(value) and not _in_int64(value):
+    if _DIGITS.match(value) and int64_of_decimal(value) is None:
         return "integer out of the 64-bit range"
     return None
 
@@ -177,7 +167,7 @@ def _big_integer_field(body: bytes) -> str | None:
     def find(node: Any, path: str) -> str | None:
         if isinstance(node, bool):
             return None
-        if isinstance(node, int) and not -(2**63) <= node <= INT64_MAX:
+        if isinstance(node, int) and not INT64_MIN <= node <= INT64_MAX:
             return path or "body"
         if isinstance(node, dict):
             for key, child in node.items():

@@ -270,7 +270,7 @@ class ProfileMisalignment(Cause):
         return np.asarray(col.astype(str).to_numpy() if col is not None
                           else np.full(data.n, "?"), dtype=object)
 
-    def _reference(self, data: FinderData, inst: NDArray[Any], rows: Mask) -> str:
+    def reference_instrument(self, data: FinderData, inst: NDArray[Any], rows: Mask) -> str:
         """The instrument the model's wear states came from: the calibration rows' most
         frequent instrument (else the most frequent one overall)."""
         cal = data.frame["in_calibration"].to_numpy(bool) if "in_calibration" in \
@@ -287,7 +287,7 @@ class ProfileMisalignment(Cause):
         coef = shape_coefficients(data)
         est.coefs_ = {i: coef[rows & (inst == i)].mean(axis=0) if (rows & (inst == i)).any()
                       else np.zeros(3) for i in _levels(inst)}
-        est.reference_ = self._reference(data, inst, rows)
+        est.reference_ = self.reference_instrument(data, inst, rows)
         est.theta_, est.log_scale_ = np.zeros(0), np.zeros(2)
         return est
 

@@ -83,4 +83,4 @@ def instrument_echo(data: FinderData, area_cause: Cause, instrument_scale: Cause
 def reference_instrument(shape_cause: Cause, data: FinderData, rows: Mask) -> str:
     """The instrument the model's wear states came from (``ProfileMisalignment``'s)."""
     inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
-    return str(shape_cause._reference(data, inst, rows))  # type: ignore[attr-defined]
+    return str(shape_cause.reference_instrument(data, inst, rows))  # type: ignore[attr-defined]

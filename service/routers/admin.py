@@ -13,13 +13,14 @@ from sqlalchemy import func, select
 from wearcast.service import admin_store, auth
 from wearcast.service.deps import SessionDep
 from wearcast.service.errors import Conflict, NotFound
+from wearcast.service.id_text import INT64_MAX
 from wearcast.service.middleware import write_audit
 from wearcast.service.models_access import ApiKey, AuditRecord
 from wearcast.service.schema_base import Strict
 
 router = APIRouter(prefix="/admin", tags=["admin"])
 Scope = Literal["read", "write", "admin"]
-EntityId = Annotated[int, Path(ge=1, le=2**63 - 1)]
+EntityId = Annotated[int, Path(ge=1, le=INT64_MAX)]
 
 
 class ApiKeyIn(Strict):
@@ -61,7 +62,7 @@ class RemovedOut(BaseModel):
 
 
 class SupersedeIn(Strict):
-    by: int = Field(ge=1, le=2**63 - 1, description="id of the row that replaces this one")
+    by: int = Field(ge=1, le=INT64_MAX, description="id of the row that replaces this one")
     reason: str | None = Field(default=None, max_length=1000)
 
 

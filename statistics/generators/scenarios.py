@@ -172,16 +172,13 @@ def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5
         km = np.concatenate([[0.0], np.sort(rng.uniform(200.0, 1500.0, 4))])
         ft_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("sd_mm"))
         qr_mm = np.interp(wear_scale * km, truth.mileage_km, truth.mean("qr_mm"))
-        ft_mm = ft_mm + rng.normal(0, noise_mm, km.size)
-        qr_mm = qr_mm + rng.normal(0, noise_mm, km.size)
-        rows += [{"vehicle": f"V{v}", "distance_km": k, "FT_mm": a, "QR_mm": b}
-                 for k, a, b in zip(km, ft_mm, qr_mm, strict=True)]
+        columns = {"FT_mm": ft_mm + rng.normal(0, noise_mm, km.size),
+                   "QR_mm": qr_mm + rng.normal(0, noise_mm, km.size)}
         if flange_height:
-            fh_mm = (np.interp(wear_scale * km, truth.mileage_km, truth.mean("sh_mm"))
-                     + fh_rng.normal(0, noise_mm, km.size))
-            for row, fh in zip(rows[-km.size:], fh_mm, strict=True):
-                row["FH_mm"] = fh
-    return pd.DataFrame(rows)
+            columns["FH_mm"] = (np.interp(wear_scale * km, truth.mileage_km, truth.mean("sh_mm"))
+                                + fh_rng.normal(0, noise_mm, km.size))
+        rows.append(pd.DataFrame({"vehicle": f"V{v}", "distance_km": km, **columns}))
+    return pd.concat(rows, ignore_index=True)
 
 
 # --- the loop-driven fleet (fleet_twin_loop) of the detection benchmark and its tests ---
