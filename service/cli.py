@@ -100,6 +100,7 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
 
     from wearcast.service import models_db as db
     from wearcast.service.app import create_app
+    from wearcast.service.http_protocol import problem_http_protocol
 
     settings = Settings()
     database = Database(settings)
@@ -129,12 +130,14 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
         JobRunner(database, settings).recover(all_running=True, dispatch_all=False)
         database.dispose()
         uvicorn.run("wearcast.service.cli:serve_app", factory=True, host=host, port=port,
-                    workers=workers, timeout_graceful_shutdown=10, access_log=access_log)
+                    workers=workers, timeout_graceful_shutdown=10, access_log=access_log,
+                    http=problem_http_protocol())
     else:
         database.dispose()
         # migrate=True: the one process serving recovers the jobs of the last run
         uvicorn.run(create_app(settings, migrate=True), host=host, port=port,
-                    timeout_graceful_shutdown=10, access_log=access_log)
+                    timeout_graceful_shutdown=10, access_log=access_log,
+                    http=problem_http_protocol())
 
 
 @app.command()

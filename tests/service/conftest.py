@@ -8,9 +8,15 @@ A test that takes ``backend_url`` runs once on each.
 from __future__ import annotations
 
 import os
+import socket
+import subprocess
+import sys
+import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
+import httpx
 import pytest
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
@@ -49,3 +55,48 @@ def backend_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]
         yield f"sqlite:///{tmp_path / 'wearcast.sqlite3'}"
         return
     yield from fresh_postgres_database()
+
+
+@dataclass
+class RealServer:
+    """``wearcast serve`` in a child process, as an operator starts it (no WEARCAST_* variable
+    but the data folder): the served API's base URL; ``stop()`` terminates it and returns its
+    log (stderr)."""
+
+    base: str
+    process: subprocess.Popen
+    stderr: str | None = None
+
+    def stop(self) -> str:
+        if self.stderr is None:
+            self.process.terminate()
+            _out, self.stderr = self.process.communicate(timeout=30)
+        return self.stderr
+
+
+@pytest.fixture
+def real_server(tmp_path: Path) -> Iterator[RealServer]:
+    """The real HTTP server on a free port with ``tmp_path`` as its data folder, once
+    ``/v1/health`` answers."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = int(s.getsockname()[1])
+    env = {k: v for k, v in os.environ.items() if not k.startswith("WEARCAST_")}
+    env["WEARCAST_DATA_DIR"] = str(tmp_path)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "wearcast.service.cli", "serve", "--port", str(port)],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    server = RealServer(f"http://127.0.0.1:{port}/v1", process)
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                if httpx.get(f"{server.base}/health").status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            assert process.poll() is None and time.monotonic() < deadline, "server did not start"
+            time.sleep(0.2)
+        yield server
+    finally:
+        server.stop()

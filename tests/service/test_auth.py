@@ -5,14 +5,10 @@
 
 from __future__ import annotations
 
-import os
 import re
-import socket
-import subprocess
-import sys
-import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -249,44 +245,20 @@ def test_an_empty_api_key_variable_counts_as_unset(
     assert _anonymous(app).post("/v1/routes", json=ROUTE).status_code == 401
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def test_the_real_server_accepts_no_write_without_a_key(tmp_path: Path) -> None:
+def test_the_real_server_accepts_no_write_without_a_key(real_server: Any) -> None:
     """``wearcast serve`` as an operator starts it (no WEARCAST_API_KEY, defaults)."""
-    port = _free_port()
-    env = {k: v for k, v in os.environ.items() if not k.startswith("WEARCAST_")}
-    env["WEARCAST_DATA_DIR"] = str(tmp_path)
-    server = subprocess.Popen(
-        [sys.executable, "-m", "wearcast.service.cli", "serve", "--port", str(port)],
-        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        base = f"http://127.0.0.1:{port}/v1"
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                if httpx.get(f"{base}/health").status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            assert server.poll() is None and time.monotonic() < deadline, "server did not start"
-            time.sleep(0.2)
-        for method, path, kw in (("POST", "/routes", {"json": ROUTE}),
-                                 ("POST", "/measurements/import",
-                                  {"files": {"file": ("a.csv", b"a,b\n1,2\n")}}),
-                                 ("POST", "/wear-tables", {"files": {"file": ("t.csv", b"x")}}),
-                                 ("POST", "/models", {"json": {}}),
-                                 ("POST", "/simulations", {"json": {}}),
-                                 ("DELETE", "/admin/routes/1", {}),
-                                 ("POST", "/admin/api-keys", {"json": {}})):
-            r = httpx.request(method, base + path, **kw)  # type: ignore[arg-type]
-            assert r.status_code == 401, (path, r.status_code, r.text)
-        assert httpx.get(f"{base}/routes").status_code == 401
-    finally:
-        server.terminate()
-        _out, err = server.communicate(timeout=30)
-    key = re.search(r"(wc_[A-Za-z0-9_-]{40,})", err)
-    assert key is not None, err  # printed once on the first start
+    base = real_server.base
+    for method, path, kw in (("POST", "/routes", {"json": ROUTE}),
+                             ("POST", "/measurements/import",
+                              {"files": {"file": ("a.csv", b"a,b\n1,2\n")}}),
+                             ("POST", "/wear-tables", {"files": {"file": ("t.csv", b"x")}}),
+                             ("POST", "/models", {"json": {}}),
+                             ("POST", "/simulations", {"json": {}}),
+                             ("DELETE", "/admin/routes/1", {}),
+                             ("POST", "/admin/api-keys", {"json": {}})):
+        r = httpx.request(method, base + path, **kw)  # type: ignore[arg-type]
+        assert r.status_code == 401, (path, r.status_code, r.text)
+    assert httpx.get(f"{base}/routes").status_code == 401
+    log = real_server.stop()
+    key = re.search(r"(wc_[A-Za-z0-9_-]{40,})", log)
+    assert key is not None, log  # printed once on the first start
