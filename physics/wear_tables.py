@@ -163,8 +163,10 @@ def _add_indices(contacts: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
-def _table_from_contacts(contacts: pd.DataFrame) -> pd.DataFrame:
-    """Aggregate the raw contacts into the table of docs/conventions.md (regions, rails, radii)."""
+def table_from_contacts(contacts: pd.DataFrame) -> pd.DataFrame:
+    """Aggregate the raw contacts (``compute_wear_table_with_contacts``'s frame) into the table
+    of docs/conventions.md (regions, rails, radii): per wheel and region tau_max is the largest
+    ``tau_max_mpa`` of its loaded patches, T-gamma the sum of ``t_gamma_n``."""
     df = contacts.copy()
     df["tau_max"] = np.where(df["in_contact"], df["tau_max_mpa"], 0.0)
     df["t_gamma"] = np.where(df["in_contact"], df["t_gamma_n"], 0.0)
@@ -246,7 +248,7 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
         for k, (c, res, v) in enumerate(zip(cls, results, speeds, strict=True)):
             rows.extend(_contact_rows(bogie_type, k, c, res, v))
     contacts = _add_indices(pd.DataFrame(rows))
-    return _table_from_contacts(contacts), contacts
+    return table_from_contacts(contacts), contacts
 
 
 def compute_wear_table(vehicle_motor: BogieVehicle, vehicle_trailer: BogieVehicle,
