@@ -1,6 +1,8 @@
-"""What a start cleans up after a previous process that was killed or crashed: temporary
-upload files, raw files no committed batch refers to, idempotency claims left in flight, and
-(at shutdown) the import worker processes.
+"""What a start cleans up after a previous process that was killed or crashed: import batches
+left pending (their measurements, never visible, and the wheels and vehicles only they used;
+:func:`wearcast.service.pending_batches.discard_batch`), temporary upload files, raw files no
+committed batch refers to, idempotency claims left in flight, and (at shutdown) the import
+worker processes.
 
 Run only by the one process that starts the service (``create_app(migrate=True)``, i.e.
 ``wearcast serve``), when no import of this service can be running.
@@ -23,8 +25,14 @@ log = logging.getLogger(__name__)
 def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, int]:
     """Remove leftovers of interrupted imports; returns what was removed, by kind."""
     from wearcast.service.idempotency import release_stale
+    from wearcast.service.pending_batches import discard_batch, pending_batch_ids
 
-    removed = {"temporary": 0, "orphan_raw": 0, "idempotency_claims": 0}
+    removed = {"pending_batches": 0, "pending_measurements": 0, "temporary": 0,
+               "orphan_raw": 0, "idempotency_claims": 0}
+    with factory() as session:  # first: their raw files become orphans, removed below
+        for batch_id in pending_batch_ids(session):
+            removed["pending_measurements"] += discard_batch(session, batch_id)
+            removed["pending_batches"] += 1
     raw_dir = data_dir / "raw"
     tmp_dir = data_dir / "tmp"
     if tmp_dir.is_dir():

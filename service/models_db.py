@@ -68,6 +68,13 @@ class ImportBatch(Base):
     n_created: Mapped[int] = mapped_column(Integer, default=0)
     n_duplicates: Mapped[int] = mapped_column(Integer, default=0)
     n_points: Mapped[int] = mapped_column(Integer, default=0)
+    #: ``pending`` while its import inserts the measurements chunk by chunk (each chunk its
+    #: own short transaction; a pending batch's measurements are invisible to every read,
+    #: :mod:`wearcast.service.batch_visibility`), ``complete`` once the import has flipped it
+    #: in one last short transaction. A pending batch left by a killed import is removed at
+    #: the next start (:mod:`wearcast.service.housekeeping`).
+    status: Mapped[str] = mapped_column(String(20), default="complete",
+                                        server_default="complete", index=True)
 
 
 class RawFile(Base):
