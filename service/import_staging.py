@@ -194,21 +194,25 @@ class WriteLockShare:
     anyway, so the pause is rarely needed). Not needed on PostgreSQL (row locks).
     """
 
-    def __init__(self, sqlite: bool) -> None:
+    def __init__(self, sqlite: bool, clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep) -> None:
         self.sqlite = sqlite
+        self.clock, self.sleep = clock, sleep
         self.held_s = 0.0
         self.released_at: float | None = None
         self.started_at = 0.0
 
     def acquire(self) -> None:
+        """Before a chunk transaction: pause until the lock has been free long enough."""
         if self.sqlite and self.released_at is not None:
-            pause = min(self.held_s, MAX_LOCK_PAUSE_S) - (time.monotonic() - self.released_at)
+            pause = min(self.held_s, MAX_LOCK_PAUSE_S) - (self.clock() - self.released_at)
             if pause > 0:
-                time.sleep(pause)
-        self.started_at = time.monotonic()
+                self.sleep(pause)
+        self.started_at = self.clock()
 
     def release(self) -> None:
-        self.released_at = time.monotonic()
+        """After a chunk transaction (committed or rolled back)."""
+        self.released_at = self.clock()
         self.held_s = self.released_at - self.started_at
 
 

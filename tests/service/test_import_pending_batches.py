@@ -25,6 +25,7 @@ from wearcast.service.app import create_app
 from wearcast.service.batch_visibility import INCLUDE_PENDING
 from wearcast.service.db import Database
 from wearcast.service.errors import ApiError, NotFound
+from wearcast.service.import_staging import MAX_LOCK_PAUSE_S, WriteLockShare
 from wearcast.service.measurement_schemas import MeasurementIn
 from wearcast.service.route_schemas import RouteIn
 from wearcast.service.settings import Settings
@@ -271,3 +272,33 @@ def test_a_killed_import_leaves_nothing_visible_and_the_next_start_removes_it(
     # the same upload again is imported whole (not answered as a duplicate of the dead one)
     result = _import(database, data)
     assert not result.duplicate and result.created == n
+
+
+def test_an_import_leaves_the_sqlite_write_lock_free_about_as_long_as_it_held_it() -> None:
+    now, slept = [100.0], []
+
+    def sleep(seconds: float) -> None:
+        slept.append(seconds)
+        now[0] += seconds
+
+    share = WriteLockShare(sqlite=True, clock=lambda: now[0], sleep=sleep)
+    share.acquire()  # the first chunk does not wait
+    now[0] += 0.040
+    share.release()  # held 40 ms
+    now[0] += 0.010
+    share.acquire()  # free for 10 ms only: waits 30 ms more
+    assert slept == pytest.approx([0.030])
+    now[0] += 2.0
+    share.release()  # held 2 s (a slow chunk on a loaded machine)
+    share.acquire()  # waits at most MAX_LOCK_PAUSE_S
+    assert slept[-1] == pytest.approx(MAX_LOCK_PAUSE_S)
+    now[0] += 0.050
+    share.release()
+    now[0] += 1.0  # reading the next chunk took longer than the chunk held the lock
+    share.acquire()
+    assert len(slept) == 2
+    other = WriteLockShare(sqlite=False, clock=lambda: now[0], sleep=sleep)
+    other.acquire()
+    other.release()
+    other.acquire()  # PostgreSQL: row locks, no pause
+    assert len(slept) == 2
