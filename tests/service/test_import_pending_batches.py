@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 from sqlalchemy import func, select
 
-from wearcast.service import importing, measurement_store, route_store
+from wearcast.service import admin_store, importing, measurement_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.batch_visibility import INCLUDE_PENDING
@@ -187,6 +187,11 @@ def test_writes_that_collide_with_a_running_import_are_refused_to_retry(
                     bogie_type=first.bogie_type, axle=int(first.axle), side=first.side,
                     mileage_km=float(first.mileage_km), sd_mm=30.0, sh_mm=28.0, qr_mm=10.0))
         assert overlap.value.status == 409 and "being imported" in overlap.value.reason
+        with database.session_factory() as s:  # an operator cannot delete it half-way
+            batch_id = s.scalar(select(db.ImportBatch.id))
+            with pytest.raises(ApiError) as removal:
+                admin_store.remove(s, "batches", batch_id)
+        assert removal.value.status == 409 and "being imported" in removal.value.reason
     finally:
         pause.go_on.set()
         thread.join()
