@@ -24,6 +24,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service.batch_visibility import COMPLETE, INCLUDE_PENDING, PENDING, visible
+from wearcast.service.errors import Conflict
 from wearcast.service.import_result import ImportCounts
 from wearcast.service.import_staging import Written
 from wearcast.service.reference_store import OWN_BASELINE
@@ -71,9 +72,14 @@ def complete_batch(session: Session, batch_id: int, written: Written) -> ImportC
         apply_reference(session, wheel_id, OWN_BASELINE, commit=True)
     for wheel_id in sorted(seen_before):
         apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
-    session.execute(update(db.ImportBatch).where(db.ImportBatch.id == batch_id).values(
+    flipped = session.execute(update(db.ImportBatch).where(
+        db.ImportBatch.id == batch_id, db.ImportBatch.status == PENDING).values(
         status=COMPLETE, n_records=counts.records, n_created=counts.created,
         n_duplicates=counts.duplicates, n_points=counts.points))
+    if flipped.rowcount != 1:  # type: ignore[attr-defined]
+        session.rollback()
+        raise Conflict("file", f"import batch {batch_id} was removed while it was imported; "
+                       "try again")
     session.commit()
     return counts
 
