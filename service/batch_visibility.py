@@ -6,12 +6,14 @@ short transaction (:mod:`wearcast.service.importing`). So that no half-written b
 seen, every ORM ``SELECT`` a :class:`~sqlalchemy.orm.Session` runs that touches
 ``measurements`` (listings, counts, joins, ``Session.get``) is given the criterion
 
-    ``batch_id IS NULL OR batch_id NOT IN (SELECT id FROM import_batches WHERE status = 'pending')``
+    ``batch_id IS NULL OR batch_id NOT IN``
+    ``(SELECT id FROM import_batches WHERE status <> 'complete')``
 
 with SQLAlchemy's :func:`~sqlalchemy.orm.with_loader_criteria` from a ``do_orm_execute``
 event on every session (SQLAlchemy's documented pattern for global visibility rules), so a
 read added later is covered without remembering to filter. The set of pending batches is
-tiny (the imports running now), so the criterion costs one small subquery.
+tiny (the imports running now), so the criterion costs one small subquery. A batch being
+discarded (``discarding``) is as invisible as a pending one.
 
 The import itself and the recovery after a crash must see their own pending rows (duplicate
 checks, the own-baseline re-reference of a wheel, deleting an interrupted batch): they run
@@ -32,6 +34,8 @@ from wearcast.service import models_db as db
 
 PENDING = "pending"
 COMPLETE = "complete"
+#: A failed or abandoned batch being removed: as invisible as a pending one.
+DISCARDING = "discarding"
 #: Execution option: this statement sees the measurements of pending batches too.
 INCLUDE_PENDING = "include_pending_batches"
 #: Session ``info`` key: every statement of this session sees pending batches.
@@ -39,9 +43,10 @@ _SESSION_KEY = "wearcast_include_pending_batches"
 
 
 def visible(measurement: Any = db.Measurement) -> ColumnElement[bool]:
-    """True for a measurement that is not part of a pending import batch."""
-    pending = select(db.ImportBatch.id).where(db.ImportBatch.status == PENDING)
-    return or_(measurement.batch_id.is_(None), measurement.batch_id.not_in(pending))
+    """True for a measurement that is not part of an incomplete (pending or discarding)
+    import batch."""
+    incomplete = select(db.ImportBatch.id).where(db.ImportBatch.status != COMPLETE)
+    return or_(measurement.batch_id.is_(None), measurement.batch_id.not_in(incomplete))
 
 
 @contextmanager

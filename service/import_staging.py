@@ -33,13 +33,14 @@ from sqlalchemy import func, insert, select, tuple_
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
-from wearcast.service.batch_visibility import INCLUDE_PENDING, PENDING
+from wearcast.service.batch_visibility import COMPLETE, INCLUDE_PENDING
 from wearcast.service.errors import ApiError, Conflict
 from wearcast.service.import_pool import submit_profiles
 from wearcast.service.import_registry import ImportRegistry
 from wearcast.service.import_result import ImportCounts, collect_warnings
 from wearcast.service.import_worker import Processed
 from wearcast.service.measurement_rows import measurement_row
+from wearcast.service.pending_batches import BEAT_S, beat
 from wearcast.service.readers.bundle import Record
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ProfileRecord
@@ -233,7 +234,7 @@ def in_flight_conflict(session: Session, keys: Iterable[tuple[str, float]],
     if not holders:
         return
     running = sorted(session.scalars(select(db.ImportBatch.id).where(
-        db.ImportBatch.id.in_(holders), db.ImportBatch.status == PENDING)))
+        db.ImportBatch.id.in_(holders), db.ImportBatch.status != COMPLETE)))
     if running:
         error: ApiError = Conflict("file", "measurements of this upload are being imported "
                                    f"now by batch {running[0]}; retry when it has finished")
@@ -275,18 +276,22 @@ def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
             _check_points(chunk, max_points)
         _check_texts(chunk, max_id_length)
 
+    last_beat = time.monotonic()
     for rows, n_read in chunk_rows(session, records, registry, written.counts, written.keys,
                                    batch_id=batch_id, chunk_size=chunk_size, check=check):
-        if rows:
+        if rows or time.monotonic() - last_beat > BEAT_S:
             session.commit()  # end the reads of this chunk before the write transaction
             share.acquire()
             try:
-                write_new_wheels(session, registry, {row["wheel_id"] for row in rows})
-                session.connection().execute(statement, rows)
-                keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
-                if _inserted(session, keys, batch_id) < len(rows):
-                    in_flight_conflict(session, keys, batch_id)
+                if rows:
+                    write_new_wheels(session, registry, {row["wheel_id"] for row in rows})
+                    session.connection().execute(statement, rows)
+                    keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
+                    if _inserted(session, keys, batch_id) < len(rows):
+                        in_flight_conflict(session, keys, batch_id)
+                beat(session, batch_id)
                 session.commit()
+                last_beat = time.monotonic()
             finally:
                 share.release()
         if progress is not None:

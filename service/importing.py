@@ -58,7 +58,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
-from wearcast.service.batch_visibility import PENDING, seeing_pending
+from wearcast.service.batch_visibility import COMPLETE, seeing_pending
 from wearcast.service.errors import ApiError, Conflict, Unprocessable
 
 # service.model_store imports the processing under its former name from here (that module is
@@ -215,7 +215,7 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
 
 def _answer_existing(session: Session, found: db.ImportBatch) -> ImportResult:
     """The first import's answer (``duplicate``), or 409 while that import still runs."""
-    if found.status == PENDING:
+    if found.status != COMPLETE:
         error: ApiError = Conflict("file", f"the same content is being imported now (batch "
                                    f"{found.id}); retry when it has finished")
         error.headers = {"Retry-After": "5"}

@@ -6,6 +6,7 @@ on PostgreSQL."""
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 import logging
 import os
@@ -19,12 +20,19 @@ import pandas as pd
 import pytest
 from sqlalchemy import func, select
 
-from wearcast.service import admin_store, importing, measurement_store, route_store
+from wearcast.service import (
+    admin_store,
+    importing,
+    measurement_store,
+    pending_batches,
+    route_store,
+)
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.batch_visibility import INCLUDE_PENDING
 from wearcast.service.db import Database
 from wearcast.service.errors import ApiError, NotFound
+from wearcast.service.housekeeping import sweep_abandoned_imports
 from wearcast.service.import_staging import MAX_LOCK_PAUSE_S, WriteLockShare
 from wearcast.service.measurement_schemas import MeasurementIn
 from wearcast.service.route_schemas import RouteIn
@@ -198,6 +206,24 @@ def test_writes_that_collide_with_a_running_import_are_refused_to_retry(
     assert out["result"].created == n
 
 
+def test_an_import_given_up_as_abandoned_cannot_complete(
+        database: Database, upload: tuple[bytes, int]) -> None:
+    data, n = upload
+    pause = Pause(after=2)
+    thread, out = _in_background(database, data, pause)
+    try:
+        with database.session_factory() as s:  # what the sweep does to a silent import
+            batch_id = s.scalar(select(db.ImportBatch.id))
+            assert pending_batches.discard_batch(s, batch_id) >= CHUNK
+    finally:
+        pause.go_on.set()
+        thread.join()
+    assert isinstance(out.get("error"), ApiError) and out["error"].status == 409
+    assert _counts(database) == {"visible": 0, "stored": 0, "pending_batches": 0,
+                                 "batches": 0, "wheels": 0, "vehicles": 0}
+    assert _import(database, data).created == n  # tried again, it is imported whole
+
+
 def test_a_repeated_import_creates_nothing_new(database: Database,
                                                upload: tuple[bytes, int]) -> None:
     data, n = upload
@@ -251,9 +277,10 @@ with database.session_factory() as session, open(sys.argv[3], "rb") as stream:
 """
 
 
-def test_a_killed_import_leaves_nothing_visible_and_the_next_start_removes_it(
+@pytest.mark.parametrize("recovery", ["restart", "sweep"])
+def test_a_killed_import_leaves_nothing_visible_and_is_removed_by_the_next_start_or_sweep(
         database: Database, upload: tuple[bytes, int], tmp_path: Path,
-        caplog: pytest.LogCaptureFixture) -> None:
+        caplog: pytest.LogCaptureFixture, recovery: str) -> None:
     data, n = upload
     csv = tmp_path / "fleet.csv"
     csv.write_bytes(data)
@@ -267,13 +294,20 @@ def test_a_killed_import_leaves_nothing_visible_and_the_next_start_removes_it(
     assert left["stored"] >= 3 * CHUNK and left["pending_batches"] == 1  # killed half-way
     assert left["visible"] == 0
     assert any(p.is_file() for p in database.settings.raw_dir.rglob("*"))
-    with caplog.at_level(logging.INFO, logger="wearcast.service.housekeeping"):
-        create_app(database.settings, migrate=True)  # the start `wearcast serve` makes
-    assert "'pending_batches': 1" in caplog.text
-    assert f"'pending_measurements': {left['stored']}" in caplog.text
+    if recovery == "restart":
+        with caplog.at_level(logging.INFO, logger="wearcast.service.housekeeping"):
+            create_app(database.settings, migrate=True)  # the start `wearcast serve` makes
+        assert "'pending_batches': 1" in caplog.text
+        assert f"'pending_measurements': {left['stored']}" in caplog.text
+        assert not [p for p in database.settings.raw_dir.rglob("*") if p.is_file()]
+    else:  # the service kept running (another worker of `serve --workers N`): its sweep
+        factory = database.session_factory
+        now = dt.datetime.now(dt.UTC)
+        assert sweep_abandoned_imports(factory, now) == 0  # silent for seconds only
+        later = now + dt.timedelta(seconds=pending_batches.STALE_S + 1)
+        assert sweep_abandoned_imports(factory, later) == 1
     assert _counts(database) == {"visible": 0, "stored": 0, "pending_batches": 0,
                                  "batches": 0, "wheels": 0, "vehicles": 0}
-    assert not [p for p in database.settings.raw_dir.rglob("*") if p.is_file()]
     # the same upload again is imported whole (not answered as a duplicate of the dead one)
     result = _import(database, data)
     assert not result.duplicate and result.created == n
