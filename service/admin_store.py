@@ -18,6 +18,7 @@ from sqlalchemy import delete, inspect, select
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
+from wearcast.service.batch_visibility import COMPLETE
 from wearcast.service.errors import Conflict, NotFound
 
 Kind = Literal["batches", "measurements", "routes", "wear-tables", "models"]
@@ -69,6 +70,9 @@ def remove(session: Session, kind: str, entity_id: int) -> dict[str, Any]:
     """Delete a row of ``kind`` (not committed) and return its snapshot; 404 when absent,
     409 when a model depends on it."""
     row = _row(session, kind, entity_id)
+    if kind == "batches" and row.status != COMPLETE:
+        raise Conflict("id", f"batch {entity_id} is being imported now; delete it when its "
+                       "import has finished")
     users = _models_using(session, kind, entity_id)
     if users:
         raise Conflict("id", f"model(s) {', '.join(map(str, users))} depend on this "

@@ -126,7 +126,12 @@ def serve(host: Annotated[str, typer.Option(help="interface to bind")] = "127.0.
                   + (f" with {workers} workers" if workers > 1 else ""))
     if workers > 1:
         # jobs the last run left running are queued again; worker processes import the app:
-        # same settings (from the environment), no migration, lost jobs found by heartbeat
+        # same settings (from the environment), no migration, lost jobs found by heartbeat;
+        # what interrupted imports left (pending batches, temporary and orphan raw files) is
+        # removed here, before any worker can start an import
+        from wearcast.service.housekeeping import clean_after_restart
+
+        clean_after_restart(database.session_factory, settings.data_dir)
         JobRunner(database, settings).recover(all_running=True, dispatch_all=False)
         database.dispose()
         uvicorn.run("wearcast.service.cli:serve_app", factory=True, host=host, port=port,

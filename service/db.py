@@ -18,6 +18,7 @@ from sqlalchemy import Engine, create_engine, event, text
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
+from wearcast.service import batch_visibility  # noqa: F401  (pending batches stay unseen)
 from wearcast.service.settings import Settings
 
 SessionFactory = sessionmaker[Session]

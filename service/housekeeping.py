@@ -1,13 +1,17 @@
-"""What a start cleans up after a previous process that was killed or crashed: temporary
-upload files, raw files no committed batch refers to, idempotency claims left in flight, and
-(at shutdown) the import worker processes.
+"""What a start cleans up after a previous process that was killed or crashed: import batches
+left pending (their measurements, never visible, and the wheels and vehicles only they used;
+:func:`wearcast.service.pending_batches.discard_batch`), temporary upload files, raw files no
+committed batch refers to, idempotency claims left in flight, and (at shutdown) the import
+worker processes.
 
-Run only by the one process that starts the service (``create_app(migrate=True)``, i.e.
-``wearcast serve``), when no import of this service can be running.
+:func:`clean_after_restart` is run only by the one process that starts the service
+(``create_app(migrate=True)``, i.e. ``wearcast serve``), when no import of this service can be
+running; :func:`sweep_abandoned_imports` by every serving process, periodically.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import logging
 import shutil
 from pathlib import Path
@@ -23,8 +27,14 @@ log = logging.getLogger(__name__)
 def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, int]:
     """Remove leftovers of interrupted imports; returns what was removed, by kind."""
     from wearcast.service.idempotency import release_stale
+    from wearcast.service.pending_batches import discard_batch, incomplete_batch_ids
 
-    removed = {"temporary": 0, "orphan_raw": 0, "idempotency_claims": 0}
+    removed = {"pending_batches": 0, "pending_measurements": 0, "temporary": 0,
+               "orphan_raw": 0, "idempotency_claims": 0}
+    with factory() as session:  # first: their raw files become orphans, removed below
+        for batch_id in incomplete_batch_ids(session):
+            removed["pending_measurements"] += discard_batch(session, batch_id)
+            removed["pending_batches"] += 1
     raw_dir = data_dir / "raw"
     tmp_dir = data_dir / "tmp"
     if tmp_dir.is_dir():
@@ -50,6 +60,24 @@ def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, in
     if any(removed.values()):
         log.info("cleaned up after the last run: %s", removed)
     return removed
+
+
+def sweep_abandoned_imports(factory: SessionFactory, now: dt.datetime | None = None
+                            ) -> int:
+    """Discard the import batches left pending by a process that died while the service
+    kept running (silent for ``pending_batches.STALE_S``) and those left half-discarded;
+    run periodically by every serving process (:class:`wearcast.service.jobs.JobRunner`).
+    Returns how many were discarded."""
+    from wearcast.service.pending_batches import STALE_S, discard_batch, incomplete_batch_ids
+
+    now = now or dt.datetime.now(dt.UTC)
+    with factory() as session:
+        stale = incomplete_batch_ids(session, now - dt.timedelta(seconds=STALE_S))
+        for batch_id in stale:
+            removed = discard_batch(session, batch_id)
+            log.warning("discarded import batch %s, abandoned by its import (%d "
+                        "measurements, never visible)", batch_id, removed)
+    return len(stale)
 
 
 def stop_import_workers() -> None:

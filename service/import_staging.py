@@ -7,38 +7,40 @@ when large, :mod:`wearcast.service.import_pool`) while the next chunk is read; t
 ``measurements`` rows are built (:mod:`wearcast.service.measurement_rows`,
 :func:`chunk_rows`).
 
-Imports of an upload are staged outside the write lock: reading and processing an upload
-(profile cleaning, alignment, wear curves) is the slow part of an import; while it ran inside
-the batch's transaction, SQLite's single write lock was held for all of it and every other
-write waited. Here the rows are built first, with reads only, and spooled to an anonymous
-temporary file (unlinked at once: nothing is left behind by a kill), so memory stays flat
-however large the upload (:func:`stage_records`); then the batch, its raw-file rows, new
-vehicles and wheels (upserts: concurrent imports sharing them both succeed) and the
-measurements (a row another import stored meanwhile is skipped as a duplicate) are inserted
-in one transaction — the batch stays atomic and the lock is held only for the inserts
-(:func:`write_stage`). Single posts are inserted directly in the session's open transaction
-(:func:`store_records`).
+An upload's rows are inserted under a batch whose status is ``pending`` (invisible to every
+read, :mod:`wearcast.service.batch_visibility`), chunk by chunk, each chunk its own short write
+transaction (:func:`write_records`): SQLite's single write lock is held for one chunk's
+inserts at a time (``import_chunk_size`` rows) and released between chunks, so another
+writer waits for one chunk at most, however large the upload (:class:`WriteLockShare` keeps
+the import from taking the lock straight back). Reading and processing (the slow part) run
+outside any write transaction, the next chunk's while the current one is inserted. New
+vehicles and wheels are upserts (concurrent imports sharing them both succeed); a row
+another import stored meanwhile is skipped as a duplicate, one another running import holds
+is a 409 (retry when it has finished). The batch is flipped to ``complete`` in one last
+short transaction (:mod:`wearcast.service.pending_batches`). Single posts are inserted
+directly in the session's open transaction (:func:`store_records`).
 """
 
 from __future__ import annotations
 
-import pickle
-import tempfile
+import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from itertools import islice
-from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 from sqlalchemy import func, insert, select, tuple_
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
+from wearcast.service.batch_visibility import COMPLETE, INCLUDE_PENDING
+from wearcast.service.errors import ApiError, Conflict
 from wearcast.service.import_pool import submit_profiles
 from wearcast.service.import_registry import ImportRegistry
 from wearcast.service.import_result import ImportCounts, collect_warnings
 from wearcast.service.import_worker import Processed
 from wearcast.service.measurement_rows import measurement_row
+from wearcast.service.pending_batches import BEAT_S, beat
 from wearcast.service.readers.bundle import Record
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ProfileRecord
@@ -83,10 +85,14 @@ def chunk_rows(session: Session, records: Iterable[Record], registry: ImportRegi
         if check is not None:
             check(chunk)
         keys = [(r.meta.wheel_id, float(r.meta.mileage_km)) for r in chunk]
-        stored = {tuple(row) for row in session.execute(
-            select(db.Measurement.wheel_id, db.Measurement.mileage_km).where(
+        found = session.execute(
+            select(db.Measurement.wheel_id, db.Measurement.mileage_km,
+                   db.Measurement.batch_id).where(
                 tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
-        ).all()}
+            .execution_options(**{INCLUDE_PENDING: True})).all()
+        stored = {(row[0], row[1]) for row in found}
+        if any(row[2] is not None and row[2] != batch_id for row in found):
+            in_flight_conflict(session, stored, batch_id)
         fresh: list[Record] = []
         for record, key in zip(chunk, keys, strict=True):
             if key in stored or key in seen:
@@ -146,10 +152,14 @@ def insert_ignoring_duplicates(session: Session, table: Any, index_elements: lis
     return insert(table)
 
 
-def write_new_wheels(session: Session, registry: ImportRegistry) -> None:
-    """Insert the vehicles and wheels a staged import found new (upserts: another import may
-    have stored them meanwhile), then check that every one is stored where the upload says."""
-    new = registry.new_wheels
+def write_new_wheels(session: Session, registry: ImportRegistry,
+                     wheel_ids: set[str] | None = None) -> None:
+    """Insert the vehicles and wheels an import found new (all, or those of ``wheel_ids``;
+    upserts: another import may have stored them meanwhile), then check that every one is
+    stored where the upload says. Written wheels leave ``registry.new_wheels``."""
+    chosen = list(registry.new_wheels) if wheel_ids is None else \
+        sorted(registry.new_wheels.keys() & wheel_ids)
+    new = {w: registry.new_wheels.pop(w) for w in chosen}
     if not new:
         return
     vehicles = sorted({w["vehicle_id"] for w in new.values()})
@@ -167,51 +177,135 @@ def write_new_wheels(session: Session, registry: ImportRegistry) -> None:
                                   f"another position {stored.get(wheel_id)!r}", field="wheel_id")
 
 
+#: On SQLite, the longest pause [s] an import leaves between two chunk transactions so that
+#: writers waiting for the database lock get it (their busy handler retries every 100 ms at
+#: most once it has waited a while).
+MAX_LOCK_PAUSE_S = 0.1
+
+
+class WriteLockShare:
+    """Keeps an import's share of SQLite's one write lock at most about one half.
+
+    SQLite grants its write lock to whoever asks first when it is free; a waiting writer
+    sleeps in its busy handler and asks again, it is not queued. An import that started its
+    next chunk transaction right after committing the last one could take the lock again
+    each time before the waiter wakes. So before each chunk transaction the import pauses,
+    if needed, until the lock has been free for as long as it held it last time (at most
+    :data:`MAX_LOCK_PAUSE_S`; reading and processing the next chunk usually take longer
+    anyway, so the pause is rarely needed). Not needed on PostgreSQL (row locks).
+    """
+
+    def __init__(self, sqlite: bool, clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep) -> None:
+        self.sqlite = sqlite
+        self.clock, self.sleep = clock, sleep
+        self.held_s = 0.0
+        self.released_at: float | None = None
+        self.started_at = 0.0
+
+    def acquire(self) -> None:
+        """Before a chunk transaction: pause until the lock has been free long enough."""
+        if self.sqlite and self.released_at is not None:
+            pause = min(self.held_s, MAX_LOCK_PAUSE_S) - (self.clock() - self.released_at)
+            if pause > 0:
+                self.sleep(pause)
+        self.started_at = self.clock()
+
+    def release(self) -> None:
+        """After a chunk transaction (committed or rolled back)."""
+        self.released_at = self.clock()
+        self.held_s = self.released_at - self.started_at
+
+
+def in_flight_conflict(session: Session, keys: Iterable[tuple[str, float]],
+                       batch_id: int | None) -> None:
+    """409 when a (wheel_id, mileage_km) of ``keys`` belongs to another import that is still
+    running (a pending batch): whether it is a duplicate is known only once that import has
+    completed (or failed, and its rows are gone)."""
+    wanted = set(keys)
+    if not wanted:
+        return
+    holders = set(session.scalars(
+        select(db.Measurement.batch_id).where(
+            tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(wanted),
+            db.Measurement.batch_id.is_not(None))
+        .execution_options(**{INCLUDE_PENDING: True})))
+    holders.discard(batch_id)
+    if not holders:
+        return
+    running = sorted(session.scalars(select(db.ImportBatch.id).where(
+        db.ImportBatch.id.in_(holders), db.ImportBatch.status != COMPLETE)))
+    if running:
+        error: ApiError = Conflict("file", "measurements of this upload are being imported "
+                                   f"now by batch {running[0]}; retry when it has finished")
+        error.headers = {"Retry-After": "5"}
+        raise error
+
+
 @dataclass
-class Stage:
-    """Rows of an upload ready to insert, spooled to an anonymous temporary file."""
+class Written:
+    """What :func:`write_records` read and inserted under a pending batch."""
 
     counts: ImportCounts
     registry: ImportRegistry
-    spool: IO[bytes]
-    chunks: int = 0
     keys: set[tuple[str, float]] = field(default_factory=set)
 
-    def rows(self) -> Iterator[list[dict[str, Any]]]:
-        self.spool.seek(0)
-        for _ in range(self.chunks):
-            yield pickle.load(self.spool)
 
-    def close(self) -> None:
-        self.spool.close()
+def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
+                  chunk_size: int, max_points: int | None = None, max_id_length: int = 200,
+                  progress: Progress | None = None) -> Written:
+    """Check, process and insert the records under the pending batch ``batch_id``, each
+    chunk of rows in its own short transaction (committed here).
 
-
-def stage_records(session: Session, records: Iterable[Record], *, chunk_size: int,
-                  tmp_dir: Path | None = None, max_points: int | None = None,
-                  max_id_length: int = 200, progress: Progress | None = None) -> Stage:
-    """Read, check and process every record (reads only); the rows go to a spool file."""
+    A chunk's profiles are processed while the previous chunk is inserted
+    (:func:`chunk_rows`); the new wheels and vehicles a chunk's rows need are upserted in the
+    same transaction as those rows (so every wheel the batch created has a measurement of the
+    batch, and goes with it if the batch is discarded); a row another import stored meanwhile
+    is skipped (a duplicate), one another import is still inserting is a 409
+    (:func:`in_flight_conflict`). The session must see pending batches
+    (:func:`wearcast.service.batch_visibility.seeing_pending`).
+    """
     registry = ImportRegistry(session, defer_writes=True)
-    if tmp_dir is not None:
-        tmp_dir.mkdir(parents=True, exist_ok=True)
-    stage = Stage(ImportCounts(), registry, tempfile.TemporaryFile(dir=tmp_dir))
+    written = Written(ImportCounts(), registry)
+    statement = insert_ignoring_duplicates(session, db.Measurement.__table__,
+                                           ["wheel_id", "mileage_km"])
+    share = WriteLockShare(session.get_bind().dialect.name == "sqlite")
 
     def check(chunk: list[Record]) -> None:
         if max_points is not None:
             _check_points(chunk, max_points)
         _check_texts(chunk, max_id_length)
 
-    try:
-        for rows, n_read in chunk_rows(session, records, registry, stage.counts, stage.keys,
-                                       batch_id=None, chunk_size=chunk_size, check=check):
-            if rows:
-                pickle.dump(rows, stage.spool, protocol=pickle.HIGHEST_PROTOCOL)
-                stage.chunks += 1
-            if progress is not None:
-                progress(n_read)
-    except BaseException:
-        stage.close()
-        raise
-    return stage
+    last_beat = time.monotonic()
+    for rows, n_read in chunk_rows(session, records, registry, written.counts, written.keys,
+                                   batch_id=batch_id, chunk_size=chunk_size, check=check):
+        if rows or time.monotonic() - last_beat > BEAT_S:
+            session.commit()  # end the reads of this chunk before the write transaction
+            share.acquire()
+            try:
+                if rows:
+                    write_new_wheels(session, registry, {row["wheel_id"] for row in rows})
+                    session.connection().execute(statement, rows)
+                    keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
+                    if _inserted(session, keys, batch_id) < len(rows):
+                        in_flight_conflict(session, keys, batch_id)
+                beat(session, batch_id)
+                session.commit()
+                last_beat = time.monotonic()
+            finally:
+                share.release()
+        if progress is not None:
+            progress(n_read)
+    session.commit()
+    return written
+
+
+def _inserted(session: Session, keys: list[tuple[str, float]], batch_id: int) -> int:
+    return int(session.scalar(
+        select(func.count()).select_from(db.Measurement).where(
+            db.Measurement.batch_id == batch_id,
+            tuple_(db.Measurement.wheel_id, db.Measurement.mileage_km).in_(set(keys)))
+        .execution_options(**{INCLUDE_PENDING: True})) or 0)
 
 
 #: Text fields of a measurement that are stored in bounded columns.
@@ -245,26 +339,3 @@ def _check_points(chunk: list[Record], max_points: int) -> None:
                                   f"{meta.mileage_km:g} km has {len(record.y_mm):,} points "
                                   f"(limit max_points_per_profile = {max_points:,})",
                                   line=meta.source_line, field="y_mm")
-
-
-def write_stage(session: Session, stage: Stage, batch_id: int) -> ImportCounts:
-    """Insert the staged rows under ``batch_id`` in the session's transaction; rows stored
-    meanwhile by another import count as duplicates. Returns the final counts."""
-    write_new_wheels(session, stage.registry)
-    # Core executemany on the table (not the ORM entity): no per-row ORM bookkeeping
-    statement = insert_ignoring_duplicates(session, db.Measurement.__table__,
-                                           ["wheel_id", "mileage_km"])
-    connection = session.connection()
-    for rows in stage.rows():
-        for row in rows:
-            row["batch_id"] = batch_id
-        connection.execute(statement, rows)
-    created = int(session.scalar(select(func.count()).select_from(db.Measurement)
-                                 .where(db.Measurement.batch_id == batch_id)) or 0)
-    for wheel_id in sorted(stage.registry.own_wheels):  # baseline = own first measurement
-        session.flush()
-        apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
-    counts = stage.counts
-    counts.duplicates += len(stage.keys) - created
-    counts.created = created
-    return counts

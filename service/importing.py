@@ -1,4 +1,4 @@
-"""The import pipeline: readers → profile processing → bulk inserts, one transaction per batch.
+"""The import pipeline: readers → profile processing → bulk inserts under a pending batch.
 
 ``import_upload`` streams the records of an upload (long CSV, parameter CSV, MiniProf files
 with a manifest, or a zip of these; :mod:`wearcast.service.readers`), processes each profile
@@ -19,12 +19,21 @@ fits is given (:func:`apply_reference`).
 
 Idempotency: a batch is identified by the SHA-256 of its content (file, and manifest when
 given) and optionally by an ``Idempotency-Key``; importing the same content or key again
-creates nothing and returns the first batch with ``duplicate=True``. A measurement whose
-(wheel_id, mileage_km) is already stored (or appears twice in the upload) is skipped and
-counted in ``duplicates``. Any error rolls the whole batch back (and removes the raw file it
-stored) and is reported with file, line, field and reason.
+creates nothing and returns the first batch with ``duplicate=True`` (409 while the first
+import still runs). A measurement whose (wheel_id, mileage_km) is already stored (or appears
+twice in the upload) is skipped and counted in ``duplicates``.
 
-This module holds the upload's transaction (checksum, idempotency, raw files, batch); the
+Atomic without one long transaction: the batch is opened ``pending`` in a short transaction,
+its measurements are inserted chunk by chunk, each chunk a short transaction of its own (so
+on SQLite another write waits for one chunk at most, not for the whole upload), and it is
+flipped to ``complete`` in one last short transaction
+(:mod:`wearcast.service.pending_batches`). Until then none of it is visible to any read
+(:mod:`wearcast.service.batch_visibility`). Any error discards the pending batch and all it
+wrote (and the raw file it stored) and is reported with file, line, field and reason; a
+batch left pending by a killed process is discarded at the next start
+(:mod:`wearcast.service.housekeeping`).
+
+This module holds the upload's steps (checksum, idempotency, raw files, batch); the
 records are read by :mod:`wearcast.service.readers`, checked, processed and inserted chunk by
 chunk by :mod:`wearcast.service.import_staging` (wheels: :mod:`~wearcast.service.import_registry`,
 processing: :mod:`~wearcast.service.import_pool`, rows and warnings:
@@ -37,6 +46,7 @@ from __future__ import annotations
 
 import hashlib
 import io
+import logging
 import zipfile
 import zlib
 from pathlib import Path
@@ -48,16 +58,19 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
+from wearcast.service.batch_visibility import COMPLETE, seeing_pending
 from wearcast.service.errors import ApiError, Conflict, Unprocessable
 
 # service.model_store imports the processing under its former name from here (that module is
 # not edited on this branch); new code imports import_pool.process_with_reference.
 from wearcast.service.import_pool import process_with_reference as _process_arrays  # noqa: F401
 from wearcast.service.import_result import ImportResult, duplicate_result
-from wearcast.service.import_staging import DEFAULT_CHUNK, Progress, stage_records, write_stage
+from wearcast.service.import_staging import DEFAULT_CHUNK, Progress, write_records
+from wearcast.service.pending_batches import complete_batch, discard_batch, open_batch
 from wearcast.service.readers.bundle import ZipLimits
 from wearcast.service.readers.errors import ImportFileError
 
+log = logging.getLogger(__name__)
 
 def import_file_error(exc: ImportFileError) -> ApiError:
     """A reader's error as a 422 naming file, line, field and reason."""
@@ -97,9 +110,10 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
                   progress: Progress | None = None, settings: Any = None) -> ImportResult:
     """Import one upload atomically; see the module docstring for the rules.
 
-    The records are read, checked and processed before the batch's transaction starts
-    (:mod:`wearcast.service.import_staging`), so the write lock is held only for the
-    inserts. ``settings`` (default: the serving app's, else the environment's) gives the
+    The records are read, checked and processed outside any write transaction and inserted
+    in short chunk transactions under a pending batch
+    (:mod:`wearcast.service.import_staging`), so the write lock is held for one chunk at a
+    time. ``settings`` (default: the serving app's, else the environment's) gives the
     limits: zip members and decompressed size, CSV line length and columns, points per
     profile (422 naming the limit).
     """
@@ -125,12 +139,12 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
             if found.checksum_sha256 != checksum:
                 raise Unprocessable("Idempotency-Key", "this key was used for a different "
                                     "request (another file or manifest); use a new key")
-            return duplicate_result(session, found)
+            return _answer_existing(session, found)
         done_batch = idempotency.claim(session, idempotency_key, checksum)
         if done_batch is not None:
             batch_row = session.get(db.ImportBatch, done_batch)
             if batch_row is not None:
-                return duplicate_result(session, batch_row)
+                return _answer_existing(session, batch_row)
     try:
         result = _import_claimed(session, raw_dir, stream, file_name, file_sha, checksum,
                                  manifest, manifest_name, idempotency_key, chunk_size,
@@ -150,9 +164,10 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
                     progress: Progress | None, settings: Any) -> ImportResult:
     found = _existing_batch(session, checksum=checksum)
     if found is not None:
-        return duplicate_result(session, found)
+        return _answer_existing(session, found)
+    session.rollback()  # end the reads: the batch is opened in a transaction of its own
     stored_files: list[rawfiles.StoredFile] = []
-    stage = None
+    batch_id: int | None = None
     try:
         stored_files.append(rawfiles.store(raw_dir, stream, file_sha))
         if manifest is not None:
@@ -160,58 +175,66 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
                                                hashlib.sha256(manifest).hexdigest()))
         from wearcast.service.readers.bundle import iter_upload
 
+        batch_id = open_batch(session, checksum=checksum, idempotency_key=idempotency_key,
+                              file_name=file_name, raw_files=[
+            {"role": role, "name": name, "sha256": stored.sha256,
+             "size_bytes": stored.size_bytes, "storage_path": stored.relative_path}
+            for role, stored, name in zip(("file", "manifest"), stored_files,
+                                          (file_name, manifest_name or "manifest.csv"),
+                                          strict=False)])
         records = iter_upload(stream, file_name, manifest=manifest, limits=_limits(settings))
-        stage = stage_records(session, records, chunk_size=chunk_size,
-                              tmp_dir=raw_dir.parent / "tmp",
-                              max_points=settings.max_points_per_profile,
-                              max_id_length=settings.max_id_length, progress=progress)
-        session.rollback()  # end the reads; the write transaction starts below
-        if stage.counts.records == 0:
-            raise Unprocessable("file", f"{file_name} holds no measurements")
-        batch = db.ImportBatch(checksum_sha256=checksum, idempotency_key=idempotency_key,
-                               file_name=file_name, n_records=0, n_created=0, n_duplicates=0,
-                               n_points=0)
-        session.add(batch)
-        session.flush()
-        for role, stored, name in zip(("file", "manifest"), stored_files,
-                                      (file_name, manifest_name or "manifest.csv"),
-                                      strict=False):
-            session.add(db.RawFile(batch_id=batch.id, role=role, name=name,
-                                   sha256=stored.sha256, size_bytes=stored.size_bytes,
-                                   storage_path=stored.relative_path))
-        session.flush()
-        counts = write_stage(session, stage, batch.id)
-        batch.n_records, batch.n_created = counts.records, counts.created
-        batch.n_duplicates, batch.n_points = counts.duplicates, counts.points
-        session.commit()
+        with seeing_pending(session):
+            written = write_records(session, records, batch_id, chunk_size=chunk_size,
+                                    max_points=settings.max_points_per_profile,
+                                    max_id_length=settings.max_id_length, progress=progress)
+            if written.counts.records == 0:
+                raise Unprocessable("file", f"{file_name} holds no measurements")
+            counts = complete_batch(session, batch_id, written)
     except ImportFileError as exc:
-        _abort(session, raw_dir, stored_files)
+        _abort(session, raw_dir, stored_files, batch_id)
         raise import_file_error(exc) from exc
     except DAMAGED_UPLOAD as exc:
-        _abort(session, raw_dir, stored_files)
+        _abort(session, raw_dir, stored_files, batch_id)
         raise Unprocessable("file", f"{file_name} is damaged or not readable: "
                             f"{type(exc).__name__}: {str(exc)[:200]}") from exc
     except IntegrityError as exc:
-        _abort(session, raw_dir, stored_files)
+        _abort(session, raw_dir, stored_files, batch_id)
         found = _existing_batch(session, checksum=checksum, key=idempotency_key)
-        if found is not None:  # a concurrent import of the same content won the race
-            return duplicate_result(session, found)
+        if found is not None:  # a concurrent import of the same content came first
+            return _answer_existing(session, found)
         raise Conflict("file", f"{file_name} conflicts with data stored meanwhile; "
                        "try again") from exc
     except BaseException:
-        _abort(session, raw_dir, stored_files)
+        _abort(session, raw_dir, stored_files, batch_id)
         raise
-    finally:
-        if stage is not None:
-            stage.close()
-    return ImportResult(batch_id=batch.id, duplicate=False, file_name=file_name,
+    return ImportResult(batch_id=batch_id, duplicate=False, file_name=file_name,
                         records=counts.records, created=counts.created,
                         duplicates=counts.duplicates, points=counts.points,
                         warnings=counts.listed(), warnings_total=counts.warnings_total)
 
 
-def _abort(session: Session, raw_dir: Path, stored_files: list[rawfiles.StoredFile]) -> None:
+def _answer_existing(session: Session, found: db.ImportBatch) -> ImportResult:
+    """The first import's answer (``duplicate``), or 409 while that import still runs."""
+    if found.status != COMPLETE:
+        error: ApiError = Conflict("file", f"the same content is being imported now (batch "
+                                   f"{found.id}); retry when it has finished")
+        error.headers = {"Retry-After": "5"}
+        raise error
+    return duplicate_result(session, found)
+
+
+def _abort(session: Session, raw_dir: Path, stored_files: list[rawfiles.StoredFile],
+           batch_id: int | None) -> None:
+    """Undo a failed import: its open transaction, its pending batch and what that batch
+    wrote (:func:`~wearcast.service.pending_batches.discard_batch`), its raw files."""
     session.rollback()
+    if batch_id is not None:
+        try:
+            discard_batch(session, batch_id)
+        except Exception:  # the next start removes it (housekeeping); keep the first error
+            session.rollback()
+            log.exception("could not discard pending import batch %s", batch_id)
+            return
     for stored in stored_files:
         rawfiles.discard(raw_dir, stored)
 

@@ -13,7 +13,9 @@ claimed by exactly one worker, which keeps a heartbeat while it runs. :class:`Jo
 Recovery: at start, and then every :data:`SWEEP_S` seconds, running jobs whose heartbeat is
 older than :data:`STALE_S` (their worker died: kill -9, a crash, a restart) are queued again to
 run from the start, or failed after two interruptions
-(:func:`wearcast.service.job_store.recover_stale`); queued jobs are (re)dispatched.
+(:func:`wearcast.service.job_store.recover_stale`); queued jobs are (re)dispatched. The same
+sweep discards import batches abandoned by a dead process
+(:func:`wearcast.service.housekeeping.sweep_abandoned_imports`).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from sqlalchemy.orm import Session
 from wearcast.service import job_store
 from wearcast.service.db import Database
 from wearcast.service.errors import ApiError
+from wearcast.service.housekeeping import sweep_abandoned_imports
 from wearcast.service.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -165,6 +168,7 @@ class JobRunner:
                 for job_id in running:
                     job_store.set_job(self.factory, job_id, heartbeat_at=job_store.now_utc())
                 self.recover(dispatch_all=False)
+                sweep_abandoned_imports(self.factory)
             except Exception as exc:
                 log.warning("job sweep failed: %s", exc)
 

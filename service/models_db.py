@@ -68,6 +68,16 @@ class ImportBatch(Base):
     n_created: Mapped[int] = mapped_column(Integer, default=0)
     n_duplicates: Mapped[int] = mapped_column(Integer, default=0)
     n_points: Mapped[int] = mapped_column(Integer, default=0)
+    #: ``pending`` while its import inserts the measurements chunk by chunk (each chunk its
+    #: own short transaction; the measurements of a batch that is not ``complete`` are
+    #: invisible to every read, :mod:`wearcast.service.batch_visibility`), ``complete`` once
+    #: the import has flipped it in one last short transaction, ``discarding`` while a failed
+    #: or abandoned one is removed (:mod:`wearcast.service.pending_batches`).
+    status: Mapped[str] = mapped_column(String(20), default="complete",
+                                        server_default="complete", index=True)
+    #: When the import of a pending batch last wrote (a batch silent for
+    #: ``pending_batches.STALE_S`` belongs to a dead process and is removed).
+    heartbeat_at: Mapped[dt.datetime | None] = mapped_column(DateTime(timezone=True))
 
 
 class RawFile(Base):
