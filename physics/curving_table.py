@@ -433,7 +433,11 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
     gap = np.zeros_like(raw)
     gap2 = np.zeros_like(raw)
-    for weight, sd in ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])):
+    # one smoothing on tread and flange (the default): the blend of two equal filters is the
+    # filter itself, computed once
+    scales = (((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
+              else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
+    for weight, sd in scales:
         gap += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, mode="nearest")
         gap2 += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, order=2,
                                            mode="nearest") / wheel_step_mm**2
