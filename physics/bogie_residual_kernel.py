@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.contact.fastsim_kernel import fastsim_totals_one
 from wearcast.physics.contact.kalker_kernel import saturated_creep_one
-from wearcast.physics.contact_candidates_kernel import slots_one
+from wearcast.physics.contact_candidates_kernel import slot_workspace, slots_one
 
 #: Patch slots per wheel (``ContactTable.candidates``' default).
 N_SLOTS = 3
@@ -106,29 +106,30 @@ N_CONSTS = 24
 
 @njit(cache=True)
 def _new_memory() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
-                           NDArray[np.int64]]:
+                           NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """Remembered shifts, their slot columns (gap, angle, lateral, radius, approach1, a1, b1),
-    weights, and the next slot to overwrite."""
+    weights, the next slot to overwrite; work space of ``slots_one`` and for its outputs."""
     return (np.full(_SHIFT_MEMORY, np.nan), np.empty((_SHIFT_MEMORY, N_SLOTS, 7)),
-            np.empty((_SHIFT_MEMORY, N_SLOTS)), np.zeros(1, dtype=np.int64))
+            np.empty((_SHIFT_MEMORY, N_SLOTS)), np.zeros(1, dtype=np.int64),
+            slot_workspace(N_SLOTS), np.empty((4, N_SLOTS)))
 
 
 @njit(cache=True)
 def _slot_columns(shift, tab, consts, memory, g_row):
     """Index into ``memory`` of the candidate columns at ``shift`` (computed if not there)."""
-    mem_shift, mem_cols, mem_w, mem_next = memory
+    mem_shift, mem_cols, mem_w, mem_next, work, slots = memory
     for m in range(_SHIFT_MEMORY):
         if mem_shift[m] == shift:
             return m
     (gap, gap2, smoothing, wheel_y, wheel_z, wheel_slope, _, _, log_ratio, approach1, a1, b1,
      _, _) = tab
-    s_y = np.empty(N_SLOTS)
-    s_gap = np.empty(N_SLOTS)
-    s_g2 = np.empty(N_SLOTS)
-    s_w = np.empty(N_SLOTS)
+    s_y = slots[0]
+    s_gap = slots[1]
+    s_g2 = slots[2]
+    s_w = slots[3]
     slots_one(gap, gap2, smoothing, consts[GRID0], consts[GRID_STEP], wheel_y, shift, N_SLOTS,
               consts[PROMINENCE], consts[SEPARATION], consts[SHARE], consts[NO_CONTACT], g_row,
-              s_y, s_gap, s_g2, s_w)
+              work, s_y, s_gap, s_g2, s_w)
     hit = mem_next[0]
     mem_next[0] = (hit + 1) % _SHIFT_MEMORY
     mem_shift[hit] = shift
@@ -144,7 +145,7 @@ def _slot_columns(shift, tab, consts, memory, g_row):
 def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
     """Track-frame loads of wheelset w's contacts (``bogie_equations.wheelset_loads``) into
     out: lateral [N], vertical left and right [N], yaw moment [N m], sum r Fx [N m]."""
-    _, mem_cols, mem_w, _ = memory
+    _, mem_cols, mem_w, _, _, _ = memory
     kalker_table = tab[12]
     kalker_rows = tab[13]
     r0 = consts[R0]

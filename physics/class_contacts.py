@@ -203,18 +203,21 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
                                       np.inf, float("nan"))
     out = {}
     fallbacks = 0
+    stacks: dict[str, NDArray] = {}  # the solved points' fields, stacked once for all wheels
     for wheel in wheels:
         out[wheel], fb = _wheel_contacts(vehicle, classes, points, solved, good, y, z, wheel,
-                                         prev.get(wheel), patch_width, states)
+                                         prev.get(wheel), patch_width, states, stacks)
         fallbacks += fb
     return out, fallbacks
 
 
 def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points: list,
                     solved: dict, good: list, y: NDArray, z: NDArray, wheel: tuple[int, str],
-                    previous: ClassContacts | None, patch_width: str, states: dict
-                    ) -> tuple[ClassContacts, int]:
-    """Contacts of one wheel per class from the solved operating points (fallbacks counted)."""
+                    previous: ClassContacts | None, patch_width: str, states: dict,
+                    stacks: dict[str, NDArray]) -> tuple[ClassContacts, int]:
+    """Contacts of one wheel per class from the solved operating points (fallbacks counted).
+    ``stacks``: field name -> the converged points' values stacked in ``solved``'s order,
+    filled on first use and shared by the wheels of one solve."""
     axle, side = wheel
     ai = axle - 1
     n = len(classes)
@@ -251,13 +254,15 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
     if new.size:
         m = np.shape(solved[order[0]].normal_force_n)[-1]
         rows, sides = source[new], si[new]
+        for f in (*_CONTACT_FIELDS, "speed_m_s"):
+            if f not in stacks:
+                stacks[f] = np.stack([np.asarray(getattr(solved[p], f), dtype=float)
+                                      for p in order])
         for f in _CONTACT_FIELDS:
-            stack = np.stack([np.asarray(getattr(solved[p], f), dtype=float) for p in order])
-            data[f][new, :m] = stack[rows, ai, sides]
+            data[f][new, :m] = stacks[f][rows, ai, sides]
         for f in rail:
-            stack = np.stack([np.asarray(getattr(solved[p], f), dtype=float) for p in order])
-            rail[f][new, :, :m] = stack[rows, :, sides]
-        speed[new] = np.array([solved[p].speed_m_s for p in order])[rows]
+            rail[f][new, :, :m] = stacks[f][rows, :, sides]
+        speed[new] = stacks["speed_m_s"][rows]
     kept = np.nonzero(source < 0)[0]
     if kept.size:
         assert previous is not None

@@ -45,11 +45,18 @@ def candidate_slots(gap: NDArray[np.float64], gap2: NDArray[np.float64],
     out_g2 = np.empty((n, n_slots))
     out_w = np.empty((n, n_slots))
     g = np.empty(gap.shape[1])
+    work = slot_workspace(n_slots)
     for q in range(n):
         slots_one(gap, gap2, smoothing, grid0, step, wheel_y, shifts[q], n_slots,
-                  prominence_mm, separation_mm, share_mm, no_contact_mm, g, out_y[q],
+                  prominence_mm, separation_mm, share_mm, no_contact_mm, g, work, out_y[q],
                   out_gap[q], out_g2[q], out_w[q])
     return out_y, out_gap, out_g2, out_w
+
+
+@njit(cache=True)
+def slot_workspace(n_slots: int) -> NDArray[np.float64]:
+    """Work space of :func:`slots_one` for n_slots candidates."""
+    return np.empty(10 * n_slots + n_slots * n_slots)
 
 
 @njit(cache=True)
@@ -57,23 +64,26 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
               smoothing: NDArray[np.float64], grid0: float, step: float,
               wheel_y: NDArray[np.float64], shift: float, n_slots: int, prominence_mm: float,
               separation_mm: float, share_mm: float, no_contact_mm: float,
-              g: NDArray[np.float64], out_y: NDArray[np.float64], out_gap: NDArray[np.float64],
-              out_g2: NDArray[np.float64], out_w: NDArray[np.float64]) -> None:
+              g: NDArray[np.float64], work: NDArray[np.float64], out_y: NDArray[np.float64],
+              out_gap: NDArray[np.float64], out_g2: NDArray[np.float64],
+              out_w: NDArray[np.float64]) -> None:
     """The candidate slots of one shift into out_y, out_gap, out_g2, out_w (n_slots,) each;
-    ``g`` (n_y,) is work space (the interpolated gap row)."""
+    ``g`` (n_y,) and ``work`` (:func:`slot_workspace`) are work space (the interpolated gap
+    row; the candidates' values)."""
     n_rows, n_y = gap.shape
     dy = wheel_y[1] - wheel_y[0]
-    idx = np.empty(n_slots, dtype=np.int64)
-    found = np.empty(n_slots, dtype=np.bool_)
-    yc = np.empty(n_slots)
-    gc = np.empty(n_slots)
-    g0 = np.empty(n_slots)
-    g2v = np.empty(n_slots)
-    mat = np.empty(n_slots)
-    gapv = np.empty(n_slots)
-    weight = np.empty(n_slots)
-    merged = np.zeros((n_slots, n_slots))
-    best_v = np.empty(n_slots)
+    ns = n_slots
+    yc = work[0:ns]
+    gc = work[ns:2 * ns]
+    g0 = work[2 * ns:3 * ns]
+    g2v = work[3 * ns:4 * ns]
+    mat = work[4 * ns:5 * ns]
+    gapv = work[5 * ns:6 * ns]
+    weight = work[6 * ns:7 * ns]
+    best_v = work[7 * ns:8 * ns]
+    idx_f = work[8 * ns:9 * ns]  # candidate indices (exact in float64)
+    found_f = work[9 * ns:10 * ns]  # 1.0 found, 0.0 missing
+    merged = work[10 * ns:10 * ns + ns * ns].reshape((ns, ns))
     pos = (shift - grid0) / step
     if pos < 0.0:
         pos = 0.0
@@ -99,17 +109,17 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
                 continue
             while t > 0 and v < best_v[t - 1]:
                 best_v[t] = best_v[t - 1]
-                idx[t] = idx[t - 1]
+                idx_f[t] = idx_f[t - 1]
                 t -= 1
             best_v[t] = v
-            idx[t] = j
+            idx_f[t] = j
     for s in range(n_slots):
-        found[s] = s < n_found
-        if not found[s]:
-            idx[s] = 1
+        found_f[s] = 1.0 if s < n_found else 0.0
+        if s >= n_found:
+            idx_f[s] = 1
     best_gc = np.inf
     for s in range(n_slots):
-        i = idx[s]
+        i = int(idx_f[s])
         gm, gz, gp = g[i - 1], g[i], g[i + 1]
         den = gm - 2.0 * gz + gp
         frac = 0.5 * (gm - gp) / den if den > 0 else 0.0
@@ -125,14 +135,14 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
         g2v[s] = (1.0 - f) * r_i + f * r_j
         g0[s] = gz
         gc[s] = gz - 0.25 * (gm - gp) * frac - 0.5 * g2v[s] * smoothing[i] ** 2
-        if not found[s]:
+        if s >= n_found:
             gc[s] = np.inf
         if gc[s] < best_gc:
             best_gc = gc[s]
     for s in range(n_slots):
-        gapv[s] = gc[s] - best_gc if found[s] else no_contact_mm
+        gapv[s] = gc[s] - best_gc if s < n_found else no_contact_mm
         # prominence: rise to the lower of the two adjacent maxima (ends count as maxima)
-        i = idx[s]
+        i = int(idx_f[s])
         left = i
         while left > 0 and not (g[left] >= g[left - 1] and g[left] > g[left + 1]):
             left -= 1
@@ -140,12 +150,12 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
         while right < n_y - 1 and not (g[right] >= g[right - 1] and g[right] > g[right + 1]):
             right += 1
         prom = min(g[left], g[right]) - g0[s]
-        mat[s] = _smoothstep(prom / prominence_mm) if found[s] else 0.0
+        mat[s] = _smoothstep(prom / prominence_mm) if s < n_found else 0.0
     for p in range(n_slots):
         merged[p, p] = 0.0
         for r in range(p + 1, n_slots):
-            lo = min(idx[p], idx[r])
-            hi = max(idx[p], idx[r])
+            lo = int(min(idx_f[p], idx_f[r]))
+            hi = int(max(idx_f[p], idx_f[r]))
             barrier = -np.inf
             for j in range(lo, hi + 1):
                 if g[j] > barrier:
@@ -154,7 +164,7 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
             merged[p, r] = m
             merged[r, p] = m
     for s in range(n_slots):
-        if not found[s]:
+        if s >= n_found:
             weight[s] = 0.0
             continue
         others = 0.0
@@ -164,10 +174,23 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
                 diff = -50.0 * share_mm
             others += merged[s, r] * mat[r] * np.exp(-diff / share_mm)
         weight[s] = mat[s] / (1e-9 + mat[s] + others)
-    # field side first (largest y), missing candidates last, stable
-    order = np.argsort(-np.where(found, yc, -np.inf), kind="mergesort")
+    # field side first (largest y), missing candidates last, stable (insertion sort of the
+    # slot numbers on the key, in best_v)
+    for s in range(n_slots):
+        best_v[s] = yc[s] if s < n_found else -np.inf
+        idx_f[s] = s
+    for s in range(1, n_slots):
+        key = best_v[s]
+        num = idx_f[s]
+        t = s
+        while t > 0 and best_v[t - 1] < key:
+            best_v[t] = best_v[t - 1]
+            idx_f[t] = idx_f[t - 1]
+            t -= 1
+        best_v[t] = key
+        idx_f[t] = num
     for t in range(n_slots):
-        s = order[t]
+        s = int(idx_f[t])
         out_y[t] = yc[s]
         out_gap[t] = gapv[s]
         out_g2[t] = g2v[s]
