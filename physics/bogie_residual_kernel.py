@@ -134,9 +134,22 @@ def _slot_columns(shift, tab, consts, memory, g_row):
     mem_next[0] = (hit + 1) % _SHIFT_MEMORY
     mem_shift[hit] = shift
     for t in range(N_SLOTS):
-        _candidate_columns(shift, s_y[t], s_gap[t], s_g2[t], wheel_y, wheel_z, wheel_slope,
-                           consts[R0], consts[MIN_B], consts[MAX_B], log_ratio, approach1, a1,
-                           b1, consts[HALF_SPACING], mem_cols[hit, t])
+        if s_w[t] == 0.0:
+            # a slot without weight (a missing candidate, or one not yet or no longer mature)
+            # carries no normal force, so no creep force: every load it adds is an exact zero
+            # whatever its columns, given finite ones (the numpy reference computes them)
+            cols = mem_cols[hit, t]
+            cols[0] = s_gap[t]
+            cols[1] = 0.0
+            cols[2] = consts[HALF_SPACING] + shift + s_y[t]
+            cols[3] = consts[R0]
+            cols[4] = 1.0
+            cols[5] = 1.0
+            cols[6] = 1.0
+        else:
+            _candidate_columns(shift, s_y[t], s_gap[t], s_g2[t], wheel_y, wheel_z,
+                               wheel_slope, consts[R0], consts[MIN_B], consts[MAX_B], log_ratio,
+                               approach1, a1, b1, consts[HALF_SPACING], mem_cols[hit, t])
         mem_w[hit, t] = s_w[t]
     return hit
 
@@ -169,15 +182,16 @@ def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
             sin = math.sin(angle)
             approach = (d - cols[0]) * cos
             normal = mem_w[hit, t] * max(approach, 0.0) ** 1.5 / cols[4] ** 1.5
+            if not normal > 0:
+                # no normal force, no traction bound: both creep laws give zero forces, and
+                # every load this patch adds is zero
+                continue
             n13 = np.cbrt(normal)
             a = cols[5] * n13
             b = cols[6] * n13
             xi = 1.0 - k * sgn * lateral / 1000.0 - ratio * radius / r0
             eta = -sgn * psi * cos
             phi = (-ratio * sin / r0 + sgn * k * cos) / 1000.0
-            if not normal > 0:
-                a = 1.0
-                b = 1.0
             if creep_grid == 0:
                 fx, fy, mz, _ = saturated_creep_one(xi, eta, phi, a, b, normal, consts[MU],
                                                     consts[SHEAR], consts[NU], kalker_table,

@@ -141,6 +141,9 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
             best_gc = gc[s]
     for s in range(n_slots):
         gapv[s] = gc[s] - best_gc if s < n_found else no_contact_mm
+        if s >= n_found:
+            mat[s] = 0.0  # a missing candidate has no maturity (no prominence to search)
+            continue
         # prominence: rise to the lower of the two adjacent maxima (ends count as maxima)
         i = int(idx_f[s])
         left = i
@@ -150,10 +153,16 @@ def slots_one(gap: NDArray[np.float64], gap2: NDArray[np.float64],
         while right < n_y - 1 and not (g[right] >= g[right - 1] and g[right] > g[right + 1]):
             right += 1
         prom = min(g[left], g[right]) - g0[s]
-        mat[s] = _smoothstep(prom / prominence_mm) if s < n_found else 0.0
+        mat[s] = _smoothstep(prom / prominence_mm)
     for p in range(n_slots):
         merged[p, p] = 0.0
         for r in range(p + 1, n_slots):
+            if r >= n_found:
+                # a missing candidate has no maturity and no weight: its merging never enters
+                # a weight (m_r c_kr = 0), so its barrier is not searched
+                merged[p, r] = 0.0
+                merged[r, p] = 0.0
+                continue
             lo = int(min(idx_f[p], idx_f[r]))
             hi = int(max(idx_f[p], idx_f[r]))
             barrier = -np.inf
