@@ -1,15 +1,17 @@
-"""The bogie's equilibrium residual as one compiled kernel.
+"""The bogie's equilibrium residual and its forward-difference Jacobian as compiled kernels.
 
-``bogie_residual_flat(q, kappa, a_unb, torque, table arrays, vehicle constants, ...,
-creep_grid)`` does per state what ``bogie_equations.bogie_residual`` does (creep forces from
-the smooth Kalker + Shen-Hedrick-Elkins law of ``contact.creep``, or from FASTSIM on an n x n
-grid): the contact candidates of each
-wheel at its shift (``contact_candidates_kernel.slots_one``), their columns as
-``ContactTable._candidate_columns`` (contact angle, rolling radius, Hertz constants from the
-smoothed gap's curvature), Hertz normal forces, creepages, the saturated creep forces
-(``contact.kalker_kernel.saturated_creep_one``) or FASTSIM's
+``bogie_residual_flat(q, params, tab, consts, creep_grid)`` does per state what
+``bogie_equations.bogie_residual`` does (creep forces from the smooth Kalker +
+Shen-Hedrick-Elkins law of ``contact.creep``, creep_grid 0, or from FASTSIM on an n x n grid):
+the contact candidates of each wheel at its shift (``contact_candidates_kernel.slots_one``),
+their columns as ``ContactTable._candidate_columns`` (contact angle, rolling radius, Hertz
+constants from the smoothed gap's curvature), Hertz normal forces, creepages, the saturated
+creep forces (``contact.kalker_kernel.saturated_creep_one``) or FASTSIM's
 (``contact.fastsim_kernel.fastsim_totals_one``), the wheelset loads and the 12 scaled
 equations (primary and secondary suspension, wheel loads with the cant deficiency's transfer).
+A slot without weight or normal force adds exact zeros (its columns and creep forces are not
+computed). ``bogie_jacobian_flat`` gives the residual and the forward differences the solvers
+take, reusing the loads of the wheelset a perturbation leaves unchanged.
 
 The numpy ``bogie_equations.bogie_residual`` is the reference: the two agree to rounding
 (``tests/physics/test_bogie_residual_kernel.py``). The equilibrium solvers evaluate the residual
