@@ -90,6 +90,46 @@ march_totals = njit(cache=True, fastmath=True, error_model="numpy")(_march_total
 if HAVE_NUMBA:
     from wearcast.physics.contact.kalker_kernel import kalker_coefficients_one
 
+    @njit(cache=True, fastmath=True, error_model="numpy")
+    def _march_one(xi: float, eta: float, phi_per_mm: float, a: float, b: float, f1: float,
+                   f2: float, f3: float, g_peak: float, n_x: int, n_y: int,
+                   spin_offset_fraction: float) -> tuple[float, float, float]:
+        """The march of one patch (``march_totals``' per patch): sums P, Q and Q x - P y.
+        Every strip is updated and the elements outside the ellipse are set to zero after
+        the update (no branch, so the strips vectorise); the reductions may be reassociated
+        (fastmath), which moves the totals by rounding only."""
+        dx = 2.0 * a / n_x
+        p = np.zeros(n_y)
+        q = np.zeros(n_y)
+        sum_p = 0.0
+        sum_q = 0.0
+        sum_m = 0.0
+        for i in range(n_x - 1, -1, -1):
+            u = (i + 0.5) / n_x * 2.0 - 1.0
+            x_i = a * u
+            x_spin = x_i + spin_offset_fraction * dx
+            dq = -dx * (eta / f2 + phi_per_mm * x_spin / f3)
+            col_q = 0.0
+            for j in range(n_y):
+                v = (j + 0.5) / n_y * 2.0 - 1.0
+                rho2 = v * v + u * u
+                inside = rho2 < 1.0
+                y_j = b * v
+                dp = -dx * (xi / f1 - phi_per_mm * y_j / f3)
+                pk = p[j] + dp
+                qk = q[j] + dq
+                s = min(g_peak * (1.0 - rho2) / math.sqrt(pk * pk + qk * qk + 1e-300), 1.0)
+                pn = pk * s if inside else 0.0
+                qn = qk * s if inside else 0.0
+                p[j] = pn
+                q[j] = qn
+                sum_p += pn
+                col_q += qn
+                sum_m -= pn * y_j
+            sum_q += col_q
+            sum_m += col_q * x_i
+        return sum_p, sum_q, sum_m
+
     @njit(cache=True)
     def fastsim_totals_one(xi: float, eta: float, phi_per_mm: float, a: float, b: float,
                            normal_force_n: float, mu: float, shear_modulus_mpa: float,
@@ -134,38 +174,8 @@ if HAVE_NUMBA:
         dx = 2.0 * a / n_x
         dy = 2.0 * b / n_y
         peak = 2.0 * normal_force_n / (np.pi * a * b)
-        g_peak = mu * peak
-        p = np.zeros(n_y)
-        q = np.zeros(n_y)
-        sum_p = 0.0
-        sum_q = 0.0
-        sum_m = 0.0
-        for i in range(n_x - 1, -1, -1):
-            u = (i + 0.5) / n_x * 2.0 - 1.0
-            x_i = a * u
-            x_spin = x_i + spin_offset_fraction * dx
-            dq = -dx * (eta / f2 + phi_per_mm * x_spin / f3)
-            col_q = 0.0
-            for j in range(n_y):
-                v = (j + 0.5) / n_y * 2.0 - 1.0
-                rho2 = v**2 + u**2
-                if rho2 < 1.0:
-                    bound = 1.0 - rho2
-                    y_j = b * v
-                    dp = -dx * (xi / f1 - phi_per_mm * y_j / f3)
-                    pk = p[j] + dp
-                    qk = q[j] + dq
-                    s = min(g_peak * bound / math.sqrt(pk * pk + qk * qk + 1e-300), 1.0)
-                    p[j] = pk * s
-                    q[j] = qk * s
-                    sum_p += p[j]
-                    col_q += q[j]
-                    sum_m -= p[j] * y_j
-                else:
-                    p[j] = 0.0
-                    q[j] = 0.0
-            sum_q += col_q
-            sum_m += col_q * x_i
+        sum_p, sum_q, sum_m = _march_one(xi, eta, phi_per_mm, a, b, f1, f2, f3, mu * peak,
+                                         n_x, n_y, spin_offset_fraction)
         da = dx * dy
         return da * sum_p, da * sum_q, da * sum_m
 else:  # pragma: no cover - exercised only without numba
