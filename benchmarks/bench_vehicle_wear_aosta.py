@@ -8,7 +8,7 @@ The run the physics model builds (``benchmarks/physics_model_aosta.py``, ``POST 
 ``minuetto`` preset (two motor and two trailer bogies, both running directions, all wheels
 averaged), USFD, D_step = --step, on the example fleet's ``aosta`` route (39 curve classes;
 ``--route table3``: seed 003's Table 3 classes, what ``diagnose_aosta_physics.py`` runs,
-needs ../shared/reference). Prints the wall time, steps, contact updates and fallbacks, and
+needs ../shared/reference). Prints the wall and CPU time, steps, contact updates and fallbacks, and
 the vehicle-mean FT/FH/qR at the end. ``--json`` writes them with the per-step series;
 ``--against`` compares with such a file written by another version of the code on the same
 machine (e.g. the previous commit, run with ``PYTHONPATH`` pointing at its source): the time
@@ -53,19 +53,20 @@ def main() -> None:
     parser.add_argument("--against", type=Path, help="compare with an earlier --json")
     args = parser.parse_args()
     classes = route_classes(args.route)
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     sim = simulate_vehicle_wear("minuetto", classes, law="usfd", mileage_km=args.km,
                                 depth_per_step_mm=args.step)
     elapsed = time.perf_counter() - start
+    cpu = time.process_time() - cpu_start
     series = {k: sim.mean(q).tolist() for k, q in QUANTITIES.items()}
     print(f"whole-vehicle Aosta loop ({args.route}, {len(classes)} classes) to {args.km:,.0f} "
-          f"km, D_step {args.step} mm: {elapsed:.1f} s (target < 10 s); "
+          f"km, D_step {args.step} mm: {elapsed:.1f} s (target < 10 s; CPU {cpu:.1f} s); "
           f"{len(sim.mileage_km) - 1} steps, {sim.contact_updates} contact updates, "
           f"{sim.contact_fallbacks} class fallbacks")
     print("end: " + ", ".join(f"{k} {v[-1]:.4f} mm" for k, v in series.items()))
-    result = {"elapsed_s": elapsed, "route": args.route, "km": args.km, "step": args.step,
-              "mileage_km": sim.mileage_km.tolist(), "fallbacks": sim.contact_fallbacks,
-              **series}
+    result = {"elapsed_s": elapsed, "cpu_s": cpu, "route": args.route, "km": args.km,
+              "step": args.step, "mileage_km": sim.mileage_km.tolist(),
+              "fallbacks": sim.contact_fallbacks, **series}
     if args.json is not None:
         args.json.write_text(json.dumps(result))
         print(f"wrote {args.json}")
@@ -76,6 +77,8 @@ def main() -> None:
         print(f"earlier run: {old['elapsed_s']:.1f} s -> now {elapsed:.1f} s "
               f"(x{old['elapsed_s'] / elapsed:.2f} faster), fallbacks {old['fallbacks']} -> "
               f"{sim.contact_fallbacks}")
+        if "cpu_s" in old:
+            print(f"  CPU {old['cpu_s']:.1f} s -> {cpu:.1f} s (x{old['cpu_s'] / cpu:.2f})")
         for k in QUANTITIES:
             km_old, v_old = np.asarray(old["mileage_km"]), np.asarray(old[k])
             v_new = np.interp(km_old, sim.mileage_km, series[k])

@@ -48,14 +48,31 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.bogie_residual_kernel import (
+    N_CONSTS,
+    bogie_jacobian_flat,
+    bogie_residual_flat,
+)
 from wearcast.physics.contact.creep import creep_forces
-from wearcast.physics.contact.fastsim import fastsim_forces
+from wearcast.physics.contact.fastsim import SPIN_OFFSET_FRACTION, fastsim_forces
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
-from wearcast.physics.curving_table import TAPE_CIRCLE_HALF_SPACING_MM, ContactTable
+from wearcast.physics.contact.kalker import KALKER_ROW_SHAPE, KALKER_TABLE
+from wearcast.physics.curving_table import (
+    _NO_CONTACT_GAP_MM,
+    MAX_CURVATURE_B_PER_MM,
+    MIN_CURVATURE_B_PER_MM,
+    PROMINENCE_MM,
+    SEPARATION_MM,
+    SHARE_GAP_MM,
+    TAPE_CIRCLE_HALF_SPACING_MM,
+    ContactTable,
+)
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
 
 #: Shear modulus of wheel and rail steel [MPa] (``contact.hertz``).
 SHEAR_MODULUS_MPA = STEEL_SHEAR_MODULUS_MPA
+#: Poisson's ratio of the creep laws (``contact.creep``'s and ``contact.fastsim``'s default).
+CREEP_POISSON = 0.28
 #: Sign of each side's lateral axis: left wheel at +y (vocabulary.SIDES order).
 SIDE_SIGN = np.array([1.0, -1.0])
 
@@ -209,6 +226,71 @@ def bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, 
     if return_contacts:
         return res, c
     return res
+
+
+class CompiledBogie:
+    """:func:`bogie_residual` of one vehicle on one contact table by the compiled kernels of
+    ``bogie_residual_kernel`` (the same numbers to rounding; ``bogie_residual`` is their numpy
+    reference), for the equilibrium solvers' many small batches: the table's arrays and the
+    vehicle's constants are gathered once.
+
+    creep_grid : None for the saturation law, n for FASTSIM on an n x n grid
+    """
+
+    def __init__(self, vehicle: BogieVehicle, table: ContactTable,
+                 creep_grid: int | None = None):
+        self.tab = (table.gap_mm, table.gap2_per_mm, table.smoothing_mm, table.wheel_y_mm,
+                    table.wheel_z_mm, table.wheel_slope, table.shift_mm, table.rigid_rise_mm,
+                    table.hertz_log_ratio, table.hertz_approach1, table.hertz_a1,
+                    table.hertz_b1, KALKER_TABLE, KALKER_ROW_SHAPE)
+        self.consts = np.array([
+            table.nominal_radius_m, vehicle.friction, SHEAR_MODULUS_MPA, CREEP_POISSON,
+            vehicle.wheel_load_n, vehicle.semi_wheelbase_m,
+            2.0 * vehicle.primary_lateral_stiffness_n_per_m,
+            2.0 * vehicle.primary_longitudinal_stiffness_n_per_m
+            * vehicle.primary_semi_spacing_m**2,
+            vehicle.wheelset_mass_kg, vehicle.bogie_mass_kg + vehicle.body_mass_kg,
+            vehicle.secondary_yaw_stiffness_nm_per_rad, vehicle.bogie_centre_distance_m,
+            GRAVITY_M_S2, vehicle.cog_height_m, TAPE_CIRCLE_HALF_SPACING_MM,
+            MIN_CURVATURE_B_PER_MM, MAX_CURVATURE_B_PER_MM, PROMINENCE_MM, SEPARATION_MM,
+            SHARE_GAP_MM, _NO_CONTACT_GAP_MM, SPIN_OFFSET_FRACTION, float(table.shift_mm[0]),
+            float(table.shift_mm[1] - table.shift_mm[0])])
+        assert self.consts.size == N_CONSTS
+        self.creep_grid = 0 if creep_grid is None else int(creep_grid)
+        if self.creep_grid < 0:
+            raise ValueError("creep_grid must be None or a positive grid size")
+
+    def residual(self, q: NDArray, params: NDArray) -> NDArray[np.float64]:
+        """Scaled residual (N, 12) of the states q (N, 12) at params (N, 3): curvature
+        [1/m], unbalanced acceleration [m/s^2], torque [N m] (``bogie_residual``)."""
+        return bogie_residual_flat(np.ascontiguousarray(q, dtype=float),
+                                   np.ascontiguousarray(params, dtype=float), self.tab,
+                                   self.consts, self.creep_grid)
+
+    def jacobian(self, q: NDArray, params: NDArray, steps: NDArray
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The residual at q (N, 12) and its forward-difference Jacobian (N, 12, 12) with the
+        steps (N, 12): column c is (r(q + steps[:, c] e_c) - r(q)) / steps[:, c], the numbers
+        the solvers' finite differences of :meth:`residual` give
+        (``bogie_residual_kernel.bogie_jacobian_flat``: a perturbed state recomputes only
+        the perturbed wheelset's contacts)."""
+        return bogie_jacobian_flat(np.ascontiguousarray(q, dtype=float),
+                                   np.ascontiguousarray(steps, dtype=float),
+                                   np.ascontiguousarray(params, dtype=float), self.tab,
+                                   self.consts, self.creep_grid)
+
+
+def compiled_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
+                      creep_grid: int | None = None) -> NDArray[np.float64]:
+    """:func:`bogie_residual` (same arguments and numbers, to rounding) by the compiled kernel
+    (:class:`CompiledBogie`). q (..., 12); kappa, a_unb, torque broadcast to q's leading
+    shape. Returns (..., 12)."""
+    q = np.asarray(q, dtype=float)
+    lead = q.shape[:-1]
+    params = np.stack([np.broadcast_to(np.asarray(v, dtype=float), lead).reshape(-1)
+                       for v in (kappa, a_unb, torque)], axis=-1)
+    out = CompiledBogie(vehicle, table, creep_grid).residual(q.reshape(-1, N_STATE), params)
+    return out.reshape(lead + (N_STATE,))
 
 
 def initial_state(vehicle: BogieVehicle, table: ContactTable) -> NDArray:

@@ -203,18 +203,21 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
                                       np.inf, float("nan"))
     out = {}
     fallbacks = 0
+    stacks: dict[str, NDArray] = {}  # the solved points' fields, stacked once for all wheels
     for wheel in wheels:
         out[wheel], fb = _wheel_contacts(vehicle, classes, points, solved, good, y, z, wheel,
-                                         prev.get(wheel), patch_width, states)
+                                         prev.get(wheel), patch_width, states, stacks)
         fallbacks += fb
     return out, fallbacks
 
 
 def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points: list,
                     solved: dict, good: list, y: NDArray, z: NDArray, wheel: tuple[int, str],
-                    previous: ClassContacts | None, patch_width: str, states: dict
-                    ) -> tuple[ClassContacts, int]:
-    """Contacts of one wheel per class from the solved operating points (fallbacks counted)."""
+                    previous: ClassContacts | None, patch_width: str, states: dict,
+                    stacks: dict[str, NDArray]) -> tuple[ClassContacts, int]:
+    """Contacts of one wheel per class from the solved operating points (fallbacks counted).
+    ``stacks``: field name -> the converged points' values stacked in ``solved``'s order,
+    filled on first use and shared by the wheels of one solve."""
     axle, side = wheel
     ai = axle - 1
     n = len(classes)
@@ -229,33 +232,48 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
     if not good and previous is None:
         raise CurvingConvergenceError("quasi-static curving did not converge for any class",
                                       np.inf, float("nan"))
-    for k, (c, p) in enumerate(zip(classes, points, strict=True)):
-        res = solved[p]
-        if res is None and previous is None:
+    # per class: the solved operating point whose contacts it takes (the nearest converged one
+    # on a first update), or -1 to keep the previous update's contacts
+    order = [p for p in solved if solved[p] is not None]
+    index = {p: i for i, p in enumerate(order)}
+    source = np.full(n, -1)
+    for k, p in enumerate(points):
+        if solved[p] is None and previous is None:
             # Nearest converged operating point in curvature (then cant) of the same profile.
             fallbacks += 1
-            res = solved[min(good, key=lambda q: (abs(_curvature(q) - _curvature(p)),
-                                                  abs(q[1] - p[1])))]
-        # Mirror: the tracked wheel of a right curve is the opposite wheel of the left curve.
-        own = 0 if side == "left" else 1
-        si = own if (c.direction == "left" or c.is_tangent) else 1 - own
-        if res is None:
-            assert previous is not None
-            fallbacks += 1
-            m = previous.normal_n.shape[-1]
-            for f, name in _FIELD_NAMES.items():
-                data[f][k, :m] = getattr(previous, name)[k]
-            data["rolling_radius_m"][k, :m] = previous.rolling_radius_mm[k] / 1000.0
-            for f in rail:
-                rail[f][k, :, :m] = previous.rail_axles[f][k]
-            speed[k] = previous.speed_m_s[k]
-            continue
-        m = np.shape(res.normal_force_n)[-1]
+            source[k] = index[min(good, key=lambda q: (abs(_curvature(q) - _curvature(p)),
+                                                       abs(q[1] - p[1])))]
+        elif solved[p] is not None:
+            source[k] = index[p]
+    # Mirror: the tracked wheel of a right curve is the opposite wheel of the left curve.
+    own = 0 if side == "left" else 1
+    mirrored = np.array([not (c.direction == "left" or c.is_tangent) for c in classes],
+                        dtype=bool)
+    si = np.where(mirrored, 1 - own, own)
+    new = np.nonzero(source >= 0)[0]
+    if new.size:
+        m = np.shape(solved[order[0]].normal_force_n)[-1]
+        rows, sides = source[new], si[new]
+        for f in (*_CONTACT_FIELDS, "speed_m_s"):
+            if f not in stacks:
+                stacks[f] = np.stack([np.asarray(getattr(solved[p], f), dtype=float)
+                                      for p in order])
         for f in _CONTACT_FIELDS:
-            data[f][k, :m] = np.asarray(getattr(res, f))[ai, si]
+            data[f][new, :m] = stacks[f][rows, ai, sides]
         for f in rail:
-            rail[f][k, :, :m] = np.asarray(getattr(res, f))[:, si]
-        speed[k] = res.speed_m_s
+            rail[f][new, :, :m] = stacks[f][rows, :, sides]
+        speed[new] = stacks["speed_m_s"][rows]
+    kept = np.nonzero(source < 0)[0]
+    if kept.size:
+        assert previous is not None
+        fallbacks += int(kept.size)
+        m = previous.normal_n.shape[-1]
+        for f, name in _FIELD_NAMES.items():
+            data[f][kept, :m] = getattr(previous, name)[kept]
+        data["rolling_radius_m"][kept, :m] = previous.rolling_radius_mm[kept] / 1000.0
+        for f in rail:
+            rail[f][kept, :, :m] = previous.rail_axles[f][kept]
+        speed[kept] = previous.speed_m_s[kept]
     loaded = data["in_contact"].astype(bool) & (data["normal_force_n"] > 1.0)
     if patch_width == "kik_piotrowski":
         data["b_mm"] = np.where(loaded, conformal_half_width_mm(

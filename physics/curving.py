@@ -9,6 +9,8 @@ is in its concept modules:
   multi-point geometry with its solved roll; its names are re-exported here);
 * ``bogie_equations``: the 12 unknowns, the contacts (elastic Hertz patches, creepages,
   FASTSIM or the smooth saturation law) and the 12 equations of the bogie's equilibrium;
+* ``bogie_residual_kernel``: the same residual and its forward-difference Jacobian compiled
+  (numba; ``bogie_equations.CompiledBogie``), what the solvers evaluate;
 * ``equilibrium_solvers``: batched damped Newton, MINPACK's Powell hybrid, continuation;
 * ``pipeline_equilibrium``: the contact pipeline's forces at (or in equilibrium near) the
   table's pose;
@@ -37,6 +39,7 @@ from wearcast.physics.bogie_equations import (
 )
 from wearcast.physics.bogie_equations import (
     BogieContacts,
+    CompiledBogie,
     bogie_contacts,
     bogie_residual,
     centre_shift,
@@ -233,22 +236,20 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             q0[k] = state
             p_start[k] = p_end[k]
 
-    def fun(q, params):
-        return bogie_residual(q, vehicle, table, params[:, 0], params[:, 1], params[:, 2])
-
-    q, norm, ok = continuation_batch(fun, q0, p_start, p_end, tol)
+    # bogie_residual with the saturation law, compiled (bogie_residual is its reference)
+    saturation = CompiledBogie(vehicle, table)
+    q, norm, ok = continuation_batch(saturation.residual, q0, p_start, p_end, tol,
+                                     jac=saturation.jacobian)
     q_saturation = q.copy()
     if creep_grid is not None and np.any(ok):
         # the saturation law's equilibrium is the start of Newton with FASTSIM's forces
-        def fun_fastsim(q, params):
-            return bogie_residual(q, vehicle, table, params[:, 0], params[:, 1],
-                                   params[:, 2], creep_grid=creep_grid)
-
+        fastsim = CompiledBogie(vehicle, table, creep_grid)
         rows = np.nonzero(ok)[0]
-        q_f, norm_f, ok_f = newton_batch(fun_fastsim, q[rows], p_end[rows], tol,
-                                          max_iter=30)
+        q_f, norm_f, ok_f = newton_batch(fastsim.residual, q[rows], p_end[rows], tol,
+                                          max_iter=30, jac=fastsim.jacobian)
         for m in np.nonzero(~ok_f)[0]:
-            q_s, n_s, ok_s = scipy_polish(fun_fastsim, q_f[m], p_end[rows[m]], tol)
+            q_s, n_s, ok_s = scipy_polish(fastsim.residual, q_f[m], p_end[rows[m]], tol,
+                                          jac=fastsim.jacobian)
             if n_s < norm_f[m]:
                 q_f[m], norm_f[m], ok_f[m] = q_s, n_s, ok_s
         # a solve that stalled below FASTSIM_TOLERANCE has found the equilibrium as far as

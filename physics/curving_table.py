@@ -347,6 +347,23 @@ def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLi
     return out
 
 
+def _interp_rows(x: NDArray, xp: NDArray, fp_rows: NDArray, outside: float) -> NDArray:
+    """``np.stack([np.interp(x, xp, row, left=outside, right=outside) for row in fp_rows])``
+    in one pass over the rows, with np.interp's arithmetic (the value at an exact grid point,
+    slope (fp[j+1] - fp[j]) / (xp[j+1] - xp[j]) times (x - xp[j]) plus fp[j] between; finite
+    fp_rows)."""
+    n = xp.size
+    j = np.searchsorted(xp, x, side="right") - 1  # xp[j] <= x < xp[j+1]
+    below, above = j < 0, x > xp[-1]
+    jc = np.clip(j, 0, n - 2)
+    exact = (j >= 0) & (j <= n - 1) & (xp[np.clip(j, 0, n - 1)] == x)
+    f0, f1 = fp_rows[:, jc], fp_rows[:, jc + 1]
+    slope = (f1 - f0) / (xp[jc + 1] - xp[jc])
+    out = slope * (x - xp[jc]) + f0
+    out = np.where(exact, fp_rows[:, np.clip(j, 0, n - 1)], out)
+    return np.where(below | above, outside, out)
+
+
 @lru_cache(maxsize=1)
 def _hertz_unit_table() -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Hertz approach and semi-axes under 1 N for A = 1/mm over log(B/A) (``contact.hertz``);
@@ -422,7 +439,7 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     k = np.clip(np.floor(pos).astype(int), 0, centre.size - 2)
     w = (pos - k)[:, None]
     rows = (1.0 - w) * raw_geo[k] + w * raw_geo[k + 1]
-    raw = np.stack([np.interp(y_w, y_geo, row, left=100.0, right=100.0) for row in rows])
+    raw = _interp_rows(y_w, y_geo, rows, 100.0)
     # the wheel's rigid rise so that the roll of the pair is (rise(y) - rise(-y)) / 1500 mm
     rigid_roll = np.interp(shifts, contact_level, roll)
     rigid_rise = TAPE_CIRCLE_HALF_SPACING_MM * rigid_roll
@@ -433,7 +450,11 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
     gap = np.zeros_like(raw)
     gap2 = np.zeros_like(raw)
-    for weight, sd in ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])):
+    # one smoothing on tread and flange (the default): the blend of two equal filters is the
+    # filter itself, computed once
+    scales = (((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
+              else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
+    for weight, sd in scales:
         gap += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, mode="nearest")
         gap2 += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, order=2,
                                            mode="nearest") / wheel_step_mm**2

@@ -22,12 +22,16 @@ def _jacobian(fun, q, h=1e-6):
 _LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.1, 0.03])
 
 
-def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
+def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6, jac=None):
     """Damped Newton for many independent equilibria at once.
 
     fun(q (N, n), params (N, p)) -> residual (N, n). Each iteration evaluates the
-    forward-difference Jacobians of all rows in one call and a backtracking line search in a
-    second call. Returns (q, residual norms, converged mask).
+    forward-difference Jacobians of all rows in one call and a backtracking line search (the
+    full step, then the shorter steps of the rows it does not improve enough).
+    ``jac(q (N, n), params, steps (N, n)) -> (residual (N, n), Jacobian (N, n, n))``: the
+    same forward differences from a faster evaluator (column c from the step steps[:, c] on
+    unknown c), used instead of the batched call of ``fun``. Returns (q, residual norms,
+    converged mask).
     """
     q = np.array(q0, dtype=float)
     nb, n = q.shape
@@ -40,21 +44,32 @@ def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
         idx = np.nonzero(active)[0]
         qa, pa = q[idx], params[idx]
         steps = h * np.maximum(1.0, np.abs(qa))  # (na, n)
-        states = np.concatenate([qa[:, None, :], qa[:, None, :] + steps[:, :, None] * eye],
-                                axis=1)  # (na, n+1, n)
-        res = fun(states.reshape(-1, n), np.repeat(pa, n + 1, axis=0)).reshape(len(idx), n + 1,
-                                                                              n)
-        r0 = res[:, 0]
-        jac = np.swapaxes((res[:, 1:] - r0[:, None, :]) / steps[:, :, None], 1, 2)
+        if jac is None:
+            states = np.concatenate([qa[:, None, :], qa[:, None, :] + steps[:, :, None] * eye],
+                                    axis=1)  # (na, n+1, n)
+            res = fun(states.reshape(-1, n), np.repeat(pa, n + 1, axis=0)).reshape(
+                len(idx), n + 1, n)
+            r0 = res[:, 0]
+            jm = np.swapaxes((res[:, 1:] - r0[:, None, :]) / steps[:, :, None], 1, 2)
+        else:
+            r0, jm = jac(qa, pa, steps)
         try:
-            dx = np.linalg.solve(jac, -r0[..., None])[..., 0]
+            dx = np.linalg.solve(jm, -r0[..., None])[..., 0]
         except np.linalg.LinAlgError:
-            dx = np.stack([np.linalg.lstsq(j, -r, rcond=None)[0] for j, r in zip(jac, r0,
+            dx = np.stack([np.linalg.lstsq(j, -r, rcond=None)[0] for j, r in zip(jm, r0,
                                                                                   strict=True)])
         n0 = np.linalg.norm(r0, axis=-1)
         trial = qa[:, None, :] + _LINE_SEARCH[None, :, None] * dx[:, None, :]
-        nt = np.linalg.norm(fun(trial.reshape(-1, n), np.repeat(pa, len(_LINE_SEARCH), axis=0)),
-                            axis=-1).reshape(len(idx), len(_LINE_SEARCH))
+        # the full step first; the shorter ones only for the rows it does not improve enough
+        # (the first good step is taken, so the others' residuals would not be used)
+        n_ls = len(_LINE_SEARCH)
+        nt = np.full((len(idx), n_ls), np.inf)
+        nt[:, 0] = np.linalg.norm(fun(trial[:, 0], pa), axis=-1)
+        rest = ~(nt[:, 0] < (1.0 - 1e-4 * _LINE_SEARCH[0]) * n0)
+        if np.any(rest):
+            nt[rest, 1:] = np.linalg.norm(
+                fun(trial[rest, 1:].reshape(-1, n), np.repeat(pa[rest], n_ls - 1, axis=0)),
+                axis=-1).reshape(-1, n_ls - 1)
         good = nt < (1.0 - 1e-4 * _LINE_SEARCH[None, :]) * n0[:, None]
         pick = np.where(np.any(good, axis=1), np.argmax(good, axis=1), np.argmin(nt, axis=1))
         improved = np.take_along_axis(nt, pick[:, None], axis=1)[:, 0] < n0
@@ -66,8 +81,9 @@ def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6):
     return q, norm, norm < tol
 
 
-def scipy_polish(fun, q0, param, tol):
-    """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton."""
+def scipy_polish(fun, q0, param, tol, jac=None):
+    """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton.
+    ``jac``: as :func:`newton_batch`'s (the same forward differences, faster)."""
     # MINPACK may probe non-finite states on a badly worn profile; answer those (and any
     # non-finite residual) with a large finite residual so it backs off instead of indexing the
     # contact table with NaN.
@@ -79,20 +95,23 @@ def scipy_polish(fun, q0, param, tol):
         r = fun(z[None, :], param[None, :])[0]
         return np.where(np.isfinite(r), r, 1e12)
 
-    def jac(z):
+    def jacobian(z):
         if not np.all(np.isfinite(z)):
             return np.eye(len(z))
-        j = _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+        if jac is None:
+            j = _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+        else:
+            j = jac(z[None, :], param[None, :], 1e-6 * np.maximum(1.0, np.abs(z))[None, :])[1][0]
         return np.where(np.isfinite(j), j, 0.0)
 
-    sol = root(f, q0, jac=jac, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
+    sol = root(f, q0, jac=jacobian, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
     if not np.all(np.isfinite(sol.x)):
         return np.asarray(q0, dtype=float), float("inf"), False
     norm = float(np.linalg.norm(f(sol.x)))
     return sol.x, norm, norm < tol
 
 
-def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
+def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=None):
     """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
     p_end, each row with its own step (doubled on success, halved on failure). Returns
     (q, norms, converged).
@@ -100,7 +119,8 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
     A row that starts at its end parameters (p_start = p_end: a warm start from an earlier
     equilibrium) has no path to continue along: every retry would solve the same problem from
     the same state, so it gets one Newton solve and, if that fails, one Powell-hybrid solve
-    (what the halvings would have repeated, deterministically, up to ``max_halvings`` times)."""
+    (what the halvings would have repeated, deterministically, up to ``max_halvings`` times).
+    ``jac``: as :func:`newton_batch`'s."""
     nb = len(q_start)
     q = np.array(q_start, dtype=float)
     t = np.zeros(nb)
@@ -116,11 +136,11 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10):
         idx = np.nonzero(todo)[0]
         t_try = np.minimum(t[idx] + step[idx], 1.0)
         params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
-        q_new, n_new, ok = newton_batch(fun, q[idx], params, tol)
+        q_new, n_new, ok = newton_batch(fun, q[idx], params, tol, jac=jac)
         for k in np.nonzero(~ok)[0]:
             # small steps, or no path at all: let scipy try as well
             if no_path[idx[k]] or halvings[idx[k]] >= max_halvings // 2:
-                q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol)
+                q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol, jac=jac)
                 if ok_s:
                     q_new[k], n_new[k], ok[k] = q_s, n_s, True
         q[idx[ok]] = q_new[ok]

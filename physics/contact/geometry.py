@@ -306,14 +306,16 @@ def _min_gap_numpy(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _Flo
 
 
 def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray, r0: float,
-                tol_mm: float = 1e-9, max_iter: int = 60) -> tuple[_FloatArray, _FloatArray]:
+                tol_mm: float = 1e-9, max_iter: int = 60, start: _FloatArray | None = None
+                ) -> tuple[_FloatArray, _FloatArray]:
     """Roll (N,) with equal minimum gaps on both sides, and that gap (N,) at height 0.
 
     The gap difference F = g_left - g_right grows with roll (the left wheel lifts), so a
-    Newton iteration safeguarded by bisection on [-0.1, 0.1] rad converges."""
+    Newton iteration safeguarded by bisection on [-0.1, 0.1] rad converges (to the one root,
+    from any start in the bracket: ``start`` (N,), default 0)."""
     n = shift.size
     lo, hi = np.full(n, -0.1), np.full(n, 0.1)
-    roll = np.zeros(n)
+    roll = np.zeros(n) if start is None else np.clip(np.asarray(start, dtype=float), -0.1, 0.1)
     gap = np.zeros(n)
     active = np.arange(n)  # rows still iterating (a converged row is not evaluated again)
     for _ in range(max_iter):
@@ -613,11 +615,25 @@ def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
         raise ValueError(f"side must be 'left' or 'right', not {side!r}")
     shift, yaw = _pose_arrays(shifts_mm, 0.0)
     sides = _prepare(wt)
-    roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm)
+    start = None
+    if shift.size > 4 * _ROLL_START_STRIDE:
+        # the roll is continuous in the shift: solved on every _ROLL_START_STRIDE-th shift
+        # first, interpolated, it starts Newton within a few iterations of the root (the same
+        # root to tol_mm; from roll 0 most shifts take 8-11 iterations)
+        order = np.argsort(shift, kind="stable")
+        coarse = order[np.unique(np.r_[np.arange(0, shift.size, _ROLL_START_STRIDE),
+                                       shift.size - 1])]
+        roll_c, _ = _solve_roll(sides, shift[coarse], yaw[coarse], wt.nominal_radius_mm)
+        start = np.interp(shift, shift[coarse], roll_c)
+    roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm, start=start)
     chosen = sides[0] if side == "left" else sides[1]
     gap, _ = _gaps(chosen, shift, roll, yaw, wt.nominal_radius_mm)
     y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
     return y_wheel, gap - gap0[:, None], roll
+
+
+#: Stride of the coarse roll solve that starts :func:`rigid_wheel_gap`'s (shifts).
+_ROLL_START_STRIDE = 8
 
 
 def contact_points(wt: WheelsetTrack, lateral_shift_mm: float, yaw_rad: float = 0.0,

@@ -17,7 +17,7 @@ foot) is not modelled.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 from typing import Protocol
 
 import numpy as np
@@ -157,6 +157,15 @@ def rail_profile(name: str | RailShape = "60E1", step_mm: float = 0.2,
     """
     if not isinstance(name, str):
         return name.contact_points(step_mm, inclination)
+    y, z = _named_rail_profile(name, float(step_mm), float(inclination))
+    return y.copy(), z.copy()
+
+
+@lru_cache(maxsize=32)
+def _named_rail_profile(name: str, step_mm: float, inclination: float
+                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`rail_profile` of a named rail, cached (every contact table of the wear loop
+    samples the same rail)."""
     head = rail_head(name)
     half = head.half_width_mm
     # dense in y, then resampled by arc length (the flank is nearly vertical)

@@ -352,3 +352,16 @@ def test_saturation_state_is_the_saturation_law_equilibrium(trailer, curve_500):
     assert norm(res.state, None) > 10 * cv.DEFAULT_TOLERANCE
     smooth = cv.solve_curving(trailer, 500.0, creep_grid=None)
     assert np.array_equal(smooth.saturation_state, smooth.state)
+
+
+def test_table_rows_onto_the_wheel_grid_are_numpy_interp():
+    # build_contact_table maps the geometry's gap rows onto the wheel grid in one pass
+    # (_interp_rows): the same numbers as np.interp row by row, grid points and ends included
+    from wearcast.physics.curving_table import _interp_rows
+
+    rng = np.random.default_rng(5)
+    xp = np.sort(rng.uniform(-60.0, 50.0, 800))
+    fp = rng.normal(size=(7, 800))
+    x = np.concatenate([np.arange(-55.0, 45.0001, 0.2), xp[:40], [xp[0], xp[-1], -70.0, 70.0]])
+    ref = np.stack([np.interp(x, xp, row, left=100.0, right=100.0) for row in fp])
+    assert np.array_equal(_interp_rows(x, xp, fp, 100.0), ref)
