@@ -42,18 +42,20 @@ class ClassContacts:
     """Contacts of the tracked wheel per class, shape (n_class, n_slot) (patch slots of the
     curving model, field side first).
 
-    normal_n [N], wheel_y_mm, rail_y_mm [mm], angle_rad, rolling_radius_mm, a_mm, b_mm, xi,
-    eta [-], phi_per_mm, fx_n, fy_n, mz_nmm, tau_max_mpa, t_gamma_n, loaded (bool); speed_m_s
+    The fields of :class:`~wearcast.physics.curving_result.CurvingResult` with the same names
+    and units: normal_force_n [N], wheel_y_mm, rail_y_mm [mm], contact_angle_rad,
+    rolling_radius_m [m], a_mm, b_mm [mm], xi, eta [-], phi_per_mm, fx_n, fy_n, mz_nmm,
+    tau_max_mpa, t_gamma_n, in_contact (bool: a patch carrying more than 1 N); speed_m_s
     (n_class,). Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape
     (n_class, 2 axles, n_slot). ``states``: the last curving equilibrium per operating point
     (the warm start of the next update's failed points).
     """
 
-    normal_n: NDArray
+    normal_force_n: NDArray
     wheel_y_mm: NDArray
     rail_y_mm: NDArray
-    angle_rad: NDArray
-    rolling_radius_mm: NDArray
+    contact_angle_rad: NDArray
+    rolling_radius_m: NDArray
     a_mm: NDArray
     b_mm: NDArray
     xi: NDArray
@@ -64,12 +66,13 @@ class ClassContacts:
     mz_nmm: NDArray
     tau_max_mpa: NDArray
     t_gamma_n: NDArray
-    loaded: NDArray
+    in_contact: NDArray
     speed_m_s: NDArray
     rail_axles: dict = field(default_factory=dict)
     states: dict = field(default_factory=dict)
 
 
+#: The per-contact fields of ClassContacts, taken from the curving results by name.
 _CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
                    "rolling_radius_m", "a_mm", "b_mm", "xi", "eta", "phi_per_mm", "fx_n", "fy_n",
                    "mz_nmm", "tau_max_mpa", "t_gamma_n", "in_contact")
@@ -77,11 +80,6 @@ _CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_r
 
 _RAIL_FIELDS = ("normal_force_n", "rail_y_mm", "contact_angle_rad", "b_mm", "rolling_radius_m",
                 "in_contact")
-_FIELD_NAMES = {"normal_force_n": "normal_n", "wheel_y_mm": "wheel_y_mm", "rail_y_mm": "rail_y_mm",
-                "contact_angle_rad": "angle_rad", "a_mm": "a_mm", "b_mm": "b_mm", "xi": "xi",
-                "eta": "eta", "phi_per_mm": "phi_per_mm", "fx_n": "fx_n", "fy_n": "fy_n",
-                "mz_nmm": "mz_nmm", "tau_max_mpa": "tau_max_mpa", "t_gamma_n": "t_gamma_n",
-                "in_contact": "loaded"}
 
 
 def _operating_point(c: CurveClass, unbalanced_acceleration_m_s2: float,
@@ -223,7 +221,7 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
     n = len(classes)
     slots = [np.shape(r.normal_force_n)[-1] for r in solved.values() if r is not None]
     if previous is not None:
-        slots.append(previous.normal_n.shape[-1])
+        slots.append(previous.normal_force_n.shape[-1])
     n_slot = max(slots) if slots else 2
     data = {f: np.zeros((n, n_slot)) for f in _CONTACT_FIELDS}
     rail = {f: np.zeros((n, 2, n_slot)) for f in _RAIL_FIELDS}
@@ -267,10 +265,9 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
     if kept.size:
         assert previous is not None
         fallbacks += int(kept.size)
-        m = previous.normal_n.shape[-1]
-        for f, name in _FIELD_NAMES.items():
-            data[f][kept, :m] = getattr(previous, name)[kept]
-        data["rolling_radius_m"][kept, :m] = previous.rolling_radius_mm[kept] / 1000.0
+        m = previous.normal_force_n.shape[-1]
+        for f in _CONTACT_FIELDS:
+            data[f][kept, :m] = getattr(previous, f)[kept]
         for f in rail:
             rail[f][kept, :, :m] = previous.rail_axles[f][kept]
         speed[kept] = previous.speed_m_s[kept]
@@ -281,11 +278,5 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
             data["rail_y_mm"], np.where(loaded, data["normal_force_n"], 0.0), data["a_mm"],
             data["b_mm"]), data["b_mm"])
     rail["in_contact"] = rail["in_contact"].astype(bool) & (rail["normal_force_n"] > 1.0)
-    return ClassContacts(
-        normal_n=data["normal_force_n"], wheel_y_mm=data["wheel_y_mm"],
-        rail_y_mm=data["rail_y_mm"], angle_rad=data["contact_angle_rad"],
-        rolling_radius_mm=data["rolling_radius_m"] * 1000.0, a_mm=data["a_mm"],
-        b_mm=data["b_mm"], xi=data["xi"], eta=data["eta"], phi_per_mm=data["phi_per_mm"],
-        fx_n=data["fx_n"], fy_n=data["fy_n"], mz_nmm=data["mz_nmm"],
-        tau_max_mpa=data["tau_max_mpa"], t_gamma_n=data["t_gamma_n"], loaded=loaded,
-        speed_m_s=speed, rail_axles=rail, states=states), fallbacks
+    data["in_contact"] = loaded
+    return ClassContacts(**data, speed_m_s=speed, rail_axles=rail, states=states), fallbacks

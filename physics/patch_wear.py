@@ -45,11 +45,11 @@ def contact_volume_basis(contacts: ClassContacts, law: WearLaw) -> NDArray[np.fl
     """Worn volume per metre rolled of each patch, as a basis: shape (n_class, n_slot, n_basis)
     [mm^3/m]; n_basis = 4 (zones) for Archard/KTH, else 1 (coefficient 1)."""
     c = contacts
-    v = np.broadcast_to(c.speed_m_s[:, None], c.normal_n.shape)
-    area = np.pi * np.where(c.loaded, c.a_mm * c.b_mm, 1.0)
+    v = np.broadcast_to(c.speed_m_s[:, None], c.normal_force_n.shape)
+    area = np.pi * np.where(c.in_contact, c.a_mm * c.b_mm, 1.0)
     if law.name == "archard_kth":
         vs = rigid_sliding_velocity_m_s(v, c.xi, c.eta)
-        basis = archard_basis(c.normal_n, vs, v, c.normal_n / area, law.archard)
+        basis = archard_basis(c.normal_force_n, vs, v, c.normal_force_n / area, law.archard)
     elif law.name == "krause_poll":
         basis = krause_poll_rate(c.t_gamma_n, v, area)[..., None]
     elif law.name == "usfd":
@@ -58,7 +58,7 @@ def contact_volume_basis(contacts: ClassContacts, law: WearLaw) -> NDArray[np.fl
     else:
         basis = tau_max_rate(c.tau_max_mpa, area, law.tau_coefficient_mm_per_m_mpa,
                              law.tau_threshold_mpa)[..., None]
-    return np.where(c.loaded[..., None], basis, 0.0)
+    return np.where(c.in_contact[..., None], basis, 0.0)
 
 
 def law_coefficients(law: WearLaw) -> NDArray[np.float64]:
@@ -79,34 +79,35 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
     """
     wheel_share, _ = wheel_rail_split(law)
     c = contacts
-    n_class = c.normal_n.shape[0]
-    safe_b = np.where(c.loaded, c.b_mm, 1.0)
+    n_class = c.normal_force_n.shape[0]
+    safe_b = np.where(c.in_contact, c.b_mm, 1.0)
+    radius_mm = c.rolling_radius_m * 1000.0
     if application == "global":
         vol = contact_volume_basis(c, law)                     # (n_class, 2, nb) per m
-        safe_r = np.where(c.loaded, c.rolling_radius_mm, 1.0)
+        safe_r = np.where(c.in_contact, radius_mm, 1.0)
         shape = semi_elliptic_depth(y_grid_mm, c.wheel_y_mm, safe_b, 1.0,
-                                    safe_r, c.angle_rad)  # (n_class, n_slot, n)
+                                    safe_r, c.contact_angle_rad)  # (n_class, n_slot, n)
         return wheel_share * np.einsum("csb,csn->cbn", vol, shape)
     if application != "local":
         raise ValueError(f"application must be 'global' or 'local', got {application!r}")
     n_basis = 4 if law.name == "archard_kth" else 1
     out = np.zeros((n_class, n_basis, np.size(y_grid_mm)))
-    idx = np.nonzero(c.loaded)
+    idx = np.nonzero(c.in_contact)
     if idx[0].size == 0:
         return out
     xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
-        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_n"))
+        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_force_n"))
     fs = fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
                  n_x=fastsim_grid, n_y=fastsim_grid)
     if law.name == "archard_kth":
         basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
-                                    c.rolling_radius_mm[idx], c.angle_rad[idx], y_grid_mm,
+                                    radius_mm[idx], c.contact_angle_rad[idx], y_grid_mm,
                                     law.archard)
     else:
         v = c.speed_m_s[idx[0]][:, None, None]
         rate = element_depth_rate_mm_per_m(law, fs.shear_traction_mpa,
                                            np.hypot(fs.sx, fs.sy), fs.pn_mpa, v)
-        basis = local_rate_depth(fs, rate, c.wheel_y_mm[idx], c.rolling_radius_mm[idx],
-                                 c.angle_rad[idx], y_grid_mm)[:, None, :]
+        basis = local_rate_depth(fs, rate, c.wheel_y_mm[idx], radius_mm[idx],
+                                 c.contact_angle_rad[idx], y_grid_mm)[:, None, :]
     np.add.at(out, idx[0], basis)
     return wheel_share * out

@@ -64,9 +64,9 @@ def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArra
     vol = rail_share * contact_volume_basis(contacts, law) @ law_coefficients(
         law)                                                            # (n_class, slot) mm^3/m
     r = contacts.rail_axles
-    lead_n = np.where(contacts.normal_n > 0, contacts.normal_n, 1.0)
+    lead_n = np.where(contacts.normal_force_n > 0, contacts.normal_force_n, 1.0)
     scale = r["normal_force_n"] / lead_n[:, None, :]                # (n_class, axle, slot)
-    area_per_pass = (vol[:, None, :] * np.where(contacts.loaded[:, None, :], scale, 0.0)
+    area_per_pass = (vol[:, None, :] * np.where(contacts.in_contact[:, None, :], scale, 0.0)
                      / 1000.0)                                          # mm^2 per passage
     b = np.where(r["in_contact"], r["b_mm"], 1.0)
     # Unit radius 1/(2 pi) makes semi_elliptic_depth spread "volume" = area as a depth on y.
@@ -99,11 +99,11 @@ def rail_depth_per_vehicle_all_wheels(contacts: Mapping[tuple[int, str], ClassCo
     side_depth: dict[str, NDArray] = {s: np.zeros((n_class, np.size(rail_grid_mm))) for s in SIDES}
     for (_, side), c in contacts.items():
         vol = rail_share * contact_volume_basis(c, law) @ coeffs          # (n_class, slot)
-        area = np.where(c.loaded, vol, 0.0) / 1000.0                       # mm^2 per passage
-        b = np.where(c.loaded, c.b_mm, 1.0)
+        area = np.where(c.in_contact, vol, 0.0) / 1000.0                       # mm^2 per passage
+        b = np.where(c.in_contact, c.b_mm, 1.0)
         # Unit radius 1/(2 pi): semi_elliptic_depth spreads "volume" = area on the rail's y.
         depth = semi_elliptic_depth(rail_grid_mm, c.rail_y_mm, b, area, 1.0 / (2.0 * np.pi),
-                                    c.angle_rad)
+                                    c.contact_angle_rad)
         side_depth[side] += depth.sum(axis=1)
     high = np.zeros_like(side_depth["left"])
     low = np.zeros_like(high)

@@ -183,7 +183,8 @@ def _wheel_rates(contacts: dict[tuple[int, str], ClassContacts], law: WearLaw, y
     for wheel, c in contacts.items():
         if options.flange_wear_factor != 1.0:
             # Scale the flange patches' normal force share of wear via a per-patch factor.
-            factor = np.where(c.angle_rad > FLANGE_ANGLE_RAD, options.flange_wear_factor, 1.0)
+            factor = np.where(c.contact_angle_rad > FLANGE_ANGLE_RAD,
+                              options.flange_wear_factor, 1.0)
             per_class = _scaled_basis(c, law, y, options.application, fastsim_grid, friction,
                                       factor)
         else:
@@ -199,10 +200,10 @@ def _scaled_basis(c: ClassContacts, law: WearLaw, y: NDArray, application: str,
     """wheel_depth_basis with each patch's contribution multiplied by ``factor`` (n_class,
     n_slot): the patches are split into per-slot contacts (the basis is additive in patches)."""
     total = None
-    for slot in range(c.normal_n.shape[1]):
-        only = np.zeros_like(c.loaded)
-        only[:, slot] = c.loaded[:, slot]
-        part = wheel_depth_basis(replace(c, loaded=only), law, y, application, fastsim_grid,
+    for slot in range(c.normal_force_n.shape[1]):
+        only = np.zeros_like(c.in_contact)
+        only[:, slot] = c.in_contact[:, slot]
+        part = wheel_depth_basis(replace(c, in_contact=only), law, y, application, fastsim_grid,
                                  friction)
         part = part * factor[:, slot][:, None, None]
         total = part if total is None else total + part

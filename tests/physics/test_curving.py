@@ -249,15 +249,15 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
     hertz, _ = class_contacts(veh, classes, y, z, axle=1, side="right")
     kp, _ = class_contacts(veh, classes, y, z, axle=1, side="right",
                            patch_width="kik_piotrowski")
-    root = hertz.loaded[0] & (hertz.wheel_y_mm[0] < -30.0)
-    tread = hertz.loaded[1]
+    root = hertz.in_contact[0] & (hertz.wheel_y_mm[0] < -30.0)
+    tread = hertz.in_contact[1]
     assert root.any() and tread.any()
     assert np.all(hertz.b_mm[0][root] < 1.0)
     assert np.all(kp.b_mm[0][root] > 3.0 * hertz.b_mm[0][root])
     assert np.all(kp.b_mm[1][tread] >= hertz.b_mm[1][tread])
     assert np.all(kp.b_mm[1][tread] < 1.25 * hertz.b_mm[1][tread])
     # everything else (equilibrium, forces, creepages, a) is the curving model's
-    for name in ("normal_n", "a_mm", "xi", "eta", "wheel_y_mm"):
+    for name in ("normal_force_n", "a_mm", "xi", "eta", "wheel_y_mm"):
         assert np.array_equal(getattr(kp, name), getattr(hertz, name))
     with pytest.raises(ValueError, match="patch_width"):
         class_contacts(veh, classes, y, z, patch_width="ellipse")

@@ -154,10 +154,10 @@ def test_worn_rail_makes_the_flange_contact_more_conformal(rail_steps):
         out, fb = class_contacts_all_wheels(replace(veh, rail_profile=rail), CURVES[:1], y, z)
         assert fb == 0
         c = out[(1, "right")]
-        i = int(np.argmax(c.normal_n[0]))
-        assert np.degrees(c.angle_rad[0, i]) > 30.0  # the flange patch
+        i = int(np.argmax(c.normal_force_n[0]))
+        assert np.degrees(c.contact_angle_rad[0, i]) > 30.0  # the flange patch
         area = np.pi * c.a_mm[0, i] * c.b_mm[0, i]
-        patch[label] = (c.b_mm[0, i], c.normal_n[0, i] / area, c.t_gamma_n[0, i] / area)
+        patch[label] = (c.b_mm[0, i], c.normal_force_n[0, i] / area, c.t_gamma_n[0, i] / area)
     assert patch["worn"][0] > 1.1 * patch["new"][0]
     assert patch["worn"][1] < 0.9 * patch["new"][1]
     assert patch["worn"][2] < patch["new"][2]
