@@ -76,8 +76,8 @@ def main() -> None:
                       res.normal_force_n[0, high], res.in_contact[0, high])
         p = res.pipeline
         assert p is not None
-        pip = _flange(p["wheel_y_mm"][0, high], p["angle_rad"][0, high],
-                      p["normal_n"][0, high], p["in_contact"][0, high])
+        pip = _flange(p["wheel_y_mm"][0, high], p["contact_angle_rad"][0, high],
+                      p["normal_force_n"][0, high], p["in_contact"][0, high])
         if tab is None or pip is None:
             print(f"{r:6.0f}  no flange contact (table: {tab is not None}, pipeline: "
                   f"{pip is not None})")
@@ -114,8 +114,8 @@ def main() -> None:
         high = curving.SIDES.index(res.high_rail_side)
         p = res.pipeline
         assert p is not None
-        pip = _flange(p["wheel_y_mm"][0, high], p["angle_rad"][0, high],
-                      p["normal_n"][0, high], p["in_contact"][0, high])
+        pip = _flange(p["wheel_y_mm"][0, high], p["contact_angle_rad"][0, high],
+                      p["normal_force_n"][0, high], p["in_contact"][0, high])
         tab = _flange(res.wheel_y_mm[0, high], res.contact_angle_rad[0, high],
                       res.normal_force_n[0, high], res.in_contact[0, high])
         shift = float(p["wheelset_shift_mm"][0])

@@ -85,8 +85,8 @@ N_STATE = 12
 class BogieContacts:
     """Per-contact quantities, shape (..., 2 wheelsets, 2 sides, 3 patch slots)."""
 
-    normal_n: NDArray
-    angle_rad: NDArray
+    normal_force_n: NDArray
+    contact_angle_rad: NDArray
     xi: NDArray
     eta: NDArray
     phi_per_mm: NDArray
@@ -95,10 +95,10 @@ class BogieContacts:
     mz_nmm: NDArray
     a_mm: NDArray
     b_mm: NDArray
-    radius_m: NDArray
+    rolling_radius_m: NDArray
     wheel_y_mm: NDArray
     rail_y_mm: NDArray
-    lateral_mm: NDArray
+    lateral_position_mm: NDArray
 
 
 def bogie_contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu,
@@ -138,20 +138,22 @@ def bogie_contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu,
         ff = fastsim_forces(xi, eta, phi, a_safe, b_safe, normal, mu, SHEAR_MODULUS_MPA,
                             n_x=creep_grid, n_y=creep_grid)
         fx, fy, mz = ff.fx_n, ff.fy_n, ff.mz_nmm
-    return BogieContacts(normal, ang, xi, eta, phi, fx, fy, mz, a, b, col["radius_m"],
-                     col["wheel_y_mm"], col["rail_y_mm"], col["lateral_mm"])
+    return BogieContacts(normal_force_n=normal, contact_angle_rad=ang, xi=xi, eta=eta,
+                         phi_per_mm=phi, fx_n=fx, fy_n=fy, mz_nmm=mz, a_mm=a, b_mm=b,
+                         rolling_radius_m=col["radius_m"], wheel_y_mm=col["wheel_y_mm"],
+                         rail_y_mm=col["rail_y_mm"], lateral_position_mm=col["lateral_mm"])
 
 
 def wheelset_loads(c: BogieContacts):
     """Track-frame loads of the contacts on each wheelset: lateral [N], vertical per wheel [N],
     yaw moment [N m], axle moment sum r Fx [N m]. Inputs (..., W, 2, slots)."""
     s = SIDE_SIGN[:, None]
-    cos, sin = np.cos(c.angle_rad), np.sin(c.angle_rad)
-    lateral = np.sum(s * (-c.normal_n * sin + c.fy_n * cos), axis=(-2, -1))
-    vertical = np.sum(c.normal_n * cos + c.fy_n * sin, axis=-1)  # (..., W, 2)
-    yaw = np.sum(-(s * c.lateral_mm / 1000.0) * c.fx_n + s * c.mz_nmm * cos / 1000.0,
+    cos, sin = np.cos(c.contact_angle_rad), np.sin(c.contact_angle_rad)
+    lateral = np.sum(s * (-c.normal_force_n * sin + c.fy_n * cos), axis=(-2, -1))
+    vertical = np.sum(c.normal_force_n * cos + c.fy_n * sin, axis=-1)  # (..., W, 2)
+    yaw = np.sum(-(s * c.lateral_position_mm / 1000.0) * c.fx_n + s * c.mz_nmm * cos / 1000.0,
                  axis=(-2, -1))
-    pitch = np.sum(c.radius_m * c.fx_n, axis=(-2, -1))
+    pitch = np.sum(c.rolling_radius_m * c.fx_n, axis=(-2, -1))
     return lateral, vertical, yaw, pitch
 
 

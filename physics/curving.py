@@ -264,7 +264,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     res, c = bogie_residual(q, vehicle, table, p_end[:, 0], p_end[:, 1], p_end[:, 2],
                              return_contacts=True, creep_grid=creep_grid)
     norm = np.linalg.norm(res, axis=-1)
-    wear = equilibrium_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_n,
+    wear = equilibrium_wear_measures(c.xi, c.eta, c.phi_per_mm, c.a_mm, c.b_mm, c.normal_force_n,
                                  c.fx_n, c.fy_n, c.mz_nmm, vehicle.friction, fastsim_grid)
     pipeline: list[dict[str, NDArray] | None] = [None] * n
     pipeline_norm = np.full(n, np.nan)
@@ -277,7 +277,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         cp, peak, ok_p, errors, res_p = pipeline_residual(q_p, vehicle, table, p_end[rows],
                                                            grid, creep_grid)
         wear_p = equilibrium_wear_measures(cp.xi, cp.eta, cp.phi_per_mm, cp.a_mm, cp.b_mm,
-                                       cp.normal_n, cp.fx_n, cp.fy_n, cp.mz_nmm,
+                                       cp.normal_force_n, cp.fx_n, cp.fy_n, cp.mz_nmm,
                                        vehicle.friction, fastsim_grid)
         ws_p = q_p[:, :10].reshape(-1, 2, 5)
         pose = {"state": q_p,
@@ -316,10 +316,10 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             wheelset_roll_rad=wheelset_roll(table, ws[:, 0], ws[:, 3:5]),
             wheelset_yaw_rad=ws[:, 1] * 1e-3,
             rolling_ratio=1.0 + ws[:, 2] * 1e-3, bogie_shift_mm=float(q[k, 10]),
-            bogie_yaw_rad=float(q[k, 11]) * 1e-3, normal_force_n=c.normal_n[k],
-            contact_angle_rad=c.angle_rad[k], wheel_y_mm=c.wheel_y_mm[k],
-            rail_y_mm=c.rail_y_mm[k], lateral_position_mm=c.lateral_mm[k],
-            rolling_radius_m=c.radius_m[k], xi=c.xi[k], eta=c.eta[k],
+            bogie_yaw_rad=float(q[k, 11]) * 1e-3, normal_force_n=c.normal_force_n[k],
+            contact_angle_rad=c.contact_angle_rad[k], wheel_y_mm=c.wheel_y_mm[k],
+            rail_y_mm=c.rail_y_mm[k], lateral_position_mm=c.lateral_position_mm[k],
+            rolling_radius_m=c.rolling_radius_m[k], xi=c.xi[k], eta=c.eta[k],
             phi_per_mm=c.phi_per_mm[k], fx_n=c.fx_n[k], fy_n=c.fy_n[k], mz_nmm=c.mz_nmm[k],
             a_mm=c.a_mm[k], b_mm=c.b_mm[k], p0_mpa=wear["p0_mpa"][k],
             tau_max_mpa=wear["tau_max_mpa"][k], t_gamma_n=wear["t_gamma_n"][k],
@@ -374,9 +374,9 @@ def solve_free_wheelset(table: ContactTable, radius_m: float, wheel_load_n: floa
                                       float(norm[0]))
     c = bogie_contacts(table, q[:, 0:1], q[:, 1:2] * 1e-3, q[:, 2:3] * 1e-3, q[:, None, 3:5],
                   np.array([kappa]), r0, friction)
-    loaded = c.normal_n[0, 0] > 0
-    xi = np.array([np.sum(np.where(loaded[s], c.xi[0, 0, s], 0.0) * c.normal_n[0, 0, s])
-                   / np.sum(c.normal_n[0, 0, s]) for s in range(2)])
+    loaded = c.normal_force_n[0, 0] > 0
+    xi = np.array([np.sum(np.where(loaded[s], c.xi[0, 0, s], 0.0) * c.normal_force_n[0, 0, s])
+                   / np.sum(c.normal_force_n[0, 0, s]) for s in range(2)])
     return float(q[0, 0]), float(q[0, 1]) * 1e-3, xi
 
 

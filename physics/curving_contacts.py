@@ -73,9 +73,10 @@ def _fill(out: dict[str, NDArray], index: tuple[int, int, int], pc: PoseContact,
         n = p.normal
         lateral = sign * n.centre_y_track_mm
         values = {
-            "normal_n": n.normal_force_n, "angle_rad": -n.contact_angle_rad,
+            "normal_force_n": n.normal_force_n, "contact_angle_rad": -n.contact_angle_rad,
             "wheel_y_mm": n.centre_y_wheel_mm, "rail_y_mm": lateral - rail_origin_mm,
-            "lateral_mm": lateral, "radius_m": n.region.rolling_radius_mm / 1000.0,
+            "lateral_position_mm": lateral,
+            "rolling_radius_m": n.region.rolling_radius_mm / 1000.0,
             "xi": -p.xi, "eta": -p.eta, "phi_per_mm": -p.phi_per_mm, "fx_n": -p.fx_n,
             "fy_n": -p.fs_n, "mz_nmm": -p.mz_nmm, "a_mm": n.a_mm, "b_mm": n.b_mm,
             "peak_pressure_mpa": n.peak_pressure_mpa,

@@ -38,9 +38,11 @@ class CurvingResult:
 
     ``pipeline`` (with ``contact_pipeline=True``, else None): the contacts of the one contact
     pipeline (``curving_contacts``) at this equilibrium's pose of every wheel, same shape and
-    signs as above, keyed ``normal_n``, ``angle_rad``, ``wheel_y_mm``, ``rail_y_mm``,
-    ``lateral_mm``, ``radius_m``, ``xi``, ``eta``, ``phi_per_mm``, ``fx_n``, ``fy_n``,
-    ``mz_nmm``, ``a_mm``, ``b_mm``, ``peak_pressure_mpa``, ``tau_max_mpa``, ``t_gamma_n``,
+    signs as above, keyed by the per-contact field names of this class (those of
+    ``bogie_equations.BogieContacts``: ``normal_force_n``, ``contact_angle_rad``, ``xi``,
+    ``eta``, ``phi_per_mm``, ``fx_n``, ``fy_n``, ``mz_nmm``, ``a_mm``, ``b_mm``,
+    ``rolling_radius_m``, ``wheel_y_mm``, ``rail_y_mm``, ``lateral_position_mm``) plus
+    ``peak_pressure_mpa``, ``tau_max_mpa``, ``t_gamma_n``,
     ``in_contact``, and the pose it was evaluated at: ``state`` (as ``state``),
     ``wheelset_shift_mm``, ``wheelset_roll_rad``, ``wheelset_yaw_rad`` (2,) (the table's, or
     with ``pipeline_equilibrium`` the equilibrium of the pipeline's forces);

@@ -10,6 +10,8 @@ and, on request, the equilibrium of those forces by Broyden's method from the ta
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -38,9 +40,7 @@ def pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_gri
                            centre_shift(table, y, d), ws[..., 1] * 1e-3, wheelset_roll(table, y, d),
                            1.0 + ws[..., 2] * 1e-3, loads, params[:, 0], vehicle.friction,
                            SHEAR_MODULUS_MPA, creep_grid)
-    c = BogieContacts(pc.normal_n, pc.angle_rad, pc.xi, pc.eta, pc.phi_per_mm, pc.fx_n, pc.fy_n,
-                  pc.mz_nmm, pc.a_mm, pc.b_mm, pc.radius_m, pc.wheel_y_mm, pc.rail_y_mm,
-                  pc.lateral_mm)
+    c = BogieContacts(**{f.name: getattr(pc, f.name) for f in fields(BogieContacts)})
     return c, pc.peak_pressure_mpa, pc.ok, pc.errors
 
 

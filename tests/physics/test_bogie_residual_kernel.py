@@ -61,7 +61,7 @@ def test_compiled_residual_equals_the_numpy_reference(cases, creep_grid):
         # the states reach loaded and unloaded slots and saturated creep
         _, c = bogie_residual(q, vehicle, table, p[:, 0], p[:, 1], p[:, 2],
                               return_contacts=True, creep_grid=creep_grid)
-        assert np.any(c.normal_n == 0) and np.any(c.normal_n > 0)
+        assert np.any(c.normal_force_n == 0) and np.any(c.normal_force_n > 0)
 
 
 def test_compiled_residual_keeps_the_leading_shape_and_marks_non_finite_states(cases):

@@ -34,7 +34,7 @@ def test_pipeline_flange_contact_within_half_a_millimetre_of_the_geometry_module
         assert p is not None
         on = p["in_contact"][0, high] & (p["wheel_y_mm"][0, high] < cv.FLANGE_SPLIT_Y_MM)
         assert np.any(on), res.radius_m
-        k = int(np.argmax(np.where(on, p["normal_n"][0, high], -1.0)))
+        k = int(np.argmax(np.where(on, p["normal_force_n"][0, high], -1.0)))
         geo = contact_table(track, [float(res.wheelset_shift_mm[0])],
                             yaw_rad=float(res.wheelset_yaw_rad[0]))
         wheel = geo.right if high == 1 else geo.left
@@ -42,7 +42,7 @@ def test_pipeline_flange_contact_within_half_a_millimetre_of_the_geometry_module
         if wheel.secondary.valid[0]:
             ys.append(wheel.secondary.y_wheel_mm[0])
         assert p["wheel_y_mm"][0, high, k] == pytest.approx(min(ys), abs=0.5), res.radius_m
-        assert p["angle_rad"][0, high, k] > np.radians(60.0)  # up the 70 deg flank
+        assert p["contact_angle_rad"][0, high, k] > np.radians(60.0)  # up the 70 deg flank
 
 
 def test_pipeline_contacts_carry_the_wheel_loads_with_curving_signs(flanging):
@@ -53,13 +53,13 @@ def test_pipeline_contacts_carry_the_wheel_loads_with_curving_signs(flanging):
     for res in flanging:
         p = res.pipeline
         assert p is not None
-        vert = np.sum(p["normal_n"] * np.cos(p["angle_rad"])
-                      + p["fy_n"] * np.sin(p["angle_rad"]), axis=-1)
+        vert = np.sum(p["normal_force_n"] * np.cos(p["contact_angle_rad"])
+                      + p["fy_n"] * np.sin(p["contact_angle_rad"]), axis=-1)
         table_vert = np.sum(res.normal_force_n * np.cos(res.contact_angle_rad)
                             + res.fy_n * np.sin(res.contact_angle_rad), axis=-1)
         np.testing.assert_allclose(vert, table_vert, rtol=2e-3)
         low = 1 - cv.SIDES.index(res.high_rail_side)
-        k_p = int(np.argmax(p["normal_n"][0, low]))
+        k_p = int(np.argmax(p["normal_force_n"][0, low]))
         k_t = int(np.argmax(res.normal_force_n[0, low]))
         assert abs(p["wheel_y_mm"][0, low, k_p] - res.wheel_y_mm[0, low, k_t]) < 0.5
         assert p["xi"][0, low, k_p] == pytest.approx(res.xi[0, low, k_t], rel=0.05)
@@ -86,12 +86,12 @@ def test_equilibrium_with_the_pipelines_forces_puts_the_flange_contact_where_the
     assert res.pipeline_residual_norm < cv.PIPELINE_TOLERANCE
     high = cv.SIDES.index(res.high_rail_side)
     on = p["in_contact"][0, high] & (p["wheel_y_mm"][0, high] < cv.FLANGE_SPLIT_Y_MM)
-    k = int(np.argmax(np.where(on, p["normal_n"][0, high], -1.0)))
+    k = int(np.argmax(np.where(on, p["normal_force_n"][0, high], -1.0)))
     on_t = res.in_contact[0, high] & (res.wheel_y_mm[0, high] < cv.FLANGE_SPLIT_Y_MM)
     k_t = int(np.argmax(np.where(on_t, res.normal_force_n[0, high], -1.0)))
     assert on[k] and on_t[k_t]
     assert p["wheel_y_mm"][0, high, k] == pytest.approx(res.wheel_y_mm[0, high, k_t], abs=0.5)
-    assert p["angle_rad"][0, high, k] == pytest.approx(res.contact_angle_rad[0, high, k_t],
+    assert p["contact_angle_rad"][0, high, k] == pytest.approx(res.contact_angle_rad[0, high, k_t],
                                                       abs=np.radians(5.0))
     # the pipeline's equilibrium pose: a smaller flange climb than the table's
     assert abs(p["wheelset_roll_rad"][0]) < 0.5 * abs(res.wheelset_roll_rad[0])
