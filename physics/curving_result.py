@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.bogie_equations import BogieContacts
 from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, rail_for
 
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm]: the vocabulary's.
@@ -14,8 +15,10 @@ FLANGE_SPLIT_Y_MM = REGION_SPLIT_Y_MM
 
 
 @dataclass(frozen=True)
-class CurvingResult:
-    """Quasi-static curving solution of one bogie.
+class CurvingResult(BogieContacts):
+    """Quasi-static curving solution of one bogie: the bogie equations' per-contact
+    quantities (:class:`~wearcast.physics.bogie_equations.BogieContacts`) at the equilibrium,
+    plus the state, the operating point and the wear measures.
 
     State: ``wheelset_shift_mm`` (2,) of the wheelset centres (+ = left), ``contact_shift_mm``
     (2,) the same at rail level (the contact frame; differs by r0 times the roll),
@@ -62,20 +65,6 @@ class CurvingResult:
     rolling_ratio: NDArray
     bogie_shift_mm: float
     bogie_yaw_rad: float
-    normal_force_n: NDArray
-    contact_angle_rad: NDArray
-    wheel_y_mm: NDArray
-    rail_y_mm: NDArray
-    lateral_position_mm: NDArray
-    rolling_radius_m: NDArray
-    xi: NDArray
-    eta: NDArray
-    phi_per_mm: NDArray
-    fx_n: NDArray
-    fy_n: NDArray
-    mz_nmm: NDArray
-    a_mm: NDArray
-    b_mm: NDArray
     p0_mpa: NDArray
     tau_max_mpa: NDArray
     t_gamma_n: NDArray
