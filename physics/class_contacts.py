@@ -17,11 +17,12 @@ Forces in N, lengths in mm (rolling radius in mm), speeds in m/s.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.bogie_equations import BogieContacts
 from wearcast.physics.curving import (
     CurvingConvergenceError,
     CurvingResult,
@@ -38,32 +39,18 @@ PATCH_WIDTHS = ("hertz", "kik_piotrowski")
 
 
 @dataclass(frozen=True)
-class ClassContacts:
+class ClassContacts(BogieContacts):
     """Contacts of the tracked wheel per class, shape (n_class, n_slot) (patch slots of the
     curving model, field side first).
 
-    The fields of :class:`~wearcast.physics.curving_result.CurvingResult` with the same names
-    and units: normal_force_n [N], wheel_y_mm, rail_y_mm [mm], contact_angle_rad,
-    rolling_radius_m [m], a_mm, b_mm [mm], xi, eta [-], phi_per_mm, fx_n, fy_n, mz_nmm,
-    tau_max_mpa, t_gamma_n, in_contact (bool: a patch carrying more than 1 N); speed_m_s
-    (n_class,). Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape
-    (n_class, 2 axles, n_slot). ``states``: the last curving equilibrium per operating point
-    (the warm start of the next update's failed points).
+    The per-contact quantities of the curving results (:class:`~wearcast.physics.
+    bogie_equations.BogieContacts`, same names and units), their wear measures tau_max_mpa,
+    t_gamma_n, and in_contact (bool: a patch carrying more than 1 N); speed_m_s (n_class,).
+    Rail-side arrays of both axles of the bogie on the same rail: rail_* with shape (n_class,
+    2 axles, n_slot). ``states``: the last curving equilibrium per operating point (the warm
+    start of the next update's failed points).
     """
 
-    normal_force_n: NDArray
-    wheel_y_mm: NDArray
-    rail_y_mm: NDArray
-    contact_angle_rad: NDArray
-    rolling_radius_m: NDArray
-    a_mm: NDArray
-    b_mm: NDArray
-    xi: NDArray
-    eta: NDArray
-    phi_per_mm: NDArray
-    fx_n: NDArray
-    fy_n: NDArray
-    mz_nmm: NDArray
     tau_max_mpa: NDArray
     t_gamma_n: NDArray
     in_contact: NDArray
@@ -73,9 +60,8 @@ class ClassContacts:
 
 
 #: The per-contact fields of ClassContacts, taken from the curving results by name.
-_CONTACT_FIELDS = ("normal_force_n", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
-                   "rolling_radius_m", "a_mm", "b_mm", "xi", "eta", "phi_per_mm", "fx_n", "fy_n",
-                   "mz_nmm", "tau_max_mpa", "t_gamma_n", "in_contact")
+_CONTACT_FIELDS = (*(f.name for f in fields(BogieContacts)), "tau_max_mpa", "t_gamma_n",
+                   "in_contact")
 
 
 _RAIL_FIELDS = ("normal_force_n", "rail_y_mm", "contact_angle_rad", "b_mm", "rolling_radius_m",
