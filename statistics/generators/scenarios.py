@@ -184,6 +184,24 @@ def cached_vehicle_simulator(route: Sequence[CurveClass], vehicle: str = "metro_
     return simulate
 
 
+def curvy_segments(seed: int = 0, n_curves: int = 40) -> list[dict[str, Any]]:
+    """Segments of a synthetic line for the curve-classes cause: ``n_curves`` curves of
+    150-800 m radius (uniform in curvature), 100-400 m long, alternately right and left, cant
+    100 mm, 50 km/h, and tangent track 1.5x their length at 80 km/h. The loop's wear rate
+    steps near 400 m (flange contact), so how the curves are binned moves the flange/tread
+    split (``statistics.routes.route_from_segments``)."""
+    rng = np.random.default_rng(seed)
+    segments: list[dict[str, Any]] = []
+    for i in range(n_curves):
+        radius_m = float(1.0 / rng.uniform(1.0 / 800.0, 1.0 / 150.0))
+        segments.append({"length_m": float(rng.uniform(100.0, 400.0)), "radius_m": radius_m,
+                         "direction": "left" if i % 2 else "right", "cant_mm": 100.0,
+                         "speed_kmh": 50.0})
+    total = sum(s["length_m"] for s in segments)
+    return [*segments, {"length_m": 1.5 * total, "radius_m": None, "direction": None,
+                        "cant_mm": 0.0, "speed_kmh": 80.0}]
+
+
 def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5,
                             wear_scale: float = 1.2, noise_mm: float = 0.02,
                             seed: int = 7, flange_height: bool = False) -> pd.DataFrame:

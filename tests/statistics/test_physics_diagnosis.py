@@ -356,28 +356,15 @@ def test_the_loop_on_a_worn_rail_is_named_rail_state(loop_on_worn_rails, hidden,
     assert f.gain.ci95_low > 0.5
 
 
-def _curvy_segments():
-    """40 curves of 150-800 m (uniform in curvature, 100-400 m long, alternately left and
-    right, cant 100 mm, 50 km/h) and tangent track 1.5x their length (80 km/h): the wear
-    rate steps near 400 m (flange contact), so the binning moves it."""
-    rng = np.random.default_rng(0)
-    segments = []
-    for i in range(40):
-        radius_m = float(1.0 / rng.uniform(1.0 / 800.0, 1.0 / 150.0))
-        segments.append({"length_m": float(rng.uniform(100.0, 400.0)), "radius_m": radius_m,
-                         "direction": "left" if i % 2 else "right", "cant_mm": 100.0,
-                         "speed_kmh": 50.0})
-    total = sum(s["length_m"] for s in segments)
-    return [*segments, {"length_m": 1.5 * total, "radius_m": None, "direction": None,
-                        "cant_mm": 0.0, "speed_kmh": 80.0}]
-
-
 @pytest.fixture(scope="module")
 def loop_on_segments():
-    from wearcast.statistics.generators.scenarios import cached_vehicle_simulator
+    from wearcast.statistics.generators.scenarios import (
+        cached_vehicle_simulator,
+        curvy_segments,
+    )
     from wearcast.statistics.routes import route_from_segments
 
-    segments = _curvy_segments()
+    segments = curvy_segments()
     own = [c.curve_class() for c in route_from_segments(segments, n_class=4).classes]
     return cached_vehicle_simulator(own, "metro_b", law="usfd", mileage_km=3000.0,
                                     depth_per_step_mm=1.0, segments=segments)
