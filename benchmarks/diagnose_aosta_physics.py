@@ -6,10 +6,11 @@ The model: ``physics.vehicle_wear_simulation`` (minuetto, two motor + two traile
 running directions, all wheels averaged as measured) on seed 003's Table 3 classes with its
 USFD law and one fitted wear-coefficient scale; the catalogue of
 ``statistics.physics_diagnosis`` (flange lubrication, friction level, running-direction share,
-patch model, wear law), each extension run at its catalogue values to --km (far enough for the
-fitted scales), scored leaving one vehicle out (3 vehicles: test groups are points). Prints
-the time of every loop run and of the whole diagnosis, the null fit, every finding and the
-verdict. Needs ../shared/reference.
+patch model, wear law, traction, rail state: the Minuetto's rail worn by its own passages on
+the same classes to 5 and 10 Mt, ``physics.rail_tonnage``), each extension run at its
+catalogue values to --km (far enough for the fitted scales), scored leaving one vehicle out
+(3 vehicles: test groups are points). Prints the time of every loop run and of the whole
+diagnosis, the null fit, every finding and the verdict. Needs ../shared/reference.
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
 from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
-from wearcast.statistics.physics_diagnosis import CATALOGUE, diagnose_physics
+from wearcast.statistics.physics_diagnosis import CATALOGUE, RAIL_TONNAGES_MT, diagnose_physics
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT.parent / "shared" / "reference" / "published"
@@ -51,16 +53,29 @@ def main() -> None:
     classes = aosta_classes(pd.read_csv(track_csv, comment="#"))
 
     contacts: dict = {}  # first contact updates shared by the runs (same new profile)
+    rails: dict = {}  # the rail state's worn rails, one chain of rail steps for all tonnages
 
     def simulate(params):
         params = dict(params)
         law = params.pop("law", "usfd")
+        tonnage = params.pop("rail_tonnage_mt", 0.0)
+        if tonnage:
+            if tonnage not in rails:
+                t0 = time.perf_counter()
+                out = rails_worn_to_tonnages("minuetto", classes,
+                                             sorted({*RAIL_TONNAGES_MT, tonnage}), law="usfd")
+                rails.update(out.rails)
+                print(f"  rails worn to {sorted(out.rails)} Mt: {out.rail_steps} rail steps "
+                      f"of {', '.join(f'{t:.2f}' for t in out.tonnage_per_step_mt)} Mt in "
+                      f"{time.perf_counter() - t0:.1f} s", flush=True)
+            params["rail"] = rails[tonnage]
         t0 = time.perf_counter()
         sim = simulate_vehicle_wear("minuetto", classes, law=law, mileage_km=args.km,
                                     depth_per_step_mm=args.step,
                                     options=VehicleWearOptions(**params),
                                     contact_cache=contacts)
-        print(f"  loop run {params or 'null'} law={law}: {len(sim.mileage_km) - 1} steps in "
+        label = {k: getattr(v, "name", v) for k, v in params.items()} or "null"
+        print(f"  loop run {label} law={law}: {len(sim.mileage_km) - 1} steps in "
               f"{time.perf_counter() - t0:.1f} s; FT {sim.mean('sd_mm')[-1]:.2f}, "
               f"qR {sim.mean('qr_mm')[-1]:.2f} mm at {args.km:.0f} km", flush=True)
         return sim

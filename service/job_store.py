@@ -71,9 +71,7 @@ def resolve_classes(session: Session, body: Any) -> list[dict[str, Any]]:
 
     if body.route_id is not None:
         row = route_store.get_route(session, body.route_id, "route_id")
-        return [{k: c.get(k) for k in ("radius_m", "cant_mm", "speed_kmh", "direction",
-                                       "share")} | {"direction": c.get("direction") or "left"}
-                for c in row.classes]
+        return route_store.loop_classes(row.classes)
     return [c.model_dump() for c in body.classes or []]
 
 

@@ -2,11 +2,15 @@
 
 :func:`wearcast.statistics.physics_diagnosis.diagnose_physics` scores each cause of the
 physical catalogue (flange lubrication, friction level, running-direction share, patch model,
-wear law; ``catalogue_for`` the model's own friction, law and options as the nulls) out of
-sample with folds grouped by vehicle. Its ``simulate`` is the model's whole-vehicle run: the
-stored run for the null, one new run per catalogue value to the model's simulated mileage.
-That is several loop runs, so the diagnosis is a job (``physics_diagnosis``); the request
-waits for it like the build (:mod:`wearcast.service.physics_jobs`).
+wear law, traction, rail state, curve classes; ``catalogue_for`` the model's own friction, law
+and options as the nulls) out of sample with folds grouped by vehicle. Its ``simulate`` is
+the model's whole-vehicle run: the stored run for the null, one new run per catalogue value
+to the model's simulated mileage. The rail state runs on the vehicle's rail worn by its own
+traffic on the model's classes (``physics.rail_tonnage``: the catalogue's tonnages from one
+chain of rail steps, computed once per diagnosis); the curve classes re-bin the route's
+stored segments (``route_store.rebinned_classes``), skipped when the route was stored as
+classes. That is several loop runs, so the diagnosis is a job (``physics_diagnosis``); the
+request waits for it like the build (:mod:`wearcast.service.physics_jobs`).
 
 Measured: the model's calibration measurements, plus those the request's ``filter`` selects
 (as the hybrid diagnosis adds its calibration set), averaged per vehicle and mileage.
@@ -30,8 +34,15 @@ from wearcast.service.db import SessionFactory, transaction
 from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
-from wearcast.statistics.physics_diagnosis import catalogue_for, diagnose_physics
+from wearcast.service.route_store import rebinned_classes
+from wearcast.statistics.physics_diagnosis import (
+    CURVE_CLASSES_PARAMETER,
+    NO_SEGMENTS,
+    catalogue_for,
+    diagnose_physics,
+)
 from wearcast.statistics.physics_model import VehicleSeries, calibrate_scale
+from wearcast.statistics.routes import DEFAULT_N_CLASS
 
 KIND = "physics_diagnosis"
 
@@ -57,14 +68,29 @@ def _adhesion_torque_nm(state: dict[str, Any]) -> float | None:
     return 2.0 * b.friction * b.wheel_load_n * b.wheel_radius_m
 
 
-def catalogue(state: dict[str, Any]) -> tuple[Any, ...]:
-    """The catalogue with the model's own values as the nulls."""
+def catalogue(state: dict[str, Any], segments: list[Any] | None = None) -> tuple[Any, ...]:
+    """The catalogue with the model's own values as the nulls; with the route's ``segments``
+    also the curve-classes cause around the model's own number of classes."""
     opts = state["options"]
+    sim_spec = state.get("simulation_spec") or {}
     nulls = {"law": state["law"], "forward_share": opts.get("forward_share", 0.5),
              "flange_wear_factor": opts.get("flange_wear_factor", 1.0),
              "patch_width": opts.get("patch_width", "hertz"),
-             "traction_torque_nm": opts.get("traction_torque_nm") or 0.0}
-    return catalogue_for(_friction(state), nulls, _adhesion_torque_nm(state))
+             "traction_torque_nm": opts.get("traction_torque_nm") or 0.0,
+             "rail_tonnage_mt": sim_spec.get("rail_tonnage_mt") or 0.0}
+    n_class = (int(sim_spec.get("curve_classes") or DEFAULT_N_CLASS) if segments else None)
+    return catalogue_for(_friction(state), nulls, _adhesion_torque_nm(state), n_class)
+
+
+def _segments(session: Session, model: Any) -> list[Any] | None:
+    """The segments of the model's route (None when it was stored as classes)."""
+    route = session.get(db.Route, model.route_id)
+    return None if route is None or not route.segments else list(route.segments)
+
+
+def _skipped(segments: list[Any] | None) -> dict[str, str]:
+    """Causes the model cannot be extended by, with the reason."""
+    return {} if segments else {"curve_classes": NO_SEGMENTS}
 
 
 def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> int:
@@ -74,7 +100,8 @@ def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> in
         if getattr(body, field) is not None:
             raise Unprocessable(field, "a physics model's diagnosis simulates the progression "
                                 "itself; this field is for hybrid models")
-    names = [c.name for c in catalogue(model.state)]
+    segments = _segments(session, model)
+    names = [c.name for c in catalogue(model.state, segments)] + list(_skipped(segments))
     if body.causes is not None:
         for i, code in enumerate(body.causes):
             if code not in names:
@@ -119,9 +146,10 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
     with factory() as session:
         model = store.load(session, int(spec["model_id"]))
         model_spec = session.scalar(select(db.Model.spec).where(db.Model.id == model.id)) or {}
+        segments = _segments(session, model)
     state = model.state
     request = DiagnoseIn.model_validate(spec["request"])
-    cat = catalogue(state)
+    cat = catalogue(state, segments)
     if request.causes is not None:
         cat = tuple(c for c in cat if c.name in request.causes)
     n_runs = sum(len(c.values) - 1 for c in cat) + (1 if request.save_as else 0)
@@ -129,6 +157,19 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
     simulated_km = float(state["simulation"]["mileage_km"])
     route = {"classes": state["resolved_classes"], "km": simulated_km}
     contacts: dict = {}  # first contact updates shared by the runs (same new profile)
+    # the worn rails of the rail-state cause, computed once (one chain of rail steps) on the
+    # model's own classes
+    own_tonnage = state["simulation_spec"].get("rail_tonnage_mt") or 0.0
+    tonnages = sorted({*(v for c in cat if c.parameter == "rail_tonnage_mt" for v in c.values
+                         if v), *([own_tonnage] if own_tonnage else [])})
+    rails: dict[float, Any] = {}
+
+    def classes_for(params: dict[str, Any]) -> list[dict[str, Any]]:
+        n_class = params.pop(CURVE_CLASSES_PARAMETER, None)
+        if n_class is None:
+            return route["classes"]
+        assert segments is not None  # the cause is in the catalogue only with segments
+        return rebinned_classes(segments, int(n_class))
 
     def simulate(params: Any) -> Any:
         params = dict(params)
@@ -140,25 +181,32 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
             control.progress(min(0.95, (done[0] + km / simulated_km) / max(n_runs, 1)),
                              f"run {done[0] + 1}/{n_runs} ({label}): {km:,.0f} km")
 
-        sim = store.run_loop(state["vehicle"], route["classes"], state["law"],
+        if params.get("rail_tonnage_mt", own_tonnage) and not rails and tonnages:
+            control.progress(min(0.95, done[0] / max(n_runs, 1)),
+                             f"rails worn to {', '.join(f'{t:g}' for t in tonnages)} Mt")
+            rails.update(store.worn_rails(state["vehicle"], route["classes"], state["law"],
+                                          state["simulation_spec"], tonnages))
+        classes = classes_for(params)
+        sim = store.run_loop(state["vehicle"], classes, state["law"],
                              state["simulation_spec"], simulated_km, params, progress,
-                             contact_cache=contacts)
+                             contact_cache=contacts, rails=rails)
         done[0] += 1
         return sim
 
     measured = pd.DataFrame(spec["measured"])
-    diagnosis = diagnose_physics(simulate, measured, catalogue=cat, seed=request.seed)
+    diagnosis = diagnose_physics(simulate, measured, catalogue=cat, seed=request.seed,
+                                 skipped=_skipped(segments))
     saved, reason = None, None
     if request.save_as is not None:
         saved, reason = _save(factory, model, model_spec, diagnosis, request.save_as,
-                              spec, route["classes"], simulate)
+                              spec, route["classes"], simulate, segments)
     out = _out(model.id, diagnosis, saved, reason, factory)
     return out.model_dump(mode="json") | {"null_fit": diagnosis.null_fit}
 
 
 def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagnosis: Any,
           name: str, spec: dict[str, Any], classes: list[dict[str, Any]],
-          simulate: Any) -> tuple[int | None, str | None]:
+          simulate: Any, segments: list[Any] | None = None) -> tuple[int | None, str | None]:
     """Store the model extended by the verdict's cause (a new physics model)."""
     if diagnosis.verdict == "none":
         return None, "the verdict is 'none': no extension improves the model materially"
@@ -176,8 +224,13 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
     law = state["law"]
     if parameter == "law":
         law = value
+    elif parameter == CURVE_CLASSES_PARAMETER and value is None:
+        pass  # the model's own classes fitted best (the null level)
     else:
         sim_spec[parameter] = value
+    if parameter == CURVE_CLASSES_PARAMETER and value is not None:
+        assert segments is not None
+        classes = rebinned_classes(segments, int(value))  # the extended model's classes
     new_spec = {**model_spec, "law": law, "simulation": sim_spec, "vehicle": state["vehicle"],
                 "route_db_id": model.route_id, "measured": spec["measured"],
                 "measurement_ids": spec["measurement_ids"]}

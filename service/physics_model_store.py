@@ -108,11 +108,17 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
 
     route = _route_row(session, body)
     classes = resolve_classes(session, SimpleNamespace(route_id=route.id))
+    sim = body.simulation.model_dump()
+    if sim.get("curve_classes") is not None:
+        if not route.segments:
+            raise Unprocessable("simulation.curve_classes", f"route {route.name!r} is stored "
+                                "as curve classes, not segments: it cannot be re-binned")
+        classes = route_store.rebinned_classes(route.segments, sim["curve_classes"],
+                                               "simulation.curve_classes")
     try:
         as_loop_classes(classes)
     except ValueError as exc:
         raise Unprocessable("route_id", f"route {route.name!r}: {exc}") from exc
-    sim = body.simulation.model_dump()
     try:
         VehicleWearOptions(**options_of(sim))
         vehicle_bogies(body.vehicle, sim.get("friction"))
@@ -133,14 +139,34 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
 
 # --- running ----------------------------------------------------------------------------------
 
+def worn_rails(vehicle: str, classes: list[dict[str, Any]], law: str,
+               simulation: dict[str, Any], tonnages_mt: Any) -> dict[float, Any]:
+    """The vehicle's rail worn by its own passages on the route's classes to each tonnage
+    [Mt] (``physics.rail_tonnage``: one chain of rail steps for all of them), with the
+    model's friction and wear application: {tonnage: rail}."""
+    from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
+    from wearcast.physics.vehicles import vehicle_preset
+    from wearcast.physics.wear_loop import as_loop_classes
+
+    veh = vehicle_preset(vehicle)
+    if simulation.get("friction") is not None:
+        veh = veh.with_(friction=float(simulation["friction"]))
+    return rails_worn_to_tonnages(veh, as_loop_classes(classes), list(tonnages_mt), law=law,
+                                  application=simulation.get("application") or "global").rails
+
+
 def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: dict[str, Any],
              mileage_km: float, params: dict[str, Any] | None = None,
              progress: Any = None, continue_from: Any = None,
-             contact_cache: dict | None = None) -> Any:
-    """One whole-vehicle run with a model's options, ``params`` (VehicleWearOptions fields or
-    ``law``) replacing them; ``continue_from`` an earlier run to go on from (not with
-    ``step_convergence``, which runs anew); ``contact_cache`` shared by the runs of one
-    diagnosis (``simulate_vehicle_wear``: first contact updates solved once)."""
+             contact_cache: dict | None = None, rails: dict[float, Any] | None = None) -> Any:
+    """One whole-vehicle run with a model's options, ``params`` (VehicleWearOptions fields,
+    ``law`` or ``rail_tonnage_mt``) replacing them; ``continue_from`` an earlier run to go on
+    from (not with ``step_convergence``, which runs anew); ``contact_cache`` shared by the runs
+    of one diagnosis (``simulate_vehicle_wear``: first contact updates solved once).
+
+    ``rail_tonnage_mt`` (of ``params`` or the model's ``simulation``) > 0: the run is on the
+    rail worn to it (:func:`worn_rails` on ``classes``), looked up in / added to ``rails``
+    (the worn rails of one diagnosis, so each is computed once)."""
     from wearcast.physics.vehicle_wear_simulation import (
         VehicleWearOptions,
         simulate_vehicle_wear,
@@ -151,7 +177,13 @@ def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: 
     options = options_of(simulation)
     params = dict(params or {})
     law = params.pop("law", law)
+    tonnage = float(params.pop("rail_tonnage_mt", simulation.get("rail_tonnage_mt")) or 0.0)
     options.update(params)
+    if tonnage > 0:
+        rails = {} if rails is None else rails
+        if tonnage not in rails:
+            rails.update(worn_rails(vehicle, classes, law, simulation, [tonnage]))
+        options["rail"] = rails[tonnage]
     kwargs = {"law": law, "mileage_km": float(mileage_km),
               "options": VehicleWearOptions(**options),
               "max_steps": int(simulation.get("max_steps", 200)), "progress": progress,
@@ -193,13 +225,14 @@ def build(spec: dict[str, Any], control: JobControl | None = None
     runs: list[dict[str, Any]] = []
     warnings: list[str] = []
     sim: Any = None
+    rails: dict[float, Any] = {}  # a worn rail (simulation.rail_tonnage_mt) computed once
     for attempt in range(MAX_RUNS):
         def progress(km: float, attempt: int = attempt, total: float = mileage) -> None:
             if control is not None:
                 control.progress(min(0.95, (attempt + km / total) / MAX_RUNS),
                                  f"run {attempt + 1}: {km:,.0f} of {total:,.0f} km")
         sim = run_loop(spec["vehicle"], spec["resolved_classes"], spec["law"], sim_spec,
-                       mileage, progress=progress, continue_from=sim)
+                       mileage, progress=progress, continue_from=sim, rails=rails)
         series = VehicleSeries.from_simulation(sim)
         calibration = calibrate_scale(series, measured)
         runs.append({"mileage_km": mileage, "steps": int(series.mileage_km.size - 1),

@@ -22,6 +22,10 @@ from wearcast.service.simulation_schemas import WearLawName
 
 #: Largest simulated mileage of a physics model's run [km].
 MAX_SIMULATED_KM = 1_000_000.0
+#: Largest rail tonnage a physics model's run takes (rail steps are bounded) [Mt].
+MAX_RAIL_TONNAGE_MT = 30.0
+#: Most curve classes a route's segments are binned into for a physics model [-].
+MAX_CURVE_CLASSES = 20
 
 
 class PhysicsCalibrationIn(Strict):
@@ -61,6 +65,13 @@ class PhysicsSimulationIn(Strict):
     traction_torque_nm: float | None = Field(default=None, ge=-50_000, le=50_000, description=(
         "driving (+) or braking (-) torque on every axle of the motor bogies [N m], held over "
         "the whole route (the line's mean tractive effort); default: the preset's (none)"))
+    rail_tonnage_mt: float | None = Field(default=None, ge=0, le=MAX_RAIL_TONNAGE_MT,
+                                          description=(
+        "run on the rail worn by the vehicle's own passages on the route to this tonnage "
+        "[Mt] (the rail-step model of seed 003 §6.1, physics.rail_tonnage); default: new"))
+    curve_classes: int | None = Field(default=None, ge=1, le=MAX_CURVE_CLASSES, description=(
+        "bin the route's segments into this many radius and cant classes instead of the "
+        "stored route's (7); the route must have been stored with its segments"))
 
 
 class PhysicsModelIn(Strict):

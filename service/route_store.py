@@ -37,6 +37,25 @@ def build_route(spec: RouteSpec, name: str, field: str = "") -> stat_routes.Rout
         raise from_value_error(exc, field.rstrip(".")) from exc
 
 
+def loop_classes(classes: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Stored classes as the wear loop's jobs take them (a tangent's direction ``left``,
+    unused)."""
+    return [{k: c.get(k) for k in ("radius_m", "cant_mm", "speed_kmh", "direction", "share")}
+            | {"direction": c.get("direction") or "left"} for c in classes]
+
+
+def rebinned_classes(segments: list[dict[str, Any]], n_class: int,
+                     field: str = "curve_classes") -> list[dict[str, Any]]:
+    """A stored route's segments binned into ``n_class`` classes as :func:`create_route` bins
+    them (``route_from_segments``' defaults otherwise), in the loop's form
+    (:func:`loop_classes`)."""
+    try:
+        route = stat_routes.route_from_segments(segments, n_class=int(n_class))
+    except ValueError as exc:
+        raise Unprocessable(field, str(exc)) from exc
+    return loop_classes([c.to_dict() for c in route.classes])
+
+
 def create_route(session: Session, body: RouteIn) -> db.Route:
     """Store a route; 409 when its name is taken."""
     route = build_route(body, body.name)

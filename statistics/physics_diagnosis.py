@@ -65,10 +65,13 @@ class PhysicsCause:
     parameter: str
     values: tuple[Any, ...]
     null: Any
+    discrete: bool = False
 
     @property
     def categorical(self) -> bool:
-        return any(isinstance(v, str) for v in self.values)
+        """Each value run on its own, no blends between them: string values, or numbers
+        flagged ``discrete`` (a number of curve classes has nothing between two counts)."""
+        return self.discrete or any(isinstance(v, str) for v in self.values)
 
 
 #: The catalogue (issue 12): each cause one physical parameter of the loop besides the scale.
@@ -87,15 +90,44 @@ CATALOGUE: tuple[PhysicsCause, ...] = (
     PhysicsCause("traction_on_motor_axles", "the motor axles carry a traction torque the model "
                  "leaves out (the line's mean tractive effort): torque per motor axle [N m]",
                  "traction_torque_nm", (0.0, 2000.0, 4000.0), 0.0),
+    PhysicsCause("rail_state", "the rail is not new: the rail under the wheels worn by the "
+                 "line's own traffic to a tonnage [Mt] (the rail-step model of seed 003 §6.1, "
+                 "physics.rail_tonnage)", "rail_tonnage_mt", (0.0, 5.0, 10.0), 0.0),
 )
+#: Tonnages of the rail-state cause besides the new rail [Mt] (the defaults above; about 1.5
+#: and 3 rail steps of 0.8 mm on seed 003's line, 1.4 and 2.8 on the metro test route).
+RAIL_TONNAGES_MT = (5.0, 10.0)
+#: Parameter of the curve-classes cause: the number of radius (and cant) classes the route's
+#: segments are binned into (``statistics.routes.route_from_segments``'s ``n_class``).
+CURVE_CLASSES_PARAMETER = "curve_classes"
+#: Why the curve-classes cause is skipped when the route has no segments.
+NO_SEGMENTS = ("the route is stored as curve classes, not segments: a class table cannot be "
+               "re-binned (store the route with its segments to try this cause)")
 #: Traction torques of the catalogue as shares of a motor axle's adhesion torque
 #: 2 mu Q r (:func:`catalogue_for`); the default values above are about these shares of the
 #: Minuetto motor axle's (mu 0.28, Q 57.1 kN, r 0.43 m: 13.7 kN m).
 TRACTION_ADHESION_SHARES = (0.0, 0.15, 0.3)
 
 
+def curve_classes_cause(n_class: int) -> PhysicsCause:
+    """The track-description cause of a route binned from its segments into ``n_class``
+    classes (seed 003 §5.3): the same segments binned coarser and finer, n_class -/+
+    max(1, n_class // 2) (7 -> 4 and 10; at least 1), each level run on its own (discrete);
+    the null (None) is the model's own classes."""
+    if n_class < 1:
+        raise ValueError(f"n_class: must be >= 1, got {n_class}")
+    step = max(1, n_class // 2)
+    values = tuple(dict.fromkeys(v for v in (n_class - step, n_class + step)
+                                 if v >= 1 and v != n_class))
+    return PhysicsCause("curve_classes", f"the track description: the route's segments binned "
+                        f"into another number of curve classes than the model's {n_class} "
+                        "(seed 003 §5.3: radius and cant classes)", CURVE_CLASSES_PARAMETER,
+                        (None, *values), None, discrete=True)
+
+
 def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
-                  adhesion_torque_nm: float | None = None) -> tuple[PhysicsCause, ...]:
+                  adhesion_torque_nm: float | None = None,
+                  n_class: int | None = None) -> tuple[PhysicsCause, ...]:
     """:data:`CATALOGUE` with the friction level around a vehicle's own coefficient mu (its
     null): 0.7 mu, mu, 1.4 mu (the default catalogue is the Minuetto's, mu = 0.28), and, given
     the motor axle's adhesion torque 2 mu Q r [N m], the traction torques at
@@ -103,7 +135,11 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
 
     ``nulls`` : {parameter: the model's own value} for a model that is not the catalogue's
     default (e.g. ``{"law": "archard_kth", "forward_share": 1.0}``): that value becomes the
-    cause's null and is added to the values it is run at."""
+    cause's null and is added to the values it is run at.
+
+    ``n_class`` : the model's route was binned from its segments into this many classes: the
+    catalogue gains :func:`curve_classes_cause` (without it the cause is skipped,
+    :data:`NO_SEGMENTS`)."""
     out = []
     for c in CATALOGUE:
         if c.parameter == "friction":
@@ -122,17 +158,9 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
                 values = tuple(sorted({float(v) for v in c.values} | {float(null)}))
             c = PhysicsCause(c.name, c.summary, c.parameter, values, null)
         out.append(c)
+    if n_class is not None:
+        out.append(curve_classes_cause(n_class))
     return tuple(out)
-
-
-#: Causes of issue 12 this module cannot build yet, with the reason (reported in ``skipped``).
-NOT_BUILT = {
-    "rail_state": "a worn or measured rail can enter the contact (VehicleWearOptions.rail, "
-                  "rail_feedback.simulate_rail_steps), but the catalogue has no rail state to "
-                  "run it at: no measured rail of the line, and a worn rail per diagnosis "
-                  "needs a rail-step simulation of its own",
-    "curve_classes": "needs the route's segments; a class table cannot be re-binned",
-}
 
 
 @dataclass(frozen=True)
@@ -297,7 +325,8 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
                      catalogue: Sequence[PhysicsCause] = CATALOGUE,
                      alpha: float = DEFAULT_ALPHA,
                      min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
-                     n_bootstrap: int = 2000, seed: int = 0) -> PhysicsDiagnosis:
+                     n_bootstrap: int = 2000, seed: int = 0,
+                     skipped: Mapping[str, str] | None = None) -> PhysicsDiagnosis:
     """Diagnose the physics model against measured vehicle-averaged series.
 
     simulate : {parameter: value} -> simulation (``mileage_km``, ``mean(q)`` for the
@@ -307,6 +336,9 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         is not required: a scale that needs more is simply not reachable)
     measured : columns ``vehicle``, ``distance_km`` and any of ``FT_mm``, ``FH_mm``,
         ``QR_mm`` (each scored where measured)
+    skipped : {cause: reason} of causes left out of ``catalogue`` because the model lacks
+        what they need (reported as such); default: the curve-classes cause, when the
+        catalogue has none, with :data:`NO_SEGMENTS`
     """
     cols, data = _measured_points(measured)
     km = data["distance_km"].to_numpy(float)
@@ -316,7 +348,10 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     if groups.size < 2:
         raise ValueError("the physics diagnosis needs measurements of at least 2 vehicles")
     group_by = "vehicle" if groups.size >= 5 else "point"
-    skipped = dict(NOT_BUILT)
+    if skipped is None:
+        has = any(c.parameter == CURVE_CLASSES_PARAMETER for c in catalogue)
+        skipped = {} if has else {"curve_classes": NO_SEGMENTS}
+    skipped = dict(skipped)
     runs: dict[Any, dict[Any, _Series]] = {}
     null_runs = {None: _Series(simulate({}), cols)}
 

@@ -33,6 +33,9 @@ SPEED_RULES = ("mean", "a_nc")
 SEED_003_A_NC_M_S2 = 0.8
 #: Lateral base of the cant angle [mm] (rail-centre spacing, as ``physics.curving``).
 CANT_BASE_MM = 1500.0
+#: Number of radius (and cant) classes a route's segments are binned into by default (seed 003
+#: Table 3: n_class = 7).
+DEFAULT_N_CLASS = 7
 
 
 def speed_from_unbalanced_acceleration_kmh(radius_m: Any, cant_mm: Any,
@@ -314,7 +317,7 @@ def route_from_segments(
     segments: pd.DataFrame | Sequence[Mapping[str, Any]],
     *,
     name: str = "route",
-    n_class: int = 7,
+    n_class: int = DEFAULT_N_CLASS,
     tangent_min_radius_m: float | None = None,
     speed_rule: str = "mean",
     unbalanced_acceleration_m_s2: float = SEED_003_A_NC_M_S2,

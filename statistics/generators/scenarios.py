@@ -130,28 +130,76 @@ def cached_vehicle_simulator(route: Sequence[CurveClass], vehicle: str = "metro_
                              law: str = "usfd", mileage_km: float = 3000.0,
                              depth_per_step_mm: float = 1.0,
                              on_run: Callable[[Mapping[str, Any], float], None] | None = None,
+                             segments: Sequence[Mapping[str, Any]] | None = None,
+                             rail_tonnages_mt: Sequence[float] = (),
                              ) -> Callable[[Mapping[str, Any]], VehicleWearSimulation]:
     """``simulate(parameters)`` for the physics diagnosis: one whole-vehicle loop run per
     parameter set (``VehicleWearOptions`` fields), cached; ``on_run`` is told of each new run
     and its wall time [s].
+
+    Two parameters are not options of the run: ``curve_classes`` (n) runs on ``segments``
+    binned into n classes (``statistics.routes.route_from_segments``) instead of ``route``;
+    ``rail_tonnage_mt`` (T) runs on the vehicle's rail worn by its own passages on ``route``
+    to T Mt (``physics.rail_tonnage.rails_worn_to_tonnages``, computed once for T and every
+    tonnage of ``rail_tonnages_mt``: one chain of rail steps).
     """
     cache: dict[tuple[tuple[str, Any], ...], VehicleWearSimulation] = {}
     contacts: dict = {}  # first contact updates shared by the runs
+    rails: dict[float, Any] = {}
+
+    def worn_rail(tonnage_mt: float) -> Any:
+        if tonnage_mt not in rails:
+            from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
+
+            rails.update(rails_worn_to_tonnages(
+                vehicle, list(route), (*rail_tonnages_mt, tonnage_mt), law=law).rails)
+        return rails[tonnage_mt]
 
     def simulate(params: Mapping[str, Any]) -> VehicleWearSimulation:
         key = tuple(sorted(params.items()))
         if key not in cache:
             start = time.perf_counter()
-            cache[key] = simulate_vehicle_wear(vehicle, route, law=law,
+            options = dict(params)
+            classes: Sequence[CurveClass] = route
+            n_class = options.pop("curve_classes", None)
+            if n_class is not None:
+                from wearcast.statistics.routes import route_from_segments
+
+                if segments is None:
+                    raise ValueError("curve_classes: needs the route's segments")
+                classes = [c.curve_class() for c in
+                           route_from_segments(segments, n_class=int(n_class)).classes]
+            tonnage = options.pop("rail_tonnage_mt", None)
+            if tonnage:
+                options["rail"] = worn_rail(float(tonnage))
+            cache[key] = simulate_vehicle_wear(vehicle, classes, law=law,
                                                mileage_km=mileage_km,
                                                depth_per_step_mm=depth_per_step_mm,
-                                               options=VehicleWearOptions(**params),
+                                               options=VehicleWearOptions(**options),
                                                contact_cache=contacts)
             if on_run is not None:
                 on_run(params, time.perf_counter() - start)
         return cache[key]
 
     return simulate
+
+
+def curvy_segments(seed: int = 0, n_curves: int = 40) -> list[dict[str, Any]]:
+    """Segments of a synthetic line for the curve-classes cause: ``n_curves`` curves of
+    150-800 m radius (uniform in curvature), 100-400 m long, alternately right and left, cant
+    100 mm, 50 km/h, and tangent track 1.5x their length at 80 km/h. The loop's wear rate
+    steps near 400 m (flange contact), so how the curves are binned moves the flange/tread
+    split (``statistics.routes.route_from_segments``)."""
+    rng = np.random.default_rng(seed)
+    segments: list[dict[str, Any]] = []
+    for i in range(n_curves):
+        radius_m = float(1.0 / rng.uniform(1.0 / 800.0, 1.0 / 150.0))
+        segments.append({"length_m": float(rng.uniform(100.0, 400.0)), "radius_m": radius_m,
+                         "direction": "left" if i % 2 else "right", "cant_mm": 100.0,
+                         "speed_kmh": 50.0})
+    total = sum(s["length_m"] for s in segments)
+    return [*segments, {"length_m": 1.5 * total, "radius_m": None, "direction": None,
+                        "cant_mm": 0.0, "speed_kmh": 80.0}]
 
 
 def measured_vehicle_series(truth: VehicleWearSimulation, *, n_vehicles: int = 5,

@@ -170,7 +170,9 @@ def test_a_physics_model_is_diagnosed_with_the_physics_contract(built) -> None:
     (finding,) = d["findings"]
     assert finding["cause"] == "patch_model"
     assert {"relative", "ci95_low", "ci95_high"} <= set(finding["gain"])
-    assert "rail_state" in d["skipped"] and "traction_on_motor_axles" not in d["skipped"]
+    # the route was stored as classes: the curve classes cannot be re-binned, said why
+    assert set(d["skipped"]) == {"curve_classes"} and "segments" in d["skipped"][
+        "curve_classes"]
     assert d["n_groups"] == 4
     assert d["null_fit"]["wear_scale"] == pytest.approx(SCALE, rel=0.02)
     r = client.post(f"/v1/models/{model['id']}/diagnose", json={"causes": ["traction"]})
@@ -231,10 +233,12 @@ def test_a_physics_build_answers_202_with_its_job_when_asked_not_to_wait(tmp_pat
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("hidden", "expected"), [({}, "none"),
-                                                  ({"friction": 0.56}, "friction_level")])
+@pytest.mark.parametrize(("hidden", "expected"), [
+    ({}, "none"), ({"friction": 0.56}, "friction_level"),
+    ({"rail_tonnage_mt": 10.0}, "rail_state")])
 def test_the_whole_catalogue_names_a_hidden_cause_or_none(tmp_path, hidden, expected) -> None:
-    # about 10 loop runs of ~5 s each: the whole catalogue on loop data
+    # about 12 loop runs of ~5 s each and one chain of rail steps: the whole catalogue (seven
+    # causes: the route has no segments, so not the curve classes) on loop data
     client = _client(tmp_path)
     _load(client, hidden, vehicles=5)
     r = client.post("/v1/models", json=MODEL)
@@ -245,18 +249,26 @@ def test_the_whole_catalogue_names_a_hidden_cause_or_none(tmp_path, hidden, expe
     assert d["verdict"] == expected, d
     from wearcast.statistics.physics_diagnosis import CATALOGUE
 
-    assert len(d["findings"]) == len(CATALOGUE) and d["group_by"] == "vehicle"
+    assert len(d["findings"]) == len(CATALOGUE) == 7 and d["group_by"] == "vehicle"
+    assert set(d["skipped"]) == {"curve_classes"}
     if expected == "none":
         assert d["saved_model"] is None and d["candidates"] == []
         return
     # named over every other cause that gains anything, by a tested margin
     assert d["runner_up"] != expected and d["margin"] > 0 and d["candidates"] == []
     f = next(f for f in d["findings"] if f["cause"] == expected)
-    assert f["extension"]["value"] == pytest.approx(0.56, abs=0.06)
+    (parameter, value), = hidden.items()
+    assert f["extension"]["parameter"] == parameter
+    assert f["extension"]["value"] == pytest.approx(value, rel=0.15)
     assert f["gain"]["ci95_low"] > 0
     saved = d["saved_model"]
     assert saved["kind"] == "physics" and saved["extension"]["cause"] == expected
-    assert saved["physics"]["options"]["friction"] == pytest.approx(0.56, abs=0.06)
+    if parameter == "friction":
+        assert saved["physics"]["options"]["friction"] == pytest.approx(0.56, abs=0.06)
+    else:  # the extended model runs on the rail worn to the fitted tonnage
+        spec = client.get(f"/v1/models/{saved['id']}").json()["physics"]["simulation"]
+        assert saved["extension"]["value"] == pytest.approx(10.0, rel=0.15)
+        assert spec["mileage_km"] == pytest.approx(RUN_KM)
     r = client.post(f"/v1/models/{saved['id']}/predict", json={
         "bogie_type": "trailer", "axle": 2, "side": "left", "mileage_km": [500]})
     assert r.status_code == 200, r.text
@@ -278,3 +290,42 @@ def test_a_scale_beyond_the_first_run_continues_the_run(tmp_path) -> None:
     runs = physics["simulation"]["runs"]
     assert len(runs) >= 2 and runs[0]["at_reach"] and runs[1]["continued"]
     assert not physics["at_reach"] and physics["wear_scale"] == pytest.approx(3.0, rel=0.03)
+
+
+SEGMENTS = [{"length_m": 150.0, "radius_m": 250.0, "direction": "left", "cant_mm": 100.0,
+             "speed_kmh": 60.0},
+            {"length_m": 150.0, "radius_m": 250.0, "direction": "right", "cant_mm": 100.0,
+             "speed_kmh": 60.0},
+            {"length_m": 700.0, "radius_m": None, "cant_mm": 0.0, "speed_kmh": 100.0}]
+
+
+def test_a_route_with_segments_is_diagnosed_by_its_curve_classes(built) -> None:
+    # the same track as "curvy", stored as segments: the model on it can be re-binned (one
+    # radius: every binning gives the same classes, so the cause gains nothing here)
+    client, _, _ = built
+    r = client.post("/v1/routes", json={"name": "curvy-segments", "segments": SEGMENTS})
+    assert r.status_code == 201, r.text
+    body = {**MODEL, "name": "on segments", "route_id": "curvy-segments",
+            "calibration": {"filter": {"route_id": "curvy"}}}
+    r = client.post("/v1/models", json=body)
+    assert r.status_code == 201, r.text
+    model = r.json()
+    r = client.post(f"/v1/models/{model['id']}/diagnose", json={"causes": ["curve_classes"]})
+    assert r.status_code == 200, r.text
+    d = r.json()
+    assert d["skipped"] == {} and d["verdict"] == "none"
+    (finding,) = d["findings"]
+    assert finding["cause"] == "curve_classes"
+    assert finding["evidence"]["values_run"] == [None, 4, 10]
+    assert finding["gain"]["relative"] == pytest.approx(0.0, abs=1e-9)
+    # a model binned at its own number of classes, and the refusals
+    r = client.post("/v1/models", json={**body, "name": "binned 3", "simulation": {
+        **MODEL["simulation"], "curve_classes": 3}})
+    assert r.status_code == 201, r.text
+    assert _bad(client, simulation={"curve_classes": 3}) == "simulation.curve_classes"
+    assert _bad(client, simulation={"rail_tonnage_mt": -1.0}) == "simulation.rail_tonnage_mt"
+    # on a classes-only route the cause may be asked for: it is skipped, saying why
+    r = client.post(f"/v1/models/{built[1]['id']}/diagnose",
+                    json={"causes": ["curve_classes"]})
+    assert r.status_code == 200, r.text
+    assert r.json()["findings"] == [] and "segments" in r.json()["skipped"]["curve_classes"]
