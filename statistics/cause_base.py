@@ -90,6 +90,8 @@ class FinderData:
         s = 1.4826 * np.median(np.abs(r - np.median(r, axis=0)), axis=0)
         c = k * np.maximum(s, 1e-9)
         self.cache["weights"] = np.minimum(1.0, c[None, :] / np.maximum(np.abs(r), 1e-12))
+        for key in ("re_shrink", "re_loading"):   # the GLS transform depends on the weights
+            self.cache.pop(key, None)
 
     def season(self) -> Array | None:
         """``season_features`` of the data, computed once."""
@@ -103,10 +105,13 @@ class FinderData:
 # --- linear algebra of the working residual -----------------------------------------------
 
 def solve(data: FinderData, target: Array, features: Array, rows: Mask,
-          weights: Array | None = None) -> tuple[Array, Array]:
+          weights: Array | None = None, re_columns: Mask | None = None
+          ) -> tuple[Array, Array]:
     """Least squares of ``target`` (n, 2) on phi (b_r + x theta) over ``rows``.
 
-    features : (n, 2, k). Returns (b (2,), theta (k,)).
+    features : (n, 2, k). Returns (b (2,), theta (k,)). ``re_columns`` (k,): parameters
+    taken from the random-effects GLS fit, the others and b refitted by least squares given
+    them (``finder_random_effects.two_stage``; default weights only).
     """
     n, _, k = features.shape
     ph = data.phi
@@ -115,14 +120,23 @@ def solve(data: FinderData, target: Array, features: Array, rows: Mask,
     design[:, 1, 1] = 1.0
     design[:, :, 2:] = features
     design = design * ph[:, :, None]
-    x = design[rows].reshape(-1, 2 + k)
-    y = target[rows].reshape(-1)
+    use_re = re_columns is not None and bool(np.any(re_columns)) and weights is None
     weights = data.weights if weights is None else weights
-    if weights is not None:
-        w = np.sqrt(weights[rows].reshape(-1))
-        x, y = x * w[:, None], y * w
+    w_all = np.sqrt(weights)
+    x_all = (design * w_all[:, :, None]).reshape(-1, 2 + k)
+    y_all = (target * w_all).reshape(-1)
+    flat_rows = np.repeat(rows, 2)
+    x, y = x_all[flat_rows], y_all[flat_rows]
     keep = np.any(x != 0, axis=1)
-    coef = _least_squares(x[keep], y[keep])
+    if use_re:
+        from wearcast.statistics import finder_random_effects as fre
+
+        xq = fre.quasi_demean(data, x_all)[flat_rows]
+        yq = fre.quasi_demean(data, y_all)[flat_rows]
+        mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
+        coef = fre.two_stage(x[keep], y[keep], xq[keep], yq[keep], mask)
+    else:
+        coef = _least_squares(x[keep], y[keep])
     return coef[:2], coef[2:]
 
 
@@ -139,10 +153,14 @@ def _least_squares(x: Array, y: Array) -> Array:
 
 
 def cluster_covariance(data: FinderData, residual: Array, features: Array,
-                       cluster: NDArray[Any]) -> Array:
+                       cluster: NDArray[Any], re_columns: Mask | None = None) -> Array:
     """Cluster-robust (vehicle) covariance of (b, theta) of ``solve`` (CR1, Liang-Zeger).
 
     residual : (n, 2) working residual after the fit; features : (n, 2, k).
+    ``re_columns`` (k,): the parameters ``solve`` took from the random-effects GLS fit; the
+    coefficients are then L y with L the two-stage estimator's linear map
+    (``finder_random_effects.two_stage_map``), and the sandwich sums L's columns times the
+    residual over each cluster.
     """
     n, _, k = features.shape
     design = np.zeros((n, 2, 2 + k))
@@ -155,12 +173,21 @@ def cluster_covariance(data: FinderData, residual: Array, features: Array,
     u = residual.reshape(-1) * sw
     codes = np.repeat(pd.factorize(pd.Series(cluster).astype(str))[0], 2)
     g = int(codes.max()) + 1
+    p = 2 + k
+    corr = g / max(g - 1, 1) * (x.shape[0] - 1) / max(x.shape[0] - p, 1)
+    if re_columns is not None:
+        from wearcast.statistics import finder_random_effects as fre
+
+        mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
+        lmap = fre.two_stage_map(x, fre.quasi_demean(data, x), mask,
+                                 lambda v: fre.quasi_demean(data, v))
+        scores = np.zeros((g, p))
+        np.add.at(scores, codes, lmap.T * u[:, None])
+        return np.asarray(corr * scores.T @ scores)
     bread = np.linalg.pinv(x.T @ x)
     scores = np.zeros((g, 2 + k))
     np.add.at(scores, codes, x * u[:, None])
     meat = scores.T @ scores
-    p = 2 + k
-    corr = g / max(g - 1, 1) * (x.shape[0] - 1) / max(x.shape[0] - p, 1)
     return np.asarray(corr * bread @ meat @ bread)
 
 
@@ -181,6 +208,9 @@ class Cause:
     covariate_name: ClassVar[str] = ""
     linear: ClassVar[bool] = True           # g linear in theta (closed-form fit)
     gauss_newton_steps: ClassVar[int] = 3
+    # theta from the random-effects GLS fit (``finder_random_effects``): a cause whose
+    # contrast lies within the wheels (the season), not between them
+    random_effects: ClassVar[bool] = False
 
     theta_: Array
     log_scale_: Array
@@ -211,6 +241,10 @@ class Cause:
 
     def clip(self, theta: Array) -> Array:
         return theta
+
+    def re_columns(self) -> Mask:
+        """(k,) parameters fitted by random-effects GLS (``random_effects``)."""
+        return np.full(len(self.param_names()), bool(self.random_effects))
 
     def public(self) -> dict[str, Any]:
         """JSON-able fitted parameters (what the saved extension carries)."""
@@ -249,10 +283,11 @@ class Cause:
         theta = est.start()
         steps = 1 if est.linear else est.gauss_newton_steps
         b = np.zeros(2)
+        re = est.re_columns()
         for _ in range(steps):
             x = est.features(data, theta)
             g = est.log_factor(data, theta) if not est.linear else 0.0
-            b, delta = solve(data, target - data.phi * g, x, rows)
+            b, delta = solve(data, target - data.phi * g, x, rows, re_columns=re)
             theta = est.clip(theta + delta if not est.linear else delta)
         if not est.linear:  # final scale at the clipped theta
             b, _ = solve(data, target - data.phi * est.log_factor(data, theta),
@@ -263,7 +298,8 @@ class Cause:
             res = (target - data.phi * (b[None, :] + est.log_factor(data, theta)))
             res = np.where(rows[:, None], res, 0.0)
             xr = np.where(rows[:, None, None], x, 0.0)
-            est.cov_ = cluster_covariance(data, res, xr, cluster)
+            est.cov_ = cluster_covariance(data, res, xr, cluster,
+                                          re_columns=re if re.any() else None)
             est.n_groups_ = int(pd.Series(np.asarray(cluster)[rows]).nunique())
         return est
 
@@ -331,6 +367,10 @@ class Composite(Cause):
         for m in self.members:
             m.prepare(data, rows)
         self.sizes = [len(m.param_names()) for m in self.members]
+
+    def re_columns(self) -> Mask:
+        parts = [m.re_columns() for m in self.members]
+        return np.concatenate(parts) if parts else np.zeros(0, dtype=bool)
 
     def _split(self, theta: Array) -> list[Array]:
         return np.split(np.asarray(theta, dtype=float), np.cumsum(self.sizes)[:-1]) \

@@ -80,6 +80,9 @@ class SeasonalFriction(Cause):
     code = "seasonal_friction"
     needs = ("measured_on",)
     covariate_name = "measured_on"
+    # the season's contrast lies within the wheels (every wheel of a unit shares the
+    # calendar): amplitude and phase by random-effects GLS (``finder_random_effects``)
+    random_effects = True
     explanation = ("Rail-wheel friction, and with it the wear rate, follows the season (leaves, "
                    "moisture, temperature): rate x (1 + a cos wt + b sin wt), integrated over "
                    "the calendar days of every interval between measurements, "

@@ -9,7 +9,11 @@ scores it out of sample and names a cause only when it is specific:
    vehicles), never by row: each extension and the baseline (the model with its per-region
    scale refitted) are fitted on K-1 folds and their squared working residuals computed on
    the held-out fold; the relative gain is 1 - after / before, with a 95 % interval from a
-   bootstrap over the groups;
+   bootstrap over the groups. Causes whose contrast lies within the wheels (the calendar
+   season) take their parameters from a random-effects GLS fit (a random log-scale per wheel
+   and region, ``finder_random_effects``), so the wheels' own scatter neither drowns nor
+   fakes them; the region scales are refitted by least squares, and the resampled datasets
+   are fitted by the same estimator;
 3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
    per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
    (wild cluster bootstrap: every effect and residual kept at its rows with a random sign,
@@ -72,6 +76,7 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_instrument as fi
+from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.discrepancy_findings import (
@@ -339,12 +344,16 @@ def diagnose(
                     nuisance["log_rate_sd_by_region"][r][lvl] = float(sds[j])
             base_residual = residual
         base_x = full.features(data, full.theta_)
+        base_re = np.concatenate([[False, False], full.re_columns()])
         alt = []
+        alt_re = []
         for c in remaining:
             prepared = cz.Composite((c,))
             prepared.prepare(data, everything)
             alt.append(fs.area_design(data, np.concatenate(
                 [base_x, prepared.features(data, prepared.start())], axis=2)))
+            alt_re.append(np.concatenate([base_re, prepared.re_columns()]))
+        re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re)
         observed = np.array([_relative(before, rows[c.code]) for c in remaining])
         # the nuisance is taken from the residuals of the baseline plus the leading
         # candidate (its effect must not be resampled as nuisance), widened for the
@@ -356,7 +365,7 @@ def diagnose(
         nm_lead = fs.NuisanceModel.fit(sw * lead_res, sw * data.phi, vehicle, wheel)
         draws = nm_lead.draws(n_null, rng, used_dof=len(lead_fit.theta_) - len(full.theta_))
         boot = fs.bootstrap_gains(fs.area_design(data, base_x), alt, draws,
-                                  np.repeat(folds, 2))
+                                  np.repeat(folds, 2), re_fit)
         codes = [c.code for c in remaining]
         if step == 0 and shape_row is not None:
             observed = np.append(observed, shape_row[0])
@@ -382,7 +391,9 @@ def diagnose(
 
             step_ctx = fs.MarginTest(data, rows, before, best.code, dict(
                 zip([c.code for c in remaining], alt, strict=True)),
-                fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng)
+                fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng,
+                re_fit.transform, dict(zip([c.code for c in remaining], alt_re, strict=True)),
+                base_re)
             p_m = step_ctx.p_value(runner.code)
             m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
                                                                              1e-300))

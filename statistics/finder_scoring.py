@@ -203,29 +203,65 @@ def area_design(data: cz.FinderData, features: Array) -> Array:
 
 
 def _fold_sse(design: Array, ys: Sequence[Array], yty: Sequence[Array],
-              slices: Sequence[slice]) -> Array:
+              slices: Sequence[slice], re: tuple[Array, Sequence[Array], Array] | None = None
+              ) -> Array:
     """(B,) held-out sum of squares of the least-squares fit of y on ``design`` over folds.
 
     Rows are sorted by fold (``slices``); ``ys``/``yty`` are each fold's y block (N_k, B)
     and its column sums of squares. Normal equations from per-fold cross-products: the
     training fit of fold k uses the totals minus fold k's own.
+
+    ``re`` = (design_q, ys_q, columns): the ``columns`` of the fit come from the
+    random-effects GLS fit (transformed design and y blocks, sorted as ``design``/``ys``),
+    the other columns by least squares given them
+    (``finder_random_effects.two_stage``), scored on the untransformed rows.
     """
     xs = [design[sl] for sl in slices]
     # small products by einsum (single-threaded: no BLAS thread oversubscription)
     xtx = [np.einsum("np,nq->pq", x, x) for x in xs]
     xty = [np.einsum("np,nb->pb", x, y) for x, y in zip(xs, ys, strict=True)]
     xtx_all, xty_all = sum(xtx), sum(xty)
+    if re is not None:
+        xqs = [re[0][sl] for sl in slices]
+        xtx_q = [np.einsum("np,nq->pq", x, x) for x in xqs]
+        xty_q = [np.einsum("np,nb->pb", x, y) for x, y in zip(xqs, re[1], strict=True)]
+        xtx_q_all, xty_q_all = sum(xtx_q), sum(xty_q)
+        cols = np.asarray(re[2], dtype=bool)
+        rest = ~cols
     sse = np.zeros(ys[0].shape[1])
     for k in range(len(slices)):
-        beta = np.linalg.pinv(xtx_all - xtx[k]) @ (xty_all - xty[k])
+        a, c = xtx_all - xtx[k], xty_all - xty[k]
+        if re is None:
+            beta = np.linalg.pinv(a) @ c
+        else:
+            theta = (np.linalg.pinv(xtx_q_all - xtx_q[k]) @ (xty_q_all - xty_q[k]))[cols]
+            beta = np.zeros((a.shape[0], c.shape[1]))
+            beta[cols] = theta
+            beta[rest] = np.linalg.pinv(a[np.ix_(rest, rest)]) @ (
+                c[rest] - a[np.ix_(rest, cols)] @ theta)
         sse += yty[k] - 2.0 * np.sum(beta * xty[k], axis=0) \
             + np.sum(beta * (xtx[k] @ beta), axis=0)
     return np.asarray(sse)
 
 
+@dataclass(frozen=True)
+class RandomEffectsFit:
+    """Which design columns are fitted by random-effects GLS, and the transform Q
+    (``finder_random_effects.quasi_demean``) on (2n, k) arrays of the finder's space."""
+
+    transform: Any                         # Callable[[Array], Array]
+    null_columns: Array | None             # (p0,) bool of the null design, or None
+    alt_columns: Sequence[Array | None]    # per alternative design
+
+
 def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Array,
-                    folds_flat: NDArray[np.int64]) -> Array:
-    """(n_alt, B) held-out relative gains 1 - SSE_alt / SSE_null on resampled datasets."""
+                    folds_flat: NDArray[np.int64], re: RandomEffectsFit | None = None
+                    ) -> Array:
+    """(n_alt, B) held-out relative gains 1 - SSE_alt / SSE_null on resampled datasets.
+
+    ``re``: designs with columns fitted by random-effects GLS (the same estimator as
+    ``cause_base.solve`` applies to the data); the draws are transformed once.
+    """
     order = np.argsort(folds_flat, kind="stable")
     f_sorted = folds_flat[order]
     bounds = np.flatnonzero(np.diff(f_sorted)) + 1
@@ -235,17 +271,34 @@ def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Arr
     y = draws[order]
     ys = [y[sl] for sl in slices]
     yty = [np.sum(b * b, axis=0) for b in ys]
-    before = _fold_sse(null_design[order], ys, yty, slices)
+    ys_q: list[Array] = []
+    uses_re = re is not None and any(
+        c is not None and bool(np.any(c)) for c in [re.null_columns, *re.alt_columns])
+    if uses_re:
+        assert re is not None
+        y_q = re.transform(draws)[order]
+        ys_q = [y_q[sl] for sl in slices]
+
+    def spec(design: Array, columns: Array | None
+             ) -> tuple[Array, Sequence[Array], Array] | None:
+        if re is None or columns is None or not np.any(columns):
+            return None
+        return re.transform(design)[order], ys_q, np.asarray(columns, dtype=bool)
+
+    before = _fold_sse(null_design[order], ys, yty, slices,
+                       spec(null_design, None if re is None else re.null_columns))
     out = np.empty((len(alt_designs), draws.shape[1]))
     for i, d in enumerate(alt_designs):
-        out[i] = 1.0 - _fold_sse(d[order], ys, yty, slices) / np.maximum(before, 1e-300)
+        cols = None if re is None else re.alt_columns[i]
+        out[i] = 1.0 - _fold_sse(d[order], ys, yty, slices, spec(d, cols)) \
+            / np.maximum(before, 1e-300)
     return out
 
 
 def margin_p(y: Array, weight: Array, null_design: Array, best_design: Array,
              runner_design: Array, observed: float, vehicle: NDArray[Any],
              wheel: NDArray[Any], folds_flat: NDArray[np.int64], n_draws: int,
-             rng: np.random.Generator) -> float:
+             rng: np.random.Generator, re: RandomEffectsFit | None = None) -> float:
     """p-value of the best cause's margin over the runner-up under H0 "the runner-up is the
     cause" (a parametric bootstrap, Cox's test of non-nested models by simulation).
 
@@ -255,6 +308,7 @@ def margin_p(y: Array, weight: Array, null_design: Array, best_design: Array,
         of the step's baseline and of the baseline plus each cause
     observed : the margin on the data, (SSE_runner - SSE_best) / SSE_baseline held out, the
         runner-up's gain floored at ``RUNNER_GAIN_FLOOR`` (as on every resampled dataset)
+    re : random-effects columns of (null, [best, runner]) (``bootstrap_gains``)
 
     The runner-up's design is fitted to y (its effect on top of the baseline). The nuisance
     model (vehicle and wheel effects, per-measurement residuals) comes from the residuals of
@@ -289,7 +343,7 @@ def margin_p(y: Array, weight: Array, null_design: Array, best_design: Array,
     if NUISANCE_OF_MARGIN == "encompassing" and used > 0:
         dof = level_dof(null_design, both[:, k0:], vehicle, wheel)
     draws = signal[:, None] + nm.draws(n_draws, rng, used_dof=dof)
-    gains = bootstrap_gains(null_design, [best_design, runner_design], draws, folds_flat)
+    gains = bootstrap_gains(null_design, [best_design, runner_design], draws, folds_flat, re)
     margins = margin_statistic(gains[0], gains[1])
     return float((1.0 + np.sum(margins >= observed)) / (n_draws + 1.0))
 
@@ -351,6 +405,10 @@ class MarginTest:
     folds: NDArray[np.int64]
     n_null: int
     rng: np.random.Generator
+    # random-effects columns per cause's design and of the baseline's (``bootstrap_gains``)
+    re_transform: Any = None
+    re_columns: dict[str, Array] | None = None
+    re_base: Array | None = None
 
     def p_value(self, other: str) -> float:
         """p of "``other`` explains the data as well as the best cause"."""
@@ -371,7 +429,7 @@ class MarginTest:
         boot = margin_p((sw * self.data.e).reshape(-1), sw * self.data.phi,
                         self.base_design, self.designs[self.best], self.designs[other],
                         observed, self.vehicle, self.wheel, np.repeat(self.folds, 2),
-                        self.n_null, self.rng)
+                        self.n_null, self.rng, self._re(other))
         if MARGIN_TEST == "bootstrap":
             return boot
         # Bonferroni over the two tests of the same hypothesis: the bootstrap is powerful when
@@ -380,6 +438,13 @@ class MarginTest:
         # with few vehicles (vehicle_load on nine cars); the sign-flip has the opposite
         # strengths. min(1, 2 min p) keeps the level.
         return float(min(1.0, 2.0 * min(boot, flip)))
+
+
+    def _re(self, other: str) -> RandomEffectsFit | None:
+        if self.re_transform is None or self.re_columns is None:
+            return None
+        return RandomEffectsFit(self.re_transform, self.re_base,
+                                [self.re_columns[self.best], self.re_columns[other]])
 
 
 def separated(p_margin: float, alpha: float) -> bool:
