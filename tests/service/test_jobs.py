@@ -126,7 +126,8 @@ def test_a_server_killed_during_a_job_resumes_it_after_restart(tmp_path: Path) -
         server.wait(timeout=30)
         server, client = _serve(port, env)
         body = client.get(f"/v1/jobs/{job}").json()
-        assert body["status"] in ("queued", "running") and body["attempts"] >= 1
+        # recovered at the start: queued again, already running, or (the loop is fast) done
+        assert body["status"] in ("queued", "running", "done") and body["attempts"] >= 1
         body = _wait(client, job, timeout_s=600)
         assert body["status"] == "done", body
         assert body["attempts"] == 2  # interrupted once, run again from the start
