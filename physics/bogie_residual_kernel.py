@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.contact.fastsim_kernel import fastsim_totals_one
 from wearcast.physics.contact.kalker_kernel import saturated_creep_one
+from wearcast.physics.contact.min_gap_kernel import interp_on_interval
 from wearcast.physics.contact_candidates_kernel import slot_workspace, slots_one
 
 #: Patch slots per wheel (``ContactTable.candidates``' default).
@@ -63,13 +64,7 @@ def interp_like_numpy(x: float, xp: NDArray[np.float64], fp: NDArray[np.float64]
     j = lo
     if xp[j] == x:
         return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    res = slope * (x - xp[j]) + fp[j]
-    if math.isnan(res):
-        res = slope * (x - xp[j + 1]) + fp[j + 1]
-        if math.isnan(res) and fp[j] == fp[j + 1]:
-            res = fp[j]
-    return res
+    return interp_on_interval(x, xp, fp, j)
 
 
 @njit(cache=True)

@@ -38,8 +38,11 @@ def _locate(x: float, xp: NDArray[np.float64], j: int) -> int:
 
 
 @njit(cache=True, inline="always")
-def _interp(x: float, xp: NDArray[np.float64], fp: NDArray[np.float64], j: int) -> float:
-    """np.interp's formula on the interval j."""
+def interp_on_interval(x: float, xp: NDArray[np.float64], fp: NDArray[np.float64],
+                       j: int) -> float:
+    """np.interp's formula on the interval j (xp[j] <= x <= xp[j + 1]): the slope form from
+    the left point, from the right one where that gives NaN, the common value of a flat
+    interval where both do (so results equal numpy's bit for bit)."""
     slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
     value = slope * (x - xp[j]) + fp[j]
     if math.isnan(value):
@@ -85,7 +88,7 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
                 j = _locate(y, rail_y, j)
                 g = z - (dz_dy[j] * (y - rail_y[j]) + rail_z[j])
                 if math.isnan(g):
-                    g = z - _interp(y, rail_y, rail_z, j)
+                    g = z - interp_on_interval(y, rail_y, rail_z, j)
             if not math.isfinite(g):
                 g = np.inf
             gap[p] = g
@@ -112,7 +115,7 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
         elif math.isnan(y_min):
             slope = np.nan
         else:
-            slope = _interp(y_min, rail_y, rail_slope, _locate(y_min, rail_y, 0))
+            slope = interp_on_interval(y_min, rail_y, rail_slope, _locate(y_min, rail_y, 0))
         yw = y_ws[idx]
         zw = z_ws[idx]
         dz = yw * c - zw * s
