@@ -34,6 +34,7 @@ from wearcast.service.db import SessionFactory, transaction
 from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
 from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
+from wearcast.service.physics_schemas import MAX_STEPS_PER_RUN
 from wearcast.service.route_store import rebinned_classes
 from wearcast.statistics.physics_diagnosis import (
     CURVE_CLASSES_PARAMETER,
@@ -187,9 +188,11 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
             rails.update(store.worn_rails(state["vehicle"], route["classes"], state["law"],
                                           state["simulation_spec"], tonnages))
         classes = classes_for(params)
-        sim = store.run_loop(state["vehicle"], classes, state["law"],
-                             state["simulation_spec"], simulated_km, params, progress,
-                             contact_cache=contacts, rails=rails)
+        # a catalogue value that wears more slowly needs more steps to the model's mileage than
+        # the model's own run took: every catalogue run may take up to the request bound
+        spec_run = {**state["simulation_spec"], "max_steps": MAX_STEPS_PER_RUN}
+        sim = store.run_loop(state["vehicle"], classes, state["law"], spec_run, simulated_km,
+                             params, progress, contact_cache=contacts, rails=rails)
         done[0] += 1
         return sim
 

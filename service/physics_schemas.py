@@ -22,6 +22,9 @@ from wearcast.service.simulation_schemas import WearLawName
 
 #: Largest simulated mileage of a physics model's run [km].
 MAX_SIMULATED_KM = 1_000_000.0
+#: The most steps one loop run may take (a request's ``simulation.max_steps`` is at most this;
+#: the physics diagnosis allows it to every catalogue run).
+MAX_STEPS_PER_RUN = 400
 #: Largest rail tonnage a physics model's run takes (rail steps are bounded) [Mt].
 MAX_RAIL_TONNAGE_MT = 30.0
 #: Most curve classes a route's segments are binned into for a physics model [-].
@@ -50,7 +53,8 @@ class PhysicsSimulationIn(Strict):
     max_mileage_km: float = Field(default=MAX_SIMULATED_KM, gt=0, le=MAX_SIMULATED_KM,
                                   description=(
         "the automatic mileage never exceeds this [km]"))
-    max_steps: int = Field(default=200, ge=1, le=400, description="most steps of one run")
+    max_steps: int = Field(default=200, ge=1, le=MAX_STEPS_PER_RUN,
+                           description="most steps of one run")
     step_convergence: bool = Field(default=False, description=(
         "halve D_step (twice at most) until FT and qR at the end change by < 2 % of their "
         "loss (physics.step_convergence); up to three runs"))

@@ -329,3 +329,22 @@ def test_a_route_with_segments_is_diagnosed_by_its_curve_classes(built) -> None:
                     json={"causes": ["curve_classes"]})
     assert r.status_code == 200, r.text
     assert r.json()["findings"] == [] and "segments" in r.json()["skipped"]["curve_classes"]
+
+
+
+def test_catalogue_runs_may_take_more_steps_than_the_models_own_run(built) -> None:
+    """A model whose own run just fits its ``max_steps``: a catalogue value that wears more
+    slowly needs more steps to the same mileage, and is run up to the request bound (400)
+    rather than skipped."""
+    client, model, _ = built
+    steps = model["physics"]["simulation"]["steps"]
+    body = {**MODEL, "name": "tight", "simulation": {**MODEL["simulation"], "max_steps": steps + 1}}
+    r = client.post("/v1/models", json=body)
+    assert r.status_code == 201, r.text
+    tight = r.json()
+    r = client.post(f"/v1/models/{tight['id']}/diagnose", json={"causes": ["friction_level"]})
+    assert r.status_code == 200, r.text
+    d = r.json()
+    assert "friction_level" not in d["skipped"], d["skipped"]
+    (finding,) = d["findings"]
+    assert finding["cause"] == "friction_level"
