@@ -69,7 +69,17 @@ def main() -> None:
         r = client.post(f"/v1/models/{model['id']}/diagnose", json={},
                         headers={"Prefer": "wait=36000"})
         print(f"diagnose: {r.status_code} in {time.perf_counter() - start:.0f} s")
-        print(json.dumps(r.json(), indent=1)[:4000])
+        d = r.json()
+        print(f"verdict {d.get('verdict')}; runner-up {d.get('runner_up')}, margin "
+              f"{d.get('margin')}, p {d.get('margin_p_value')}; skipped: {d.get('skipped')}")
+        print(pd.DataFrame([{
+            "cause": f["cause"], "value": f["extension"].get("value"),
+            "wear_scale": f["extension"].get("wear_scale"),
+            "error_before_mm2": f["gain"]["before_error"],
+            "error_after_mm2": f["gain"]["after_error"], "gain": f["gain"]["relative"],
+            "ci95": f"{f['gain']['ci95_low']:.3f}-{f['gain']['ci95_high']:.3f}",
+            "p_holm": f["evidence"]["p_holm"], "significant": f["significant"]}
+            for f in d.get("findings", [])]).to_string(index=False))
 
 
 if __name__ == "__main__":
