@@ -23,7 +23,6 @@ import argparse
 import os
 import signal
 import socket
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -31,6 +30,8 @@ import threading
 import time
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -190,8 +191,8 @@ def main(argv: list[str] | None = None) -> None:
             by_kind = {k: max((t for t, kind in ok if kind == k), default=float("nan"))
                        for k in ("route", "import")}
             print(f"{label:<5} {r['import_s']:>9.1f} {args.profiles / r['import_s']:>11,.0f} "
-                  f"{statistics.median(idle):>9.3f} {len(r['during']):>7} "
-                  f"{statistics.median(times):>7.3f} {_quantile(times, 0.95):>7.3f} "
+                  f"{float(np.median(idle)):>9.3f} {len(r['during']):>7} "
+                  f"{float(np.median(times)):>7.3f} {_quantile(times, 0.95):>7.3f} "
                   f"{max(times):>7.3f} {by_kind['route']:>10.3f} {by_kind['import']:>11.3f} "
                   f"{len(failed):>7}", flush=True)
             if failed:
