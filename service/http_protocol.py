@@ -11,6 +11,7 @@ body of that answer; ``wearcast serve`` passes them as uvicorn's ``http`` protoc
 from __future__ import annotations
 
 import json
+from typing import Any
 
 from uvicorn.protocols.http.h11_impl import H11Protocol
 from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
@@ -38,20 +39,22 @@ def _reason(msg: str) -> str:
             "character, bad framing) or the header block is too large")
 
 
-class ProblemHttpToolsProtocol(HttpToolsProtocol):
+class _ProblemAnswer:
+    """The 400 answer of both protocols: problem details, then the connection closed."""
+
+    transport: Any
+
+    def send_400_response(self, msg: str) -> None:
+        self.transport.write(unparseable_request_answer(_reason(msg)))
+        self.transport.close()
+
+
+class ProblemHttpToolsProtocol(_ProblemAnswer, HttpToolsProtocol):
     """uvicorn's httptools protocol (the default with ``uvicorn[standard]``)."""
 
-    def send_400_response(self, msg: str) -> None:
-        self.transport.write(unparseable_request_answer(_reason(msg)))
-        self.transport.close()
 
-
-class ProblemH11Protocol(H11Protocol):
+class ProblemH11Protocol(_ProblemAnswer, H11Protocol):
     """uvicorn's pure-Python h11 protocol (where httptools is not installed)."""
-
-    def send_400_response(self, msg: str) -> None:
-        self.transport.write(unparseable_request_answer(_reason(msg)))
-        self.transport.close()
 
 
 def problem_http_protocol() -> type:
