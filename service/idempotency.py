@@ -20,6 +20,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service.errors import ApiError, Conflict, Unprocessable
 from wearcast.service.models_access import IdempotencyKey
+from wearcast.service.utc_time import as_utc, now_utc
 
 FIELD = "Idempotency-Key"
 #: An in-flight claim older than this [s] belongs to a dead request and is taken over.
@@ -50,10 +51,8 @@ def claim(session: Session, key: str, request_sha256: str) -> int | None:
             raise Unprocessable(FIELD, "this key was used for a different request (another "
                                 "file or manifest); use a new key for new content")
         if row.state == "in_flight":
-            created = row.created_at
-            if created is not None and created.tzinfo is None:
-                created = created.replace(tzinfo=dt.UTC)
-            age = (dt.datetime.now(dt.UTC) - created).total_seconds() if created else 0.0
+            created = as_utc(row.created_at)
+            age = (now_utc() - created).total_seconds() if created else 0.0
             if age < STALE_S:
                 error: ApiError = Conflict(FIELD, "the first request with this key is still "
                                            "running; retry when it has finished")

@@ -25,6 +25,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory, transaction
+from wearcast.service.utc_time import as_utc, now_utc
 
 log = logging.getLogger(__name__)
 ACTIVE = ("queued", "running")
@@ -40,16 +41,6 @@ class JobStopped(Exception):  # noqa: N818 (a signal, not an error of the job)
         super().__init__(reason)
         self.status = status
         self.reason = reason
-
-
-def now_utc() -> dt.datetime:
-    return dt.datetime.now(dt.UTC)
-
-
-def _aware(value: dt.datetime | None) -> dt.datetime | None:
-    if value is None:
-        return None
-    return value if value.tzinfo is not None else value.replace(tzinfo=dt.UTC)
 
 
 def finite_json(value: Any) -> Any:
@@ -214,7 +205,7 @@ def recover_stale(factory: SessionFactory, stale_before: dt.datetime,
                                .where(db.Simulation.status == "running")).all()
         requeued = []
         for job_id, attempts, beat, started in rows:
-            last = _aware(beat) or _aware(started)
+            last = as_utc(beat) or as_utc(started)
             if last is not None and last > stale_before:
                 continue
             if (attempts or 0) >= max_attempts:

@@ -38,6 +38,7 @@ from wearcast.service.batch_visibility import (
 from wearcast.service.errors import Conflict
 from wearcast.service.import_result import ImportCounts
 from wearcast.service.reference_store import OWN_BASELINE
+from wearcast.service.utc_time import as_utc, now_utc
 from wearcast.service.wheel_reference import apply_reference
 
 if TYPE_CHECKING:
@@ -67,10 +68,6 @@ def open_batch(session: Session, *, checksum: str, idempotency_key: str | None,
         session.add(db.RawFile(batch_id=batch.id, **raw))
     session.commit()
     return batch.id
-
-
-def now_utc() -> dt.datetime:
-    return dt.datetime.now(dt.UTC)
 
 
 def beat(session: Session, batch_id: int) -> None:
@@ -173,14 +170,8 @@ def incomplete_batch_ids(session: Session, silent_since: dt.datetime | None = No
         return [row[0] for row in rows]
     out = []
     for batch_id, status, heartbeat, created in rows:
-        last = _aware(heartbeat) or _aware(created)
+        last = as_utc(heartbeat) or as_utc(created)
         if status == DISCARDING or last is None or last < silent_since:
             out.append(batch_id)
     return out
 
-
-def _aware(value: dt.datetime | None) -> dt.datetime | None:
-    """SQLite gives timestamps back without their zone (they were stored in UTC)."""
-    if value is not None and value.tzinfo is None:
-        return value.replace(tzinfo=dt.UTC)
-    return value
