@@ -36,7 +36,7 @@ from __future__ import annotations
 import hashlib
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -126,6 +126,10 @@ class Placement:
     method: str
 
 
+#: What a head wear measure is (``WearMeasure.status``).
+WearStatus = Literal["ok", "reference_mismatch", "not_measured"]
+
+
 @dataclass(frozen=True)
 class WearMeasure:
     """One head wear measure [mm] (None when not measurable, see ``status`` and ``note``).
@@ -136,7 +140,7 @@ class WearMeasure:
     """
 
     value_mm: float | None
-    status: str
+    status: WearStatus
     reference_point_mm: tuple[float, float] | None
     definition: str
     note: str = ""

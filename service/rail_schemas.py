@@ -7,50 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
-
-class RailWearMeasureOut(BaseModel):
-    """One head wear measure [mm], positive where metal is lost; ``status`` ``ok``,
-    ``reference_mismatch`` (a number, but not wear: the head does not fit the reference) or
-    ``not_measured``; ``reference_point_mm`` (y, z) on the placed reference, rail frame."""
-
-    value_mm: float | None
-    status: Literal["ok", "reference_mismatch", "not_measured"]
-    reference_point_mm: tuple[float, float] | None
-    definition: str
-    note: str = ""
-
-
-class RailPlacementOut(BaseModel):
-    """Where the reference head was put on the measurement (the measurement never moves):
-    ``lateral_mm``/``vertical_mm`` of its top-of-head centre in the rail frame; ``fitted`` when
-    the lateral position was fitted to the field-side flank (``flank_offset_mm`` before, and
-    ``flank_rms_mm`` about the placed reference, over ``flank_points`` points)."""
-
-    lateral_mm: float
-    vertical_mm: float
-    fitted: bool
-    flank_points: int
-    flank_offset_mm: float | None
-    flank_rms_mm: float | None
-    method: str
-
-
-class RailWearOut(BaseModel):
-    """Head wear of a rail against ``reference`` (``reference_source`` says what it is):
-    vertical (W1), lateral/gauge-face (W2, 14 mm below the top) and 45-degree gauge-corner
-    (W3) wear; ``reference_fits`` False with the reasons in ``mismatch`` when the head does not
-    fit the reference (then no measure is wear)."""
-
-    reference: str
-    reference_source: str
-    placement: RailPlacementOut
-    vertical: RailWearMeasureOut
-    lateral: RailWearMeasureOut
-    corner_45: RailWearMeasureOut
-    reference_fits: bool
-    mismatch: list[str]
-    reference_head_width_mm: float | None
-    measured_head_width_mm: float | None
+from wearcast.physics.rail_head_wear import RailHeadWear
 
 
 class RailFrameOut(BaseModel):
@@ -93,7 +50,7 @@ class RailOut(BaseModel):
     point_notes: list[dict[str, object]]
     header: dict[str, str]
     frame: RailFrameOut
-    wear: RailWearOut
+    wear: RailHeadWear
     warnings: list[str]
     instrument_wear_mm: dict[str, float] = Field(default_factory=dict, description=(
         "W1/W2/W3 as the file's header gives them (the instrument's own, against its own "

@@ -46,7 +46,6 @@ from wearcast.service.rail_schemas import (
     RailImportOut,
     RailOut,
     RailSkippedOut,
-    RailWearOut,
 )
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.miniprof_rail import (
@@ -146,7 +145,7 @@ def rail_out(session: Session, row: db.Rail, reference: str | None = None,
                   measured_on=row.measured_on, instrument_serial=row.instrument_serial,
                   n_points=row.n_points, added_points=list(row.added_points or []),
                   point_notes=list(row.point_notes or []), header=dict(row.header or {}),
-                  frame=frame, wear=RailWearOut.model_validate(wear.to_dict()),
+                  frame=frame, wear=wear,
                   warnings=list(row.warnings or []),
                   instrument_wear_mm=instrument_wear(dict(row.header or {})),
                   raw_path=row.raw_path,
