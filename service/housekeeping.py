@@ -65,18 +65,25 @@ def clean_after_restart(factory: SessionFactory, data_dir: Path) -> dict[str, in
 def sweep_abandoned_imports(factory: SessionFactory, now: dt.datetime | None = None
                             ) -> int:
     """Discard the import batches left pending by a process that died while the service
-    kept running (silent for ``pending_batches.STALE_S``) and those left half-discarded;
+    kept running (silent for ``pending_batches.STALE_S``) and those left half-discarded, and
+    release the Idempotency-Key claims of such requests (``idempotency.release_abandoned``);
     run periodically by every serving process (:class:`wearcast.service.jobs.JobRunner`).
     Returns how many were discarded."""
+    from wearcast.service.idempotency import release_abandoned
     from wearcast.service.pending_batches import STALE_S, discard_batch, incomplete_batch_ids
 
     now = now or dt.datetime.now(dt.UTC)
+    silent_since = now - dt.timedelta(seconds=STALE_S)
     with factory() as session:
-        stale = incomplete_batch_ids(session, now - dt.timedelta(seconds=STALE_S))
+        stale = incomplete_batch_ids(session, silent_since)
         for batch_id in stale:
             removed = discard_batch(session, batch_id)
             log.warning("discarded import batch %s, abandoned by its import (%d "
                         "measurements, never visible)", batch_id, removed)
+        released = release_abandoned(session, silent_since)
+        if released:
+            log.warning("released %d Idempotency-Key claims abandoned by their requests",
+                        released)
     return len(stale)
 
 

@@ -7,17 +7,20 @@ The key is claimed in its own short transaction (an ``idempotency_keys`` row in 
 ``in_flight`` with the hash of the request), so other processes see it at once; it becomes
 ``done`` with the batch id when the import commits, and is released when the import fails (a
 corrected request may reuse it). Claims left ``in_flight`` by a killed process are released
-at the next start (:func:`release_stale`).
+at the next start (:func:`release_stale`) and, while the service keeps running (a killed worker
+of ``serve --workers N``), by its periodic sweep once no pending batch under the key has been
+written for ``pending_batches.STALE_S`` (:func:`release_abandoned`).
 """
 
 from __future__ import annotations
 
 import datetime as dt
 
-from sqlalchemy import delete, update
+from sqlalchemy import delete, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from wearcast.service import models_db as db
 from wearcast.service.errors import ApiError, Conflict, Unprocessable
 from wearcast.service.models_access import IdempotencyKey
 from wearcast.service.utc_time import as_utc, now_utc
@@ -84,3 +87,20 @@ def release_stale(session: Session) -> int:
     done = session.execute(delete(IdempotencyKey).where(IdempotencyKey.state == "in_flight"))
     session.commit()
     return int(done.rowcount or 0)  # type: ignore[attr-defined]
+
+
+def release_abandoned(session: Session, silent_since: dt.datetime) -> int:
+    """Forget the in-flight claims whose request died while the service kept running: claimed
+    before ``silent_since`` and with no batch under the key (the import died before opening
+    it, or its pending batch was discarded). A claim whose batch is still pending is kept: the
+    batch's heartbeat decides, and its sweep discards it first. Returns how many."""
+    stale = select(IdempotencyKey.key).where(IdempotencyKey.state == "in_flight",
+                                             IdempotencyKey.created_at < silent_since)
+    with_batch = select(db.ImportBatch.idempotency_key).where(
+        db.ImportBatch.idempotency_key.is_not(None))
+    keys = list(session.scalars(stale.where(IdempotencyKey.key.not_in(with_batch))))
+    if keys:
+        session.execute(delete(IdempotencyKey).where(IdempotencyKey.key.in_(keys),
+                                                     IdempotencyKey.state == "in_flight"))
+    session.commit()
+    return len(keys)

@@ -273,7 +273,7 @@ def progress(_n):
 
 with database.session_factory() as session, open(sys.argv[3], "rb") as stream:
     importing.import_upload(session, settings.raw_dir, stream, "fleet.csv", chunk_size=8,
-                            progress=progress, settings=settings)
+                            progress=progress, settings=settings, idempotency_key="fleet-key")
 """
 
 
@@ -304,12 +304,16 @@ def test_a_killed_import_leaves_nothing_visible_and_is_removed_by_the_next_start
         factory = database.session_factory
         now = dt.datetime.now(dt.UTC)
         assert sweep_abandoned_imports(factory, now) == 0  # silent for seconds only
+        with pytest.raises(ApiError) as in_flight:  # the dead request still holds its key
+            _import(database, data, idempotency_key="fleet-key")
+        assert in_flight.value.status == 409
         later = now + dt.timedelta(seconds=pending_batches.STALE_S + 1)
         assert sweep_abandoned_imports(factory, later) == 1
     assert _counts(database) == {"visible": 0, "stored": 0, "pending_batches": 0,
                                  "batches": 0, "wheels": 0, "vehicles": 0}
-    # the same upload again is imported whole (not answered as a duplicate of the dead one)
-    result = _import(database, data)
+    # the same upload under the same key is imported whole (not answered as a duplicate of
+    # the dead one, nor refused while the dead request's claim on the key is left)
+    result = _import(database, data, idempotency_key="fleet-key")
     assert not result.duplicate and result.created == n
 
 
