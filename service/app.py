@@ -66,6 +66,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     from fastapi.middleware.cors import CORSMiddleware
 
     from wearcast.service import job_store
+    from wearcast.service.admin_store import clear_caches
     from wearcast.service.auth import KeyCache, bootstrap_admin_key, require_key
     from wearcast.service.housekeeping import clean_after_restart, stop_import_workers
     from wearcast.service.jobs import JobRunner
@@ -76,6 +77,7 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
         RequestGuard,
         check_request_values,
     )
+    from wearcast.service.removal_watch import RemovalWatch
     from wearcast.service.routers import health
 
     settings = settings or Settings()
@@ -104,6 +106,10 @@ def create_app(settings: Settings | None = None, *, migrate: bool = True) -> Fas
     app.router.add_event_handler("startup", runner.start)
     app.router.add_event_handler("shutdown", runner.shutdown)
     app.router.add_event_handler("shutdown", stop_import_workers)
+    removals = RemovalWatch(database.session_factory, clear_caches)
+    app.state.removal_watch = removals
+    app.router.add_event_handler("startup", removals.start)
+    app.router.add_event_handler("shutdown", removals.stop)
     install_handlers(app)
     app.include_router(health.router, prefix="/v1")
     secured = [Depends(require_key), Depends(check_request_values)]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from sqlalchemy import DateTime, Integer, String, event, func
+from sqlalchemy import DateTime, Index, Integer, String, event, func
 from sqlalchemy import inspect as sa_inspect
 from sqlalchemy.orm import Mapped, mapped_column
 from sqlalchemy.orm.attributes import set_committed_value
@@ -43,6 +43,9 @@ class AuditRecord(Base):
     """
 
     __tablename__ = "audit_records"
+    #: The newest removal (``action`` delete or supersede) is looked up by every serving
+    #: process once a second (:mod:`wearcast.service.removal_watch`).
+    __table_args__ = (Index("ix_audit_records_action_id", "action", "id"),)
     id: Mapped[int] = mapped_column(IdInteger, primary_key=True)
     at: Mapped[dt.datetime] = mapped_column(DateTime(timezone=True), server_default=func.now(),
                                             index=True)
