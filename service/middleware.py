@@ -304,7 +304,9 @@ def _entity(path: str) -> tuple[str, str | None]:
 
 
 class AuditTrail:
-    """One audit record per accepted write (status < 400), after the answer is sent."""
+    """One audit record per accepted write (status < 400), stored before the answer leaves:
+    a client that was told its write succeeded can rely on the record (a crash after the
+    write's own commit and before its record loses the answer too, so the client retries)."""
 
     def __init__(self, app: ASGIApp, factory: Any) -> None:
         self.app = app
@@ -317,30 +319,35 @@ class AuditTrail:
                                                     scope.get("path", "")):
             await self.app(scope, receive, send)
             return
-        status = 0
-        is_json = False
-        body = bytearray()
+        held: list[Message] = []
 
         async def send_wrapper(message: Message) -> None:
-            nonlocal status, is_json
-            if message["type"] == "http.response.start":
-                status = message["status"]
-                ctype = dict(message.get("headers", [])).get(b"content-type", b"")
-                is_json = ctype.startswith(b"application/json")
-            elif message["type"] == "http.response.body" and is_json and len(body) < 1 << 16:
-                body.extend(message.get("body", b"")[: (1 << 16) - len(body)])
-            await send(message)
+            held.append(message)
+            if message["type"] == "http.response.body" and not message.get("more_body"):
+                await self._record(scope, held)
+                for m in held:
+                    await send(m)
+                held.clear()
 
         await self.app(scope, receive, send_wrapper)
+        for m in held:  # an answer that never finished its body: pass on what there is
+            await send(m)
+
+    async def _record(self, scope: Scope, messages: list[Message]) -> None:
+        start = messages[0] if messages and messages[0]["type"] == "http.response.start" \
+            else None
+        status = int(start["status"]) if start is not None else 0
         principal = (scope.get("state") or {}).get("principal")
         if principal is None or not 200 <= status < 400:
             return
         if (scope.get("state") or {}).get("audited"):
             return  # the route wrote its own record (e.g. an admin delete with a snapshot)
         entity, entity_id = _entity(scope.get("path", ""))
-        if entity_id is None and body:
+        ctype = dict(start.get("headers", [])).get(b"content-type", b"") if start else b""
+        if entity_id is None and ctype.startswith(b"application/json"):
+            body = b"".join(m.get("body", b"") for m in messages[1:])[: 1 << 16]
             try:
-                answer = json.loads(bytes(body))
+                answer = json.loads(body)
             except ValueError:
                 answer = None
             if isinstance(answer, dict):
