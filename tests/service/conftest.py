@@ -12,9 +12,10 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -74,29 +75,82 @@ class RealServer:
         return self.stderr
 
 
-@pytest.fixture
-def real_server(tmp_path: Path) -> Iterator[RealServer]:
-    """The real HTTP server on a free port with ``tmp_path`` as its data folder, once
-    ``/v1/health`` answers."""
+def start_server(data_dir: Path, **env_vars: str) -> RealServer:
+    """``wearcast serve`` on a free port with ``data_dir`` as its data folder (and the given
+    ``WEARCAST_*`` variables, no others), once ``/v1/health`` answers."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = int(s.getsockname()[1])
     env = {k: v for k, v in os.environ.items() if not k.startswith("WEARCAST_")}
-    env["WEARCAST_DATA_DIR"] = str(tmp_path)
+    env.update(env_vars, WEARCAST_DATA_DIR=str(data_dir))
     process = subprocess.Popen(
         [sys.executable, "-m", "wearcast.service.cli", "serve", "--port", str(port)],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     server = RealServer(f"http://127.0.0.1:{port}/v1", process)
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            if httpx.get(f"{server.base}/health").status_code == 200:
+                return server
+        except httpx.TransportError:
+            pass
+        if process.poll() is not None or time.monotonic() > deadline:
+            server.stop()
+            raise AssertionError("server did not start")
+        time.sleep(0.2)
+
+
+@pytest.fixture
+def real_server(tmp_path: Path) -> Iterator[RealServer]:
+    """The real HTTP server on a free port with ``tmp_path`` as its data folder, once
+    ``/v1/health`` answers."""
+    server = start_server(tmp_path)
     try:
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                if httpx.get(f"{server.base}/health").status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            assert process.poll() is None and time.monotonic() < deadline, "server did not start"
-            time.sleep(0.2)
         yield server
     finally:
+        server.stop()
+
+
+def _calibrated_model(client: Any) -> dict[str, Any]:
+    """Import a small fleet-twin unit, store the metro route and a synthetic curve-radius
+    table, and calibrate a tau_max model on it through ``client``; the table's answer."""
+    from wearcast.statistics.generators import fleet_twin as ft
+    from wearcast.statistics.generators import twin_routes, twin_wear_table
+
+    fleet = ft.generate_fleet(ft.FleetConfig(
+        units=(ft.UnitConfig("P", twin_routes.metro_route(), running_mode="lead"),),
+        mileages_km=(40_000, 90_000, 140_000), mileage_jitter_km=0.0, rate_scatter=0.0,
+        area_scatter=0.0, points_per_profile=120, seed=3))
+    client.post("/v1/measurements/import", files={"file": (
+        "p.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
+    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json()).json()
+    table = client.post("/v1/wear-tables", files={"file": (
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
+    model = client.post("/v1/models", json={
+        "name": "m", "measure": "tau_max", "running_mode": "lead",
+        "wear_table_id": table["id"], "calibration": {"route_id": "metro", "filter": {}}})
+    assert model.status_code == 201, model.text
+    return {"route": route, "table": table, "model": model.json()}
+
+
+@pytest.fixture
+def calibrated_model() -> Callable[[Any], dict[str, Any]]:
+    """``calibrated_model(client)``: a small unit imported, the metro route, a synthetic table
+    and a tau_max model calibrated on them through ``client``."""
+    return _calibrated_model
+
+
+@pytest.fixture
+def serve() -> Iterator[Callable[..., RealServer]]:
+    """``serve(data_dir, **WEARCAST_vars)`` starts a real server; all are stopped after the
+    test."""
+    started: list[RealServer] = []
+
+    def start(data_dir: Path, **env_vars: str) -> RealServer:
+        started.append(start_server(data_dir, **env_vars))
+        return started[-1]
+
+    yield start
+    for server in started:
         server.stop()

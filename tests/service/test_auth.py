@@ -22,7 +22,7 @@ from wearcast.service.app import create_app
 from wearcast.service.models_access import ApiKey
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
-from wearcast.statistics.generators import twin_routes, twin_wear_table
+from wearcast.statistics.generators import twin_routes
 
 ROUTE = {"name": "line", "classes": [
     {"radius_m": None, "speed_kmh": 80, "share": 0.7},
@@ -145,23 +145,12 @@ def test_the_audit_trail_names_who_wrote_what_and_admin_deletes_keep_history(
     assert admin.delete("/v1/admin/things/1").status_code == 422
 
 
-def test_a_table_or_route_a_model_uses_cannot_be_deleted(tmp_path: Path) -> None:
+def test_a_table_or_route_a_model_uses_cannot_be_deleted(tmp_path: Path,
+                                                          calibrated_model: Any) -> None:
     app = _app(f"sqlite:///{tmp_path / 'w.db'}", tmp_path)
     client = TestClient(app)
-    fleet = ft.generate_fleet(ft.FleetConfig(
-        units=(ft.UnitConfig("P", twin_routes.metro_route(), running_mode="lead"),),
-        mileages_km=(40_000, 90_000, 140_000), mileage_jitter_km=0.0, rate_scatter=0.0,
-        area_scatter=0.0, points_per_profile=120, seed=3))
-    client.post("/v1/measurements/import", files={"file": (
-        "p.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
-    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json()).json()
-    table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
-        "text/csv")}).json()
-    model = client.post("/v1/models", json={
-        "name": "m", "measure": "tau_max", "running_mode": "lead",
-        "wear_table_id": table["id"], "calibration": {"route_id": "metro", "filter": {}}})
-    assert model.status_code == 201, model.text
+    made = calibrated_model(client)
+    route, table = made["route"], made["table"]
     for kind, entity_id in (("routes", route["id"]), ("wear-tables", table["id"]),
                             ("measurements", 1), ("batches", 1)):
         r = client.delete(f"/v1/admin/{kind}/{entity_id}")
