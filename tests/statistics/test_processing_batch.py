@@ -120,14 +120,17 @@ def test_batch_equals_per_profile_against_another_reference():
         _assert_same(p, q)
 
 
-def test_batch_cleaning_takes_only_what_it_reproduces_exactly():
+def test_batch_cleaning_equals_clean_profile_exactly():
     rng = np.random.default_rng(3)
     profiles = [_measured(rng) for _ in range(20)] + _irregular(rng)
     batch = clean_profiles_batch(profiles)
     assert all(c is not None for c in batch[:20])  # the regular ones: the batch path
     assert batch[21] is not None and batch[21].notes[0].startswith("z was given downward")
     assert batch[22] is not None and batch[22].notes[0].startswith("y was mirrored")
-    assert batch[23] is None and batch[24] is None and batch[25] is None  # NaN, spike, zig-zag
+    assert batch[23] is None  # a NaN point: clean_profile's own path
+    assert batch[24] is not None and batch[24].notes[0].startswith("removed 1 spikes")
+    assert batch[25] is not None and batch[25].notes[0].startswith("removed 1 points stepping")
+    assert batch[29] is not None and batch[29].notes[0].startswith("merged 400 points")
     for (y, z), c in zip(profiles, batch, strict=True):
         if c is None:
             continue
