@@ -30,7 +30,7 @@ from wearcast.statistics.cleaning_batch import clean_profiles_batch
 from wearcast.statistics.processing import ProcessedProfile
 from wearcast.statistics.profile_parameters import FlangeParameters
 from wearcast.statistics.ragged import pack
-from wearcast.statistics.reference_check import check_reference
+from wearcast.statistics.reference_check import NEGATIVE_WEAR_MM, check_reference
 from wearcast.statistics.wear_curves import (
     DEFAULT_GRID_Y_MM,
     DEFAULT_SPLIT_Y_MM,
@@ -150,6 +150,10 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
     wear = _wear_rows(aligned, grid, reference_height)
     flange, tread = wear_areas_rows(grid, wear, split_y_mm)
     parameters = flange_parameters_of([(a.y_mm, a.z_mm) for a in aligned])
+    # a wear curve nowhere below -NEGATIVE_WEAR_MM has no stretch of material above the
+    # reference: check_reference need not search it (the check's outcome is the same)
+    with np.errstate(invalid="ignore"):
+        may_stretch: NDArray[np.bool_] = np.any(wear < -NEGATIVE_WEAR_MM, axis=1)
     for row, (k, a) in enumerate(zip(kept, aligned, strict=True)):
         c = cleaned[k]
         areas = WearAreas(flange_mm2=float(flange[row]), tread_mm2=float(tread[row]))
@@ -160,9 +164,9 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
             rotation_rad=a.rotation_rad, rms_residual_mm=a.rms_residual_mm,
             n_used=a.n_used, grid_y_mm=grid, wear_mm=w, areas=areas,
             parameters=parameters[row], alignment="free", datum=None,
-            reference_check=check_reference(parameters[row], areas, reference_height,
-                                            float(np.interp(0.0, grid, w)),
-                                            a.rms_residual_mm, grid, w))
+            reference_check=check_reference(
+                parameters[row], areas, reference_height, float(np.interp(0.0, grid, w)),
+                a.rms_residual_mm, *((grid, w) if may_stretch[row] else (None, None))))
     return out
 
 
