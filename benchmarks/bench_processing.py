@@ -3,7 +3,10 @@
 Usage: ``.venv/bin/python benchmarks/bench_processing.py [n_profiles]`` (default 3000).
 Prints profiles per second for synthetic worn, moved, noisy S1002 profiles of 400 points,
 given field side first as a MiniProf would, and the time of each stage (process CPU time,
-so that other load on a shared machine inflates the figures less).
+so that other load on a shared machine inflates the figures less), then the same profiles
+processed together in chunks as the import does it
+(:func:`wearcast.statistics.processing_batch.process_profiles_free`, results equal to
+round-off) and the ratio of the two.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import align_to_reference
 from wearcast.statistics.cleaning import clean_profile
 from wearcast.statistics.processing import process_profile
+from wearcast.statistics.processing_batch import BLOCK, process_profiles_free
 from wearcast.statistics.profile_parameters import flange_parameters
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, wear_areas_mm2, wear_curve_mm
 
@@ -70,6 +74,10 @@ def main(n: int = 3000) -> None:
         print(f"  {name:<20s} {seconds * 1e6:8.1f} us")
     print(f"  {'process_profile':<20s} {total * 1e6:8.1f} us/profile")
     print(f"throughput: {1.0 / total:,.0f} profiles/s")
+    chunks = [profiles[i:i + BLOCK] for i in range(0, n, BLOCK)]
+    batch = _time_per_item(process_profiles_free, chunks) * len(chunks) / n
+    print(f"process_profiles_free (chunks of {BLOCK}): {batch * 1e6:8.1f} us/profile, "
+          f"{1.0 / batch:,.0f} profiles/s, {total / batch:.1f}x the per-profile calls")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 A chunk's profiles are cleaned, placed, aligned to their declared reference and turned into
 wear curves, areas and Sd/Sh/qR (:mod:`wearcast.service.import_worker`, which the spawned
-workers import alone). Chunks of at least :data:`PARALLEL_MIN_PROFILES` new profiles go to a
-pool of one worker per core (``WEARCAST_IMPORT_WORKERS`` overrides; 0 or 1: none), so the
+workers import alone; free-fit profiles are processed together, a block of rows at a
+time). Chunks of at least :data:`PARALLEL_MIN_PROFILES` new profiles go to a pool of one
+worker per core (``WEARCAST_IMPORT_WORKERS`` overrides; 0 or 1: none), so the
 caller can parse and insert meanwhile; smaller ones, and any chunk when the pool cannot run,
 are processed in the calling process with the same results.
 """

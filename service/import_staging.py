@@ -285,10 +285,13 @@ def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
             try:
                 if rows:
                     write_new_wheels(session, registry, {row["wheel_id"] for row in rows})
-                    session.connection().execute(statement, rows)
-                    keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
-                    if _inserted(session, keys, batch_id) < len(rows):
-                        in_flight_conflict(session, keys, batch_id)
+                    result = session.connection().execute(statement, rows)
+                    # the driver's count of inserted rows when it has one (SQLite, psycopg
+                    # sum the executemany's); fewer (a row stored meanwhile) or none: ask
+                    if result.rowcount != len(rows):
+                        keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
+                        if _inserted(session, keys, batch_id) < len(rows):
+                            in_flight_conflict(session, keys, batch_id)
                 beat(session, batch_id)
                 session.commit()
                 last_beat = time.monotonic()

@@ -79,7 +79,6 @@ def process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, ref: RefTuple | None = No
     returns the error as text instead of raising.
     """
     from wearcast.statistics.processing import process_profile
-    from wearcast.statistics.profile_parameters import flange_parameters
 
     ref = ref if ref is not None else S1002_REF
     try:
@@ -87,8 +86,19 @@ def process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, ref: RefTuple | None = No
                             alignment="datum" if datum else "free")
     except ValueError as exc:
         return str(exc)
+    return _processed(p, y_mm, ref, datum)
+
+
+def _processed(p: Any, y_mm: np.ndarray, ref: RefTuple, datum: bool,
+               measured: Any = None) -> Processed:
+    """What the row keeps of a ``ProcessedProfile`` ``p`` of the raw points ``y_mm``
+    (``measured``: Sd/Sh/qR of its cleaned points, when already computed)."""
+    from wearcast.statistics.profile_parameters import flange_parameters
+
     if datum:
         params = p.parameters  # of the profile as placed on its datum (= as measured)
+    elif measured is not None:
+        params = measured
     else:
         # Sd/Sh/qR of the profile as measured (back-face referenced, like the instrument),
         # not of the profile moved by the free fit: its lateral shift would move Sd.
@@ -119,5 +129,31 @@ def process_arrays(y_mm: np.ndarray, z_mm: np.ndarray, ref: RefTuple | None = No
 
 def process_batch(profiles: list[tuple[np.ndarray, np.ndarray, RefTuple | None, bool]]
                   ) -> list[Processed | str]:
-    """:func:`process_arrays` of each (y, z, reference, datum)."""
-    return [process_arrays(y, z, ref, datum) for y, z, ref, datum in profiles]
+    """:func:`process_arrays` of each (y, z, reference, datum).
+
+    Profiles under the free rigid fit are processed together, per reference
+    (:func:`wearcast.statistics.processing_batch.process_profiles_free`: the same results to
+    round-off, numpy's per-call cost paid once per chunk); datum placements one by one.
+    """
+    from wearcast.statistics.processing_batch import flange_parameters_of, process_profiles_free
+
+    out: list[Processed | str | None] = [None] * len(profiles)
+    free: dict[RefTuple, list[int]] = {}
+    for i, (y, z, ref, datum) in enumerate(profiles):
+        if datum:
+            out[i] = process_arrays(y, z, ref, datum)
+        else:
+            free.setdefault(ref if ref is not None else S1002_REF, []).append(i)
+    for ref, indices in free.items():
+        results = process_profiles_free([(profiles[i][0], profiles[i][1]) for i in indices],
+                                        reference_height=reference_height(ref))
+        done = [(i, p) for i, p in zip(indices, results, strict=True)
+                if not isinstance(p, ValueError)]
+        # Sd/Sh/qR of the profiles as measured (see _processed), computed together
+        measured = flange_parameters_of([(p.cleaned.y_mm, p.cleaned.z_mm) for _, p in done])
+        for (i, p), params in zip(done, measured, strict=True):
+            out[i] = _processed(p, profiles[i][0], ref, False, params)
+        for i, r in zip(indices, results, strict=True):
+            if isinstance(r, ValueError):
+                out[i] = str(r)
+    return out  # type: ignore[return-value]

@@ -3,7 +3,9 @@
 ``import_upload`` streams the records of an upload (long CSV, parameter CSV, MiniProf files
 with a manifest, or a zip of these; :mod:`wearcast.service.readers`), processes each profile
 (cleaning, alignment, wear curve, wear areas, recomputed Sd/Sh/qR;
-:func:`wearcast.statistics.processing.process_profile`) and inserts the measurements in chunks
+:func:`wearcast.statistics.processing.process_profile`, for free-fit profiles a chunk at a time
+by :func:`wearcast.statistics.processing_batch.process_profiles_free` with the same results to
+round-off) and inserts the measurements in chunks
 with ``session.execute(insert(...), rows)`` — no ORM object per row, points and wear curves as
 little-endian float32 blobs — so memory stays bounded however large the upload.
 

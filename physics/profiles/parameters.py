@@ -293,3 +293,84 @@ def flange_parameters_batch(
     if grid is not None and finite.any():
         out[finite] = grid.parameters(z if finite.all() else z[finite])
     return FlangeParameterArrays(out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy())
+
+
+def flange_parameters_rows(
+    y_mm: NDArray[np.float64],
+    z_mm: NDArray[np.float64],
+    valid: NDArray[np.bool_],
+    *,
+    tip_region_y_mm: tuple[float, float] = TIP_REGION_Y_MM,
+) -> NDArray[np.float64]:
+    """:func:`flange_parameters` of many profiles of different lengths, vectorised.
+
+    Parameters
+    ----------
+    y_mm, z_mm : (M, L) padded rows [mm]: each profile's points ascending in y in the first
+        columns of its row, finite; the rest padding (any values)
+    valid : (M, L) the profiles' columns (``valid[i, :n_i]`` True, the rest False)
+    tip_region_y_mm : where the flange tip is looked for [mm]
+
+    Returns
+    -------
+    (M, 3) Sd, Sh, qR [mm] with the definitions, the tape-circle height (``np.interp``'s own
+    formula at y = 0) and the quadratic flank crossings of :func:`flange_parameters`, so the
+    numbers are the same; NaN where a point is not in the data.
+    """
+    m, width = y_mm.shape
+    out = np.full((m, 3), np.nan)
+    n = valid.sum(axis=1)
+    if m == 0 or width == 0:
+        return out
+    rows = np.arange(m)
+    last = np.maximum(n - 1, 0)
+    big = np.where(valid, y_mm, np.inf)  # ascending with the padding beyond the data
+    usable = (n >= 3) & (y_mm[:, 0] <= 0.0) & (y_mm[rows, last] >= 0.0)
+    # tape circle: np.interp(0, y, z)
+    j = np.clip((big <= 0.0).sum(axis=1) - 1, 0, width - 1)
+    j1 = np.minimum(j + 1, width - 1)
+    yj, zj, yj1, zj1 = y_mm[rows, j], z_mm[rows, j], y_mm[rows, j1], z_mm[rows, j1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z_tape = np.where((j == last) | (yj == 0.0), zj,
+                          (zj1 - zj) / (yj1 - yj) * (0.0 - yj) + zj)
+    lo = (big < tip_region_y_mm[0]).sum(axis=1)
+    hi = (big < tip_region_y_mm[1]).sum(axis=1)
+    usable &= hi > lo
+    cols = np.arange(width)
+    in_tip = (cols >= lo[:, None]) & (cols < hi[:, None])
+    k = np.argmax(np.where(in_tip, z_mm, -np.inf), axis=1)
+    z_tip = z_mm[rows, k]
+    levels = np.column_stack((z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM))
+    crossing = np.empty((m, 2))
+    after = (cols >= k[:, None]) & valid
+    for c in range(2):
+        below = after & (z_mm < levels[:, c:c + 1])
+        found = below.any(axis=1)
+        kk = np.argmax(below, axis=1)
+        k1 = np.maximum(kk, 1)
+        k2 = np.minimum(k1 + 1, width - 1)
+        y0, y1, y2 = y_mm[rows, k1 - 1], y_mm[rows, k1], y_mm[rows, k2]
+        z0, z1, z2 = z_mm[rows, k1 - 1], z_mm[rows, k1], z_mm[rows, k2]
+        level = levels[:, c]
+        h = y1 - y0
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            t_lin = (level - z0) * h / (z1 - z0)
+            d01 = (z1 - z0) / h
+            a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
+            b = d01 - a * h
+            disc = b * b - 4.0 * a * (z0 - level)
+            root = np.sqrt(np.maximum(disc, 0.0))
+            t1 = (-b - root) / (2.0 * a)
+            t2 = (-b + root) / (2.0 * a)
+        quadratic = ((k1 + 1 < n) & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300))
+                     & (disc >= 0.0))
+        ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
+        ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
+        t = np.where(ok1, t1, np.where(ok2, t2, t_lin))
+        at = np.where(kk == k, y_mm[rows, k], y0 + t)
+        crossing[:, c] = np.where(found, at, np.nan)
+    y_sd, y_qr = crossing[:, 0], crossing[:, 1]
+    out[usable, 0] = (y_sd - BACK_FACE_Y_MM)[usable]
+    out[usable, 1] = (z_tip - z_tape)[usable]
+    out[usable, 2] = (y_sd - y_qr)[usable]
+    return out
