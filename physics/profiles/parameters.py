@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -51,43 +52,46 @@ class FlangeParameters:
     qr_mm: float
 
 
+def _bracket_crossing(y0: Any, y1: Any, y2: Any, z0: Any, z1: Any, z2: Any, level: Any,
+                      has_next: Any) -> NDArray:
+    """Offset t = y - y0 [mm] where z crosses ``level`` between (y0, z0) and (y1, z1),
+    elementwise: on the quadratic through the two bracketing points and the next one (y2, z2)
+    where ``has_next``, the quadratic is not degenerate and has a root in [0, h]; else on the
+    chord. On the steep, curved flank a chord would be off by up to 0.01 mm for 0.5 mm
+    sampling."""
+    h = y1 - y0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t_lin = (level - z0) * h / (z1 - z0)
+        d01 = (z1 - z0) / h
+        a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
+        # z0 + d01 t + a t (t - h) = level
+        b = d01 - a * h
+        disc = b * b - 4.0 * a * (z0 - level)
+        root = np.sqrt(np.maximum(disc, 0.0))
+        t1 = (-b - root) / (2.0 * a)
+        t2 = (-b + root) / (2.0 * a)
+    quadratic = has_next & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
+    ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
+    ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
+    return np.asarray(np.where(ok1, t1, np.where(ok2, t2, t_lin)))
+
+
 def _flank_crossing(y: NDArray, z: NDArray, start: int, level: float,
                     quadratic: bool = True) -> float:
-    """y [mm] where z first drops below ``level`` walking from index ``start`` to +y.
-
-    The crossing is found on the quadratic through the two points that bracket it and the
-    next one (linear if there is none, the quadratic has no root between them, or
-    ``quadratic`` is False): on the steep, curved flank a chord would be off by up to
-    0.01 mm for 0.5 mm sampling.
-    """
+    """y [mm] where z first drops below ``level`` walking from index ``start`` to +y, on the
+    quadratic through the bracketing points and the next one (:func:`_bracket_crossing`;
+    the chord if ``quadratic`` is False)."""
     below = z[start:] < level
     if not below.any():
         return float("nan")
     k = start + int(np.argmax(below))
     if k == start:
         return float(y[k])
-    y0, y1 = float(y[k - 1]), float(y[k])
-    z0, z1 = float(z[k - 1]), float(z[k])
-    h = y1 - y0
-    t_lin = (level - z0) * h / (z1 - z0)
-    if not quadratic or k + 1 >= y.size:
-        return y0 + t_lin
-    y2, z2 = float(y[k + 1]), float(z[k + 1])
-    d01 = (z1 - z0) / h
-    a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
-    # z0 + d01 t + a t (t - h) = level, t = y - y0
-    b = d01 - a * h
-    c = z0 - level
-    if abs(a) * h < 1e-12 * (abs(b) + 1e-300):
-        return y0 + t_lin
-    disc = b * b - 4.0 * a * c
-    if disc < 0.0:
-        return y0 + t_lin
-    root = math.sqrt(disc)
-    for t in ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a)):
-        if 0.0 <= t <= h:
-            return y0 + t
-    return y0 + t_lin
+    k2 = min(k + 1, y.size - 1)
+    t = _bracket_crossing(y[k - 1], y[k], y[k2], z[k - 1], z[k], z[k2], level,
+                          quadratic and k + 1 < y.size)
+    return float(y[k - 1] + t)
+
 
 def flange_parameters(
     y_mm: ArrayLike,
@@ -195,20 +199,7 @@ def _flank_crossings(y: NDArray, z: NDArray, start: NDArray, levels: NDArray) ->
     flat = z.reshape(-1)
     row = (np.arange(z.shape[0]) * g)[:, None]
     z0, z1, z2 = flat[row + (k1 - 1)], flat[row + k1], flat[row + k2]
-    h = y1 - y0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_lin = (levels - z0) * h / (z1 - z0)
-        d01 = (z1 - z0) / h
-        a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
-        b = d01 - a * h
-        disc = b * b - 4.0 * a * (z0 - levels)
-        root = np.sqrt(np.maximum(disc, 0.0))
-        t1 = (-b - root) / (2.0 * a)
-        t2 = (-b + root) / (2.0 * a)
-    quadratic = (k1 + 1 < g) & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
-    ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
-    ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
-    t = np.where(ok1, t1, np.where(ok2, t2, t_lin))
+    t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels, k1 + 1 < g)
     out = np.where(at_start, y[k], y0 + t)
     return np.where(found, out, np.nan)
 
@@ -351,22 +342,7 @@ def flange_parameters_rows(
         k2 = np.minimum(k1 + 1, width - 1)
         y0, y1, y2 = y_mm[rows, k1 - 1], y_mm[rows, k1], y_mm[rows, k2]
         z0, z1, z2 = z_mm[rows, k1 - 1], z_mm[rows, k1], z_mm[rows, k2]
-        level = levels[:, c]
-        h = y1 - y0
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            t_lin = (level - z0) * h / (z1 - z0)
-            d01 = (z1 - z0) / h
-            a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
-            b = d01 - a * h
-            disc = b * b - 4.0 * a * (z0 - level)
-            root = np.sqrt(np.maximum(disc, 0.0))
-            t1 = (-b - root) / (2.0 * a)
-            t2 = (-b + root) / (2.0 * a)
-        quadratic = ((k1 + 1 < n) & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300))
-                     & (disc >= 0.0))
-        ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
-        ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
-        t = np.where(ok1, t1, np.where(ok2, t2, t_lin))
+        t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels[:, c], k1 + 1 < n)
         at = np.where(kk == k, y_mm[rows, k], y0 + t)
         crossing[:, c] = np.where(found, at, np.nan)
     y_sd, y_qr = crossing[:, 0], crossing[:, 1]
