@@ -9,7 +9,9 @@ seen, every ORM ``SELECT`` a :class:`~sqlalchemy.orm.Session` runs that touches
     ``batch_id IS NULL OR batch_id NOT IN``
     ``(SELECT id FROM import_batches WHERE status <> 'complete')``
 
-with SQLAlchemy's :func:`~sqlalchemy.orm.with_loader_criteria` from a ``do_orm_execute``
+(and wheels and vehicles the same on the batch that registered them, ``registered_batch_id``,
+so the new wheels and vehicles of a pending import are invisible too) with SQLAlchemy's
+:func:`~sqlalchemy.orm.with_loader_criteria` from a ``do_orm_execute``
 event on every session (SQLAlchemy's documented pattern for global visibility rules), so a
 read added later is covered without remembering to filter. The set of pending batches is
 tiny (the imports running now), so the criterion costs one small subquery. A batch being
@@ -42,11 +44,20 @@ INCLUDE_PENDING = "include_pending_batches"
 _SESSION_KEY = "wearcast_include_pending_batches"
 
 
+def _not_incomplete(batch_id: Any) -> ColumnElement[bool]:
+    incomplete = select(db.ImportBatch.id).where(db.ImportBatch.status != COMPLETE)
+    return or_(batch_id.is_(None), batch_id.not_in(incomplete))
+
+
 def visible(measurement: Any = db.Measurement) -> ColumnElement[bool]:
     """True for a measurement that is not part of an incomplete (pending or discarding)
     import batch."""
-    incomplete = select(db.ImportBatch.id).where(db.ImportBatch.status != COMPLETE)
-    return or_(measurement.batch_id.is_(None), measurement.batch_id.not_in(incomplete))
+    return _not_incomplete(measurement.batch_id)
+
+
+def registered_visible(entity: Any) -> ColumnElement[bool]:
+    """True for a wheel or vehicle not registered by an incomplete import batch."""
+    return _not_incomplete(entity.registered_batch_id)
 
 
 @contextmanager
@@ -68,4 +79,8 @@ def _hide_pending_batches(state: ORMExecuteState) -> None:
             or state.session.info.get(_SESSION_KEY, False)):
         return
     state.statement = state.statement.options(
-        with_loader_criteria(db.Measurement, lambda cls: visible(cls), include_aliases=True))
+        with_loader_criteria(db.Measurement, lambda cls: visible(cls), include_aliases=True),
+        with_loader_criteria(db.Wheel, lambda cls: registered_visible(cls),
+                             include_aliases=True),
+        with_loader_criteria(db.Vehicle, lambda cls: registered_visible(cls),
+                             include_aliases=True))

@@ -17,18 +17,24 @@ from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
+from wearcast.service.batch_visibility import INCLUDE_PENDING
 from wearcast.service.errors import Unprocessable
 from wearcast.service.readers.bundle import Record
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.records import ProfileRecord
 from wearcast.service.reference_store import ReferenceSpec, is_own_baseline, resolve_reference
 
+_ALL = {INCLUDE_PENDING: True}
+
 
 class ImportRegistry:
     """Per-import caches of wheels, vehicles and route names, checked for consistency."""
 
-    def __init__(self, session: Session, defer_writes: bool = False) -> None:
+    def __init__(self, session: Session, defer_writes: bool = False,
+                 batch_id: int | None = None) -> None:
         self.session = session
+        #: the batch new wheels and vehicles are registered by (hidden while it is pending)
+        self.batch_id = batch_id
         self.wheels: dict[str, tuple[str, str, int, str]] = {}
         self.vehicles: set[str] = set()
         self.routes: dict[str, str] = {}
@@ -68,6 +74,7 @@ class ImportRegistry:
             for row in self.session.execute(
                 select(db.Wheel.wheel_id, db.Wheel.vehicle_id, db.Wheel.bogie_type,
                        db.Wheel.axle, db.Wheel.side).where(db.Wheel.wheel_id.in_(wanted))
+                .execution_options(**_ALL)  # a pending import's new wheels are stored too
             ):
                 self.wheels[row[0]] = (row[1], row[2], row[3], row[4])
                 self.vehicles.add(row[1])
@@ -80,7 +87,8 @@ class ImportRegistry:
                 self.wheels[meta.wheel_id] = position
                 new_wheels[meta.wheel_id] = {
                     "wheel_id": meta.wheel_id, "vehicle_id": meta.vehicle_id,
-                    "bogie_type": meta.bogie_type, "axle": int(meta.axle), "side": meta.side}
+                    "bogie_type": meta.bogie_type, "axle": int(meta.axle), "side": meta.side,
+                    "registered_batch_id": self.batch_id}
                 continue
             for name, have, got in zip(("vehicle_id", "bogie_type", "axle", "side"), known,
                                        position, strict=True):
@@ -97,9 +105,11 @@ class ImportRegistry:
         vehicles = {w["vehicle_id"] for w in new_wheels.values()} - self.vehicles
         if vehicles:
             stored = set(self.session.scalars(
-                select(db.Vehicle.vehicle_id).where(db.Vehicle.vehicle_id.in_(vehicles))))
+                select(db.Vehicle.vehicle_id).where(db.Vehicle.vehicle_id.in_(vehicles))
+                .execution_options(**_ALL)))
             fresh = sorted(vehicles - stored)
             if fresh:
-                self.session.execute(insert(db.Vehicle), [{"vehicle_id": v} for v in fresh])
+                self.session.execute(insert(db.Vehicle), [
+                    {"vehicle_id": v, "registered_batch_id": self.batch_id} for v in fresh])
             self.vehicles |= vehicles
         self.session.execute(insert(db.Wheel), list(new_wheels.values()))

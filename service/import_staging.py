@@ -164,7 +164,8 @@ def write_new_wheels(session: Session, registry: ImportRegistry,
         return
     vehicles = sorted({w["vehicle_id"] for w in new.values()})
     session.execute(insert_ignoring_duplicates(session, db.Vehicle, ["vehicle_id"]),
-                    [{"vehicle_id": v} for v in vehicles])
+                    [{"vehicle_id": v, "registered_batch_id": registry.batch_id}
+                     for v in vehicles])
     session.execute(insert_ignoring_duplicates(session, db.Wheel, ["wheel_id"]),
                     list(new.values()))
     stored = {row[0]: tuple(row[1:]) for row in session.execute(
@@ -265,7 +266,7 @@ def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
     (:func:`in_flight_conflict`). The session must see pending batches
     (:func:`wearcast.service.batch_visibility.seeing_pending`).
     """
-    registry = ImportRegistry(session, defer_writes=True)
+    registry = ImportRegistry(session, defer_writes=True, batch_id=batch_id)
     written = Written(ImportCounts(), registry)
     statement = insert_ignoring_duplicates(session, db.Measurement.__table__,
                                            ["wheel_id", "mileage_km"])

@@ -102,6 +102,10 @@ class Vehicle(Base):
     vehicle_id: Mapped[str] = mapped_column(String(200), primary_key=True)
     fleet_id: Mapped[str | None] = mapped_column(String(200), index=True)
     km_per_day: Mapped[float | None] = mapped_column(Float)
+    #: The import batch that registered it: hidden while that batch is not complete
+    #: (``service/batch_visibility.py``); None once seen by a complete batch. No foreign key:
+    #: the batch may be discarded while another import's measurements keep the row.
+    registered_batch_id: Mapped[int | None] = mapped_column(IdInteger, index=True)
 
 
 class Fleet(Base):
@@ -135,6 +139,8 @@ class Wheel(Base):
     bogie_type: Mapped[str] = mapped_column(String(20))
     axle: Mapped[int] = mapped_column(Integer)
     side: Mapped[str] = mapped_column(String(10))
+    #: As :attr:`Vehicle.registered_batch_id`.
+    registered_batch_id: Mapped[int | None] = mapped_column(IdInteger, index=True)
 
 
 class Measurement(Base):

@@ -98,6 +98,7 @@ def complete_batch(session: Session, batch_id: int, written: Written) -> ImportC
         apply_reference(session, wheel_id, OWN_BASELINE, commit=True)
     for wheel_id in sorted(seen_before):
         apply_reference(session, wheel_id, OWN_BASELINE, commit=False)
+    _adopt_registered(session, batch_id, sorted({key[0] for key in written.keys}))
     flipped = session.execute(update(db.ImportBatch).where(
         db.ImportBatch.id == batch_id, db.ImportBatch.status == PENDING).values(
         status=COMPLETE, n_records=counts.records, n_created=counts.created,
@@ -139,7 +140,8 @@ def discard_batch(session: Session, batch_id: int) -> int:
     for start in range(0, len(wheels), DISCARD_CHUNK):
         chunk = wheels[start:start + DISCARD_CHUNK]
         vehicles = sorted(set(session.scalars(select(w.vehicle_id)
-                                              .where(w.wheel_id.in_(chunk)))))
+                                              .where(w.wheel_id.in_(chunk))
+                                              .execution_options(**_ALL))))
         # a wheel only this batch measured, then a vehicle left without wheels and without
         # planning attributes (fleet, mileage per day)
         session.execute(delete(w).where(w.wheel_id.in_(chunk),
@@ -155,6 +157,22 @@ def discard_batch(session: Session, batch_id: int) -> int:
                                                  db.ImportBatch.status == DISCARDING))
     session.commit()
     return removed
+
+
+def _adopt_registered(session: Session, batch_id: int, wheel_ids: list[str]) -> None:
+    """Wheels (and their vehicles) this batch measured that another import still pending
+    registered become visible with this batch: their ``registered_batch_id`` is cleared."""
+    w, v = db.Wheel, db.Vehicle
+    for start in range(0, len(wheel_ids), DISCARD_CHUNK):
+        chunk = wheel_ids[start:start + DISCARD_CHUNK]
+        session.execute(update(v).where(
+            v.vehicle_id.in_(select(w.vehicle_id).where(w.wheel_id.in_(chunk))),
+            v.registered_batch_id.is_not(None), v.registered_batch_id != batch_id).values(
+            registered_batch_id=None), execution_options={"synchronize_session": False})
+        session.execute(update(w).where(
+            w.wheel_id.in_(chunk), w.registered_batch_id.is_not(None),
+            w.registered_batch_id != batch_id).values(registered_batch_id=None),
+            execution_options={"synchronize_session": False})
 
 
 def incomplete_batch_ids(session: Session, silent_since: dt.datetime | None = None

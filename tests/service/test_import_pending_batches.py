@@ -142,6 +142,12 @@ def test_a_pending_batch_is_invisible_to_every_read(database: Database,
             joined = s.scalar(select(func.count()).select_from(db.Wheel)
                               .join(db.Measurement, db.Measurement.wheel_id == db.Wheel.wheel_id))
             assert joined == 0
+            # nor the wheels and vehicles the pending import registered (all of them new)
+            assert counts["wheels"] == counts["vehicles"] == 0
+            assert s.scalar(select(func.count()).select_from(db.Wheel)
+                            .execution_options(**ALL)) >= 1
+            stored_wheel = s.scalar(select(db.Wheel.wheel_id).execution_options(**ALL))
+            assert s.get(db.Wheel, stored_wheel) is None
     finally:
         pause.go_on.set()
         thread.join()
@@ -149,6 +155,33 @@ def test_a_pending_batch_is_invisible_to_every_read(database: Database,
     assert out["result"].created == n
     counts = _counts(database)
     assert counts["visible"] == counts["stored"] == n and counts["pending_batches"] == 0
+    assert counts["wheels"] >= 1 and counts["vehicles"] >= 1  # shown with their batch
+
+
+def test_wheels_a_pending_import_registered_are_shown_once_another_import_measures_them(
+        database: Database, upload: tuple[bytes, int]) -> None:
+    data, _n = upload
+    frame = pd.read_csv(io.BytesIO(data))
+    frame["mileage_km"] += 5.0  # the same wheels measured again, 5 km on: other content
+    pause = Pause(after=2)
+    thread, out = _in_background(database, data, pause)
+    try:
+        assert _counts(database)["wheels"] == 0  # registered by the pending import only
+        other = _import(database, frame.to_csv(index=False).encode(), name="again.csv")
+        assert other.created > 0
+        with database.session_factory() as s:
+            registered = s.scalar(select(func.count()).select_from(db.Wheel)
+                                  .execution_options(**ALL))
+            shown = set(s.scalars(select(db.Wheel.wheel_id)))
+            measured = set(s.scalars(select(db.Measurement.wheel_id).distinct()))
+        # every wheel the complete import measured is shown, with its vehicle
+        assert measured and measured <= shown and len(shown) <= registered
+        assert _counts(database)["vehicles"] >= 1
+    finally:
+        pause.go_on.set()
+        thread.join()
+    assert "error" not in out, out.get("error")
+    assert _counts(database)["wheels"] == registered
 
 
 def test_a_small_write_completes_while_a_large_import_is_half_way(
