@@ -42,7 +42,11 @@ from wearcast.physics.contact.creepages import rigid_creepages
 from wearcast.physics.contact.fastsim import Bound, fastsim
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
-from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
+from wearcast.physics.contact.normal_contact import (
+    NormalPatch,
+    WheelNormalContact,
+    wheel_normal_contact,
+)
 
 _FloatArray = NDArray[np.float64]
 
@@ -170,6 +174,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
         guess = None
         rounds = 0
         chosen = method
+        normal: WheelNormalContact | None = None
         while True:
             rounds += 1
             if method == "auto" and rounds > 10:
@@ -178,7 +183,9 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                 chosen = "bem-coarse"
             normal = wheel_normal_contact(single, float(loads[row]), method=chosen,
                                           lateral_ratio=ratios, young_mpa=young,
-                                          poisson=poisson, approach_guess_mm=guess)[0]
+                                          poisson=poisson, approach_guess_mm=guess,
+                                          patch_guess=None if normal is None
+                                          else [normal.patches])[0]
             guess = normal.approach_mm
             loaded = _tangential(single, 0, normal.patches, normal.approach_mm,
                                  speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
