@@ -197,7 +197,6 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
     if dx <= 0 or dy <= 0:
         raise ValueError("x_mm and y_mm must be increasing")
     area = dx * dy
-    conv = _Convolution(h.shape[0], h.shape[1], dx, dy, effective_modulus_mpa(young_mpa, poisson))
     force_mode = normal_force_n is not None
     if force_mode:
         load = float(normal_force_n)  # type: ignore[arg-type]
@@ -252,6 +251,7 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
                                f"(last change {change:.2e})")
         approach = float(np.mean((u + h)[p > 0])) if force_mode else delta
         return NormalBemResult(p, u, approach, float(area * p.sum()), x, y, iterations, True)
+    conv = _Convolution(h.shape[0], h.shape[1], dx, dy, effective_modulus_mpa(young_mpa, poisson))
     t = np.zeros_like(h)
     g_old = 1.0
     reset = True

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.creepages import rigid_creepages
-from wearcast.physics.contact.fastsim import Bound, fastsim
+from wearcast.physics.contact.fastsim import Bound, fastsim_forces
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
 from wearcast.physics.contact.normal_contact import (
@@ -125,8 +125,9 @@ def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approac
     loaded = fn > 0
     a = np.where(loaded, [p.a_mm for p in patches], 1.0)
     b = np.where(loaded, [p.b_mm for p in patches], 1.0)
-    res = fastsim(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
-                  poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
+    # the totals only (the compiled march; ``fastsim``'s numbers without its fields)
+    res = fastsim_forces(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
+                         poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
     return [LoadedPatch(p, float(xi[k]), float(eta[k]), float(phi[k]),
                         float(res.fx_n[k]) if loaded[k] else 0.0,
                         float(res.fy_n[k]) if loaded[k] else 0.0,
