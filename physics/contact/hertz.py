@@ -98,11 +98,10 @@ def _parameter_from_ratio(ratio: NDArray[np.float64]) -> NDArray[np.float64]:
     instead of 64 vectorised steps)."""
     if ratio.size == 1 and float(ratio.flat[0]) < 1e12:
         r = float(ratio.flat[0])
-        if _ratio_excess(0.0, r) >= 0.0:
-            mid = 0.0
-        else:
-            mid = brentq(_ratio_excess, -18.0, 0.0, args=(r,), xtol=1e-20, rtol=1e-15)
-        return np.full_like(ratio, -math.expm1(2.0 * mid))
+        root = 0.0
+        if _ratio_excess(0.0, r) < 0.0:
+            root = float(brentq(_ratio_excess, -18.0, 0.0, args=(r,), xtol=1e-20, rtol=1e-15))
+        return np.full_like(ratio, -math.expm1(2.0 * root))
     lo = np.full_like(ratio, -18.0)  # log(b/a): b/a = 1.5e-8 ... 1
     hi = np.zeros_like(ratio)
     for _ in range(64):

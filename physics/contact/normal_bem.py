@@ -23,7 +23,12 @@ for a prescribed normal force (delta follows) or, with ``approach_mm`` given, fo
 prescribed approach; pressures are kept non-negative, elements that open or close move
 between the sets, and the iteration stops when the pressure changes by less than ``tol``
 (relative, L1).  Typical wheel-rail patches (0.2 mm elements, 2 000-10 000 elements) converge
-in 20-80 iterations, a few milliseconds to 0.1 s.
+in 20-80 iterations, a few milliseconds to 0.1 s.  Grids of at most
+``normal_bem_kernel.DIRECT_MAX_ELEMENTS`` elements (the production method's coarse grids)
+run the same iteration compiled, with the dense influence matrix instead of the FFT
+(``normal_bem_kernel``; same solution to rounding, 5-8x faster on 22-26 elements per
+direction, ``benchmarks/bench_normal_bem.py``); a start pressure from a nearby solution
+(``initial_pressure_mpa``) saves iterations.
 """
 
 from __future__ import annotations
@@ -208,11 +213,6 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
             zero = np.zeros_like(h)
             return NormalBemResult(zero, zero, delta, 0.0, x, y, 0, True)
 
-    # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
-    if force_mode:
-        pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
-    else:
-        pen = np.clip(delta - h, 0.0, None)
     warm = None
     if initial_pressure_mpa is not None:
         warm = np.clip(np.asarray(initial_pressure_mpa, dtype=float), 0.0, None)
@@ -225,6 +225,11 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
         if force_mode:
             p *= load / (area * p.sum())
     else:
+        # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
+        if force_mode:
+            pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
+        else:
+            pen = np.clip(delta - h, 0.0, None)
         p = np.sqrt(pen)
         if force_mode:
             p *= load / (area * p.sum())

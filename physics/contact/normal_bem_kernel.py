@@ -163,6 +163,6 @@ if HAVE_NUMBA:
     dense_influence = njit(cache=True)(_dense_influence_py)
     polonsky_keer = njit(cache=True, error_model="numpy")(_polonsky_keer_py)
 else:  # pragma: no cover - exercised only without numba
-    _convolve = _convolve_py
-    dense_influence = _dense_influence_py
-    polonsky_keer = None
+    _convolve = _convolve_py  # type: ignore[assignment]
+    dense_influence = _dense_influence_py  # type: ignore[assignment]
+    polonsky_keer = None  # type: ignore[assignment]
