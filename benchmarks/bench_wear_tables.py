@@ -85,9 +85,12 @@ def aosta_pipeline_cost() -> None:
                 curving.solve_curving_cases(vehicle, cases, contact_pipeline=pipeline)
             times.append(time.perf_counter() - t0)
         best[pipeline] = min(times)
+    wheel_poses = len(route.classes) * 2 * 4  # bogie types x (2 wheelsets x 2 wheels)
+    extra_ms = 1e3 * (best[True] - best[False]) / wheel_poses
     print(f"  aosta curving ({len(route.classes)} classes x motor, trailer): table contacts "
           f"{best[False]:5.2f} s, with the contact pipeline at each pose {best[True]:5.2f} s "
-          f"(x{best[True] / best[False]:.1f})")
+          f"(x{best[True] / best[False]:.1f}; {extra_ms:.1f} ms per wheel and pose over "
+          f"{wheel_poses} wheel poses)")
 
 
 if __name__ == "__main__":

@@ -200,7 +200,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         that does not converge at all. None: the saturation law's equilibrium (faster; its
         forces are up to ~0.5 mu Fn off under large spin, ``contact.creep``)
     contact_pipeline : also evaluate the one contact pipeline at each equilibrium's pose
-        (``CurvingResult.pipeline``, ``curving_contacts``; 0.1-0.5 s per wheel); a case at which
+        (``CurvingResult.pipeline``, ``curving_contacts``; ~10-40 ms per wheel on a shared
+        core, ``benchmarks/bench_wear_tables.py``); a case at which
         the pipeline fails fails like one that does not converge. The equilibrium and the
         contacts that feed wear stay the table's: at the table's pose the pipeline's forces
         leave up to 1.7 wheel loads unbalanced on a flange (``pipeline_residual_norm``;

@@ -21,10 +21,12 @@ with R = 1/(2A).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 #: Young's modulus of wheel and rail steel [MPa].
@@ -80,8 +82,26 @@ def _quotients(m: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
     return q_a, q_b, k_int
 
 
+def _ratio_excess(log_b_over_a: float, ratio: float) -> float:
+    """(E/(1-m) - K) / (K - E) - ratio at m = 1 - (b/a)^2 (``_quotients`` for one value)."""
+    m = -math.expm1(2.0 * log_b_over_a)
+    if m < _M_SERIES:
+        return (0.5 + 9.0 * m / 16.0) / (0.5 + 3.0 * m / 16.0) - ratio
+    k_int = float(ellipk(m))
+    e_int = float(ellipe(m))
+    return (e_int / (1.0 - m) - k_int) / (k_int - e_int) - ratio
+
+
 def _parameter_from_ratio(ratio: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Elliptic parameter m = 1 - (b/a)^2 for which B/A = ratio (>= 1), by bisection."""
+    """Elliptic parameter m = 1 - (b/a)^2 for which B/A = ratio (>= 1), by bisection (one
+    ratio: Brent's method on the same function, to the same precision, ~15 evaluations
+    instead of 64 vectorised steps)."""
+    if ratio.size == 1 and float(ratio.flat[0]) < 1e12:
+        r = float(ratio.flat[0])
+        root = 0.0
+        if _ratio_excess(0.0, r) < 0.0:
+            root = float(brentq(_ratio_excess, -18.0, 0.0, args=(r,), xtol=1e-20, rtol=1e-15))
+        return np.full_like(ratio, -math.expm1(2.0 * root))
     lo = np.full_like(ratio, -18.0)  # log(b/a): b/a = 1.5e-8 ... 1
     hi = np.zeros_like(ratio)
     for _ in range(64):

@@ -23,7 +23,12 @@ for a prescribed normal force (delta follows) or, with ``approach_mm`` given, fo
 prescribed approach; pressures are kept non-negative, elements that open or close move
 between the sets, and the iteration stops when the pressure changes by less than ``tol``
 (relative, L1).  Typical wheel-rail patches (0.2 mm elements, 2 000-10 000 elements) converge
-in 20-80 iterations, a few milliseconds to 0.1 s.
+in 20-80 iterations, a few milliseconds to 0.1 s.  Grids of at most
+``normal_bem_kernel.DIRECT_MAX_ELEMENTS`` elements (the production method's coarse grids)
+run the same iteration compiled, with the dense influence matrix instead of the FFT
+(``normal_bem_kernel``; same solution to rounding, 5-8x faster on 22-26 elements per
+direction, ``benchmarks/bench_normal_bem.py``); a start pressure from a nearby solution
+(``initial_pressure_mpa``) saves iterations.
 """
 
 from __future__ import annotations
@@ -35,6 +40,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.hertz import STEEL_POISSON, STEEL_YOUNG_MPA, effective_modulus_mpa
+from wearcast.physics.contact.normal_bem_kernel import (
+    DIRECT_MAX_ELEMENTS,
+    dense_influence,
+    polonsky_keer,
+)
 
 _FloatArray = NDArray[np.float64]
 
@@ -63,6 +73,15 @@ def influence_coefficients(nx: int, ny: int, dx_mm: float, dy_mm: float,
     value = (_love_f(x + a, y + b) - _love_f(x + a, y - b) - _love_f(x - a, y + b)
              + _love_f(x - a, y - b))
     return value / (np.pi * e_star_mpa)
+
+
+@lru_cache(maxsize=16)
+def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _FloatArray:
+    """The dense influence matrix (``normal_bem_kernel.dense_influence``) of a grid, cached
+    (the rounds of one wheel's normal / tangential coupling reuse their grids)."""
+    d = dense_influence(influence_coefficients(nx, ny, dx_mm, dy_mm, e_star_mpa), ny, nx)
+    d.setflags(write=False)
+    return d
 
 
 @lru_cache(maxsize=32)
@@ -141,7 +160,9 @@ class NormalBemResult:
 def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
                      normal_force_n: float | None = None, approach_mm: float | None = None,
                      young_mpa: float = STEEL_YOUNG_MPA, poisson: float = STEEL_POISSON,
-                     tol: float = 1e-8, max_iter: int = 2000) -> NormalBemResult:
+                     tol: float = 1e-8, max_iter: int = 2000,
+                     initial_pressure_mpa: ArrayLike | None = None,
+                     compiled: bool | None = None) -> NormalBemResult:
     """Frictionless normal contact of two half-spaces with the undeformed gap h on a grid.
 
     Parameters
@@ -155,6 +176,12 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
     young_mpa, poisson : Young's modulus [MPa] and Poisson's ratio of both bodies
     tol : convergence on sum |p_new - p_old| / sum p
     max_iter : iteration limit; RuntimeError if reached without convergence
+    initial_pressure_mpa : optional start pressure (ny, nx) [MPa], e.g. the solution of a
+        nearby problem on the same grid (a warm start: fewer iterations, the same solution
+        to ``tol``); default sqrt of the rigid interpenetration
+    compiled : run the compiled direct iteration (``normal_bem_kernel``) instead of the FFT
+        one; default: compiled when numba is there and the grid has at most
+        ``DIRECT_MAX_ELEMENTS`` elements (the two agree to rounding)
 
     Returns
     -------
@@ -175,7 +202,6 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
     if dx <= 0 or dy <= 0:
         raise ValueError("x_mm and y_mm must be increasing")
     area = dx * dy
-    conv = _Convolution(h.shape[0], h.shape[1], dx, dy, effective_modulus_mpa(young_mpa, poisson))
     force_mode = normal_force_n is not None
     if force_mode:
         load = float(normal_force_n)  # type: ignore[arg-type]
@@ -187,17 +213,50 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
             zero = np.zeros_like(h)
             return NormalBemResult(zero, zero, delta, 0.0, x, y, 0, True)
 
-    # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
-    if force_mode:
-        pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
+    warm = None
+    if initial_pressure_mpa is not None:
+        warm = np.clip(np.asarray(initial_pressure_mpa, dtype=float), 0.0, None)
+        if warm.shape != h.shape:
+            raise ValueError("initial_pressure_mpa must have the shape of gap_mm")
+        if not warm.sum() > 0:
+            warm = None
+    if warm is not None:
+        p = warm.copy()
+        if force_mode:
+            p *= load / (area * p.sum())
     else:
-        pen = np.clip(delta - h, 0.0, None)
-    p = np.sqrt(pen)
-    if force_mode:
-        p *= load / (area * p.sum())
-    else:
-        p *= 0.25 * np.pi * effective_modulus_mpa(young_mpa, poisson) * pen.max() / (
-            p.max() * max(np.sqrt(area * np.count_nonzero(pen) / np.pi), dx))
+        # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
+        if force_mode:
+            pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
+        else:
+            pen = np.clip(delta - h, 0.0, None)
+        p = np.sqrt(pen)
+        if force_mode:
+            p *= load / (area * p.sum())
+        else:
+            p *= 0.25 * np.pi * effective_modulus_mpa(young_mpa, poisson) * pen.max() / (
+                p.max() * max(np.sqrt(area * np.count_nonzero(pen) / np.pi), dx))
+    if compiled is None:
+        compiled = polonsky_keer is not None and h.size <= DIRECT_MAX_ELEMENTS
+    if compiled:
+        if polonsky_keer is None:  # pragma: no cover - exercised only without numba
+            raise ValueError("compiled: numba is not installed")
+        dense = _dense(h.shape[1], h.shape[0], dx, dy,
+                       effective_modulus_mpa(young_mpa, poisson))
+        p, u, iterations, change, status = polonsky_keer(
+            dense, h.ravel().copy(), p.ravel().copy(), load if force_mode else 0.0,
+            0.0 if force_mode else delta, force_mode, area, tol, max_iter)
+        p, u = p.reshape(h.shape), u.reshape(h.shape)
+        if status == 2:
+            raise RuntimeError("normal BEM: no element in contact")
+        if status == 3:
+            raise RuntimeError("normal BEM: pressure vanished")
+        if status != 0:
+            raise RuntimeError(f"normal BEM did not converge in {max_iter} iterations "
+                               f"(last change {change:.2e})")
+        approach = float(np.mean((u + h)[p > 0])) if force_mode else delta
+        return NormalBemResult(p, u, approach, float(area * p.sum()), x, y, iterations, True)
+    conv = _Convolution(h.shape[0], h.shape[1], dx, dy, effective_modulus_mpa(young_mpa, poisson))
     t = np.zeros_like(h)
     g_old = 1.0
     reset = True

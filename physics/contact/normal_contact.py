@@ -73,6 +73,7 @@ misses the 10 % goal and is not the default.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,6 +164,22 @@ class _PlaneSamples:
 #: Smallest approach [mm] the search for the approach carrying a wheel load starts from.
 MIN_APPROACH_MM = 1e-12
 
+def _gradient(f: _FloatArray, s: _FloatArray) -> _FloatArray:
+    """``np.gradient(f, s)`` of a 1-D array on strictly increasing samples (>= 3), the same
+    formulas (second-order central differences on the uneven samples, first-order one-sided
+    at the ends) without numpy's generic axis handling, which cost more than the sums."""
+    dx = np.diff(s)
+    dx1, dx2 = dx[:-1], dx[1:]
+    out = np.empty_like(f)
+    a = -(dx2) / (dx1 * (dx1 + dx2))
+    b = (dx2 - dx1) / (dx1 * dx2)
+    c = dx1 / (dx2 * (dx1 + dx2))
+    out[1:-1] = a * f[:-2] + b * f[1:-1] + c * f[2:]
+    out[0] = (f[1] - f[0]) / dx[0]
+    out[-1] = (f[-1] - f[-2]) / dx[-1]
+    return out
+
+
 def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: float
                    ) -> _PlaneSamples:
     m = locus.gap_mm.shape[1]
@@ -184,11 +201,13 @@ def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: 
     # the monotone run through the deepest sample of the patch (always interpenetrating)
     deepest = int(region.samples[np.argmin(locus.gap_mm[row, region.samples])])
     centre = int(np.clip(np.searchsorted(idx, deepest), 0, s.size - 1))
-    keep_lo, keep_hi = centre, centre + 1
-    while keep_lo > 0 and inc[keep_lo - 1] == inc[min(centre, inc.size - 1)]:
-        keep_lo -= 1
-    while keep_hi < s.size and inc[keep_hi - 1] == inc[min(centre, inc.size - 1)]:
-        keep_hi += 1
+    # the run of equal directions around it: from after the last change below the centre
+    # to the first change at or above it
+    other = inc != inc[min(centre, inc.size - 1)]
+    below = np.flatnonzero(other[:centre])
+    above = np.flatnonzero(other[centre:])
+    keep_lo = int(below[-1]) + 1 if below.size else 0
+    keep_hi = centre + int(above[0]) + 1 if above.size else s.size
     sel = slice(keep_lo, keep_hi)
     idx, s = idx[sel], s[sel]
     order = np.argsort(s)
@@ -198,7 +217,7 @@ def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: 
     c = np.cos(delta) / np.cos(delta - dr)
     gn = g * c
     if s.size >= 3:
-        b = 0.5 * np.gradient(np.gradient(gn, s), s)  # B = (1/2) d2(h)/ds2, > 0 convex
+        b = 0.5 * _gradient(_gradient(gn, s), s)  # B = (1/2) d2(h)/ds2, > 0 convex
     else:
         b = np.full(s.shape, np.nan)
     return _PlaneSamples(s=s, g=g, x=locus.x_track_mm[row, idx] - region.x_track_mm,
@@ -307,8 +326,11 @@ def _hertz_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float,
     unit = hertz_contact(1.0, a_curv, b_curv, young_mpa, poisson)
     delta_n = max(approach_mm - float(ps.g.min()), 0.0) * c_ref
     fn = float((delta_n / float(unit.approach_mm)) ** 1.5)
-    hz = hertz_contact(fn, a_curv, b_curv, young_mpa, poisson)
-    a, b = float(hz.a_mm), float(hz.b_mm)
+    # a, b and p0 grow as F^(1/3) for a fixed geometry (Johnson 1985 eqs. 4.39 ff.): the unit
+    # force's ellipse scaled, not a second solve of the ellipse's shape
+    scale = float(np.cbrt(fn))
+    a, b = float(unit.a_mm) * scale, float(unit.b_mm) * scale
+    p0 = float(unit.p0_mpa) * scale
     s0 = float(ps.s[np.argmin(ps.g)])
     x = np.arange(-a, a + element_mm, element_mm)
     s = s0 + np.arange(-b, b + element_mm, element_mm)
@@ -317,12 +339,13 @@ def _hertz_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float,
         s = s0 + np.linspace(-b, b, 5)
     rho = 1.0 - (x[None, :] / a) ** 2 - ((s[:, None] - s0) / b) ** 2 if fn > 0 else -np.ones(
         (s.size, x.size))
-    p = float(hz.p0_mpa) * np.sqrt(np.clip(rho, 0.0, None))
-    patch = _finish(region, "hertz", ps, x, s, p)
+    p = p0 * np.sqrt(np.clip(rho, 0.0, None))
+    if not fn > 0:
+        return _finish(region, "hertz", ps, x, s, p)
     # exact Hertz totals instead of the sampled ones
-    return NormalPatch(region, "hertz", fn, x, s, p, float(hz.p0_mpa), float(np.pi * a * b),
+    return NormalPatch(region, "hertz", fn, x, s, p, p0, float(np.pi * a * b),
                        0.0, s0, float(np.interp(s0, ps.s, ps.y_wheel)),
-                       float(np.interp(s0, ps.s, ps.y_track)), a, b) if fn > 0 else patch
+                       float(np.interp(s0, ps.s, ps.y_track)), a, b)
 
 
 def _ends(s: _FloatArray, pen: _FloatArray) -> tuple[float, float]:
@@ -398,10 +421,38 @@ def _kp_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float, young_
     return _finish(region, "kp", ps, x, s, p)
 
 
+def warm_pressure(previous: NormalPatch | None, x: _FloatArray, s: _FloatArray
+                  ) -> _FloatArray | None:
+    """A start pressure on the grid (x, s) [mm] from a nearby solution ``previous`` (the same
+    patch at a slightly different load or approach: an earlier round of the normal /
+    tangential coupling or of the approach iteration): its pressure interpolated bilinearly
+    onto the grid (0 outside it), or None when it carries no pressure."""
+    if previous is None or not previous.normal_force_n > 0 or previous.x_mm.size < 2 or (
+            previous.s_mm.size < 2):
+        return None
+    px, ps_ = previous.x_mm, previous.s_mm
+    fx = (x - px[0]) / (px[1] - px[0])
+    fs = (s - ps_[0]) / (ps_[1] - ps_[0])
+    ix = np.clip(np.floor(fx).astype(np.intp), 0, px.size - 2)
+    js = np.clip(np.floor(fs).astype(np.intp), 0, ps_.size - 2)
+    tx = np.clip(fx - ix, 0.0, 1.0)
+    ts = np.clip(fs - js, 0.0, 1.0)
+    inside = ((fx >= 0) & (fx <= px.size - 1))[None, :] & ((fs >= 0) & (fs <= ps_.size - 1))[
+        :, None]
+    p = previous.pressure_mpa
+    out = ((1 - ts)[:, None] * ((1 - tx)[None, :] * p[np.ix_(js, ix)]
+                                + tx[None, :] * p[np.ix_(js, ix + 1)])
+           + ts[:, None] * ((1 - tx)[None, :] * p[np.ix_(js + 1, ix)]
+                            + tx[None, :] * p[np.ix_(js + 1, ix + 1)]))
+    out = np.where(inside, out, 0.0)
+    return out if out.sum() > 0 else None
+
+
 def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, approach_mm: float,
                          method: str = "auto", young_mpa: float = STEEL_YOUNG_MPA,
                          poisson: float = STEEL_POISSON, element_mm: float = 0.2,
-                         margin_mm: float = 0.6) -> NormalPatch:
+                         margin_mm: float = 0.6, warm: NormalPatch | None = None
+                         ) -> NormalPatch:
     """Normal contact of one patch at vertical approach d [mm] (module docstring).
 
     Parameters
@@ -412,6 +463,8 @@ def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, appro
     method : "bem", "kp", "hertz" or "auto"
     element_mm : element size of the grid [mm] (CONTACT's DX = DS = 0.2 mm)
     margin_mm : grid margin around the interpenetration region [mm]
+    warm : optional nearby solution of the same patch to start the BEM from
+        (``warm_pressure``; the same solution to the solver's tolerance, fewer iterations)
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, not {method!r}")
@@ -428,19 +481,23 @@ def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, appro
     h, x, s = _grid(ps, approach_mm, element_mm, margin_mm,
                     COARSE_ELEMENTS if coarse else None)
     res = solve_normal_bem(h, x, s, approach_mm=0.0, young_mpa=young_mpa, poisson=poisson,
-                           tol=1e-6 if coarse else 1e-7)
+                           tol=1e-6 if coarse else 1e-7,
+                           initial_pressure_mpa=warm_pressure(warm, x, s))
     return _finish(region, method, ps, x, s, res.pressure_mpa)
 
 
 def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: float,
                            approach_mm: float, method: str, young_mpa: float, poisson: float,
-                           element_mm: float, margin_mm: float = 0.6
+                           element_mm: float, margin_mm: float = 0.6,
+                           warm: NormalPatch | None = None
                            ) -> tuple[float, NormalPatch] | None:
     """Fast path of ``wheel_normal_contact`` for a single patch: its normal force is known
     from the load, F_n = W / (cos delta + r sin delta), so the BEM (or Hertz) is solved with
     the force prescribed and returns the approach; the patch is re-identified at that
     approach until it settles (2-3 solves instead of a bracketing iteration).  None when
-    there is not exactly one patch or the method has no force-prescribed form ("kp")."""
+    there is not exactly one patch or the method has no force-prescribed form ("kp").
+    ``warm``: a nearby solution to start the BEM from (``warm_pressure``); each re-solve
+    starts from the previous one."""
     d = approach_mm
     for _ in range(6):
         regions = patch_regions(locus, row, d)
@@ -466,11 +523,13 @@ def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: fl
             coarse = chosen == "bem-coarse"
             h, x, s = _grid(ps, d, element_mm, margin_mm, COARSE_ELEMENTS if coarse else None)
             res = solve_normal_bem(h, x, s, normal_force_n=fn, young_mpa=young_mpa,
-                                   poisson=poisson, tol=1e-6 if coarse else 1e-7)
+                                   poisson=poisson, tol=1e-6 if coarse else 1e-7,
+                                   initial_pressure_mpa=warm_pressure(warm, x, s))
             border = np.concatenate([res.pressure_mpa[0], res.pressure_mpa[-1],
                                      res.pressure_mpa[:, 0], res.pressure_mpa[:, -1]])
             d_new = d + res.approach_mm / c_min
             patch = _finish(region, chosen, ps, x, s, res.pressure_mpa)
+            warm = patch
             if np.any(border > 0):  # the grid was too small: grow it and solve again
                 d = max(d_new, 1.2 * d)
                 continue
@@ -486,7 +545,8 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
                          method: str = "auto", lateral_ratio: list[list[float]] | None = None,
                          young_mpa: float = STEEL_YOUNG_MPA, poisson: float = STEEL_POISSON,
                          element_mm: float = 0.2, rtol: float = 1e-4,
-                         approach_guess_mm: ArrayLike | None = None
+                         approach_guess_mm: ArrayLike | None = None,
+                         patch_guess: Sequence[Sequence[NormalPatch]] | None = None
                          ) -> list[WheelNormalContact]:
     """Patches of one wheel carrying its vertical load W, for every pose of the locus.
 
@@ -496,7 +556,9 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
     (``patches.patch_regions``), so merging and splitting follow the load.  A single patch
     takes a fast path: its force is known, so it is solved with the force prescribed and the
     approach follows (``_single_patch_by_force``).  ``approach_guess_mm`` (per pose,
-    optional) starts either iteration near a known solution.
+    optional) starts either iteration near a known solution; ``patch_guess`` (per pose, the
+    patches of a nearby solution, e.g. the previous round of the normal / tangential
+    coupling) starts the BEM solves from their pressures (``warm_pressure``).
 
     Returns one ``WheelNormalContact`` per pose; module docstring for the patch fields.
     """
@@ -507,12 +569,16 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
     out = []
     for row in range(n):
         ratios = lateral_ratio[row] if lateral_ratio is not None else None
+        guesses: list[NormalPatch] = list(patch_guess[row]) if patch_guess is not None else []
 
-        def solve(d: float, row: int = row, ratios: list[float] | None = ratios
-                  ) -> tuple[float, list[NormalPatch]]:
+        def solve(d: float, row: int = row, ratios: list[float] | None = ratios,
+                  guesses: list[NormalPatch] = guesses) -> tuple[float, list[NormalPatch]]:
             regions = patch_regions(locus, row, d)
+            warm = guesses if len(guesses) == len(regions) else []
             patches = [patch_normal_contact(locus, row, reg, d, method, young_mpa, poisson,
-                                            element_mm) for reg in regions]
+                                            element_mm, warm=warm[k] if warm else None)
+                       for k, reg in enumerate(regions)]
+            guesses[:] = patches
             total = 0.0
             for k, p in enumerate(patches):
                 r = ratios[k] if ratios is not None and k < len(ratios) else 0.0
@@ -526,7 +592,8 @@ def wheel_normal_contact(locus: WheelLocus, wheel_load_n: float | NDArray[np.flo
         else:
             start = 0.03 * (load / 1e4) ** (2.0 / 3.0)
         fast = _single_patch_by_force(locus, row, load, ratios[0] if ratios else 0.0, start,
-                                      method, young_mpa, poisson, element_mm)
+                                      method, young_mpa, poisson, element_mm,
+                                      warm=guesses[0] if len(guesses) == 1 else None)
         if fast is not None:
             out.append(WheelNormalContact(approach_mm=fast[0], patches=[fast[1]]))
             continue

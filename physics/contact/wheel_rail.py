@@ -39,10 +39,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from wearcast.physics.contact.creepages import rigid_creepages
-from wearcast.physics.contact.fastsim import Bound, fastsim
+from wearcast.physics.contact.fastsim import Bound, fastsim_forces
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
-from wearcast.physics.contact.normal_contact import NormalPatch, wheel_normal_contact
+from wearcast.physics.contact.normal_contact import (
+    NormalPatch,
+    WheelNormalContact,
+    wheel_normal_contact,
+)
 
 _FloatArray = NDArray[np.float64]
 
@@ -121,8 +125,9 @@ def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approac
     loaded = fn > 0
     a = np.where(loaded, [p.a_mm for p in patches], 1.0)
     b = np.where(loaded, [p.b_mm for p in patches], 1.0)
-    res = fastsim(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
-                  poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
+    # the totals only (the compiled march; ``fastsim``'s numbers without its fields)
+    res = fastsim_forces(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
+                         poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
     return [LoadedPatch(p, float(xi[k]), float(eta[k]), float(phi[k]),
                         float(res.fx_n[k]) if loaded[k] else 0.0,
                         float(res.fy_n[k]) if loaded[k] else 0.0,
@@ -170,6 +175,7 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
         guess = None
         rounds = 0
         chosen = method
+        normal: WheelNormalContact | None = None
         while True:
             rounds += 1
             if method == "auto" and rounds > 10:
@@ -178,7 +184,9 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                 chosen = "bem-coarse"
             normal = wheel_normal_contact(single, float(loads[row]), method=chosen,
                                           lateral_ratio=ratios, young_mpa=young,
-                                          poisson=poisson, approach_guess_mm=guess)[0]
+                                          poisson=poisson, approach_guess_mm=guess,
+                                          patch_guess=None if normal is None
+                                          else [normal.patches])[0]
             guess = normal.approach_mm
             loaded = _tangential(single, 0, normal.patches, normal.approach_mm,
                                  speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
