@@ -4,7 +4,9 @@
 scores it out of sample and names a cause only when it is specific:
 
 1. residuals of the calibrated model per measurement and region (log-area residuals) and of
-   the wear-curve shape (:mod:`wearcast.statistics.residuals`);
+   the wear-curve shape (:mod:`wearcast.statistics.residuals`); every row weighted by its
+   Huber weight times its region's precision (``cause_base.FinderData.set_robust_weights``:
+   a noisy region does not drown the other in the fits, scores and resamples);
 2. K-fold cross-validation with folds grouped by vehicle (by wheel when fewer than 5
    vehicles), never by row: each extension and the baseline (the model with its per-region
    scale refitted) are fitted on K-1 folds and their squared working residuals computed on
