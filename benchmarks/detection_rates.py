@@ -5,7 +5,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
-         [--margin-nuisance encompassing|runner_up]
+         [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from wearcast.statistics import cause_base as cb
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
@@ -276,6 +277,11 @@ def main() -> None:
                     help="nuisance of the margin's bootstrap: residuals of the fit carrying "
                          "both causes or of the runner-up's own fit "
                          "(finder_scoring.NUISANCE_OF_MARGIN)")
+    ap.add_argument("--noise-weighting", default=cb.NOISE_WEIGHTING,
+                    choices=("region", "area", "none"),
+                    help="precision weights of the finder's rows: one noise scale per region, "
+                         "a variance function of the predicted area, or Huber weights alone "
+                         "(cause_base.NOISE_WEIGHTING)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
                     help="loop generator: baseline grows as the loop runs say or linearly")
     ap.add_argument("--progression-stretch", type=float, default=1.0,
@@ -287,6 +293,7 @@ def main() -> None:
     fs.RESAMPLING = args.resampling
     fs.MARGIN_TEST = args.margin_test
     fs.NUISANCE_OF_MARGIN = args.margin_nuisance
+    cb.NOISE_WEIGHTING = args.noise_weighting
     LOOP_NULL[0] = args.loop_null
     LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):

@@ -4,7 +4,9 @@
 scores it out of sample and names a cause only when it is specific:
 
 1. residuals of the calibrated model per measurement and region (log-area residuals) and of
-   the wear-curve shape (:mod:`wearcast.statistics.residuals`);
+   the wear-curve shape (:mod:`wearcast.statistics.residuals`); every row weighted by its
+   Huber weight times its region's precision (``cause_base.FinderData.set_robust_weights``:
+   a noisy region does not drown the other in the fits, scores and resamples);
 2. K-fold cross-validation with folds grouped by vehicle (by wheel when fewer than 5
    vehicles), never by row: each extension and the baseline (the model with its per-region
    scale refitted) are fitted on K-1 folds and their squared working residuals computed on
@@ -414,21 +416,22 @@ def diagnose(
     if shape_cause is not None and is_named(scored[shape_cause.code], alpha, min_relative_gain,
                                             groups, n_boot, rng):
         names.append(shape_cause.code)
+    if shape_cause is not None and shape_cause.code in names and len(names) > 1:
+        # the gains are in different metrics: an area cause named beside the instrument that
+        # gains nothing material over the named instrument's own area distortion is its
+        # echo, not a cause of its own (whether or not it out-gains the instrument)
+        scale = fi.InstrumentAreaScale(
+            shape_cause.instruments(data),  # type: ignore[attr-defined]
+            fi.reference_instrument(shape_cause, data, everything))
+        for code in [c for c in names if c != shape_cause.code]:
+            echo, echo_gain = fi.instrument_echo(data, scored[code].cause, scale, folds,
+                                                 min_relative_gain)
+            if echo:
+                echoes.append(f"{code} (held-out gain over the instrument's area scales "
+                              f"{echo_gain:.4f})")
+                names.remove(code)
     if names:   # the verdict is the named cause with the largest relative gain
         top = max(names, key=lambda c: scored[c].gain)
-        if shape_cause is not None and shape_cause.code in names and top != shape_cause.code:
-            # the gains are in different metrics: an area cause that gains nothing material
-            # over the named instrument's own area distortion is its echo, not the verdict
-            echo, echo_gain = fi.instrument_echo(
-                data, scored[top].cause,
-                fi.InstrumentAreaScale(shape_cause.instruments(data),  # type: ignore[attr-defined]
-                                       fi.reference_instrument(shape_cause, data, everything)),
-                folds, min_relative_gain)
-            if echo:
-                echoes.append(f"{top} (held-out gain over the instrument's area scales "
-                              f"{echo_gain:.4f})")
-                names.remove(top)
-                top = shape_cause.code
         names = [top] + [c for c in names if c != top]
     # an ambiguous area step does not hide a named wear-curve (instrument) cause: an
     # instrument's geometric error also distorts the areas it measures
