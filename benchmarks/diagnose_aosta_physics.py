@@ -1,6 +1,6 @@
 """Physics diagnosis of the whole-vehicle loop on the measured Minuetto wheels (seed 003 Table 2).
 
-Run: .venv/bin/python benchmarks/diagnose_aosta_physics.py [--step 0.8] [--km 8000]
+Run: .venv/bin/python benchmarks/diagnose_aosta_physics.py [--step 0.8] [--km 8000] [--workers 2]
 
 The model: ``physics.vehicle_wear_simulation`` (minuetto, two motor + two trailer bogies, both
 running directions, all wheels averaged as measured) on seed 003's Table 3 classes with its
@@ -9,8 +9,11 @@ USFD law and one fitted wear-coefficient scale; the catalogue of
 patch model, wear law, traction, rail state: the Minuetto's rail worn by its own passages on
 the same classes to 5 and 10 Mt, ``physics.rail_tonnage``), each extension run at its
 catalogue values to --km (far enough for the fitted scales), scored leaving one vehicle out
-(3 vehicles: test groups are points). Prints the time of every loop run and of the whole
-diagnosis, the null fit, every finding and the verdict. Needs ../shared/reference.
+(3 vehicles: test groups are points). The loop runs are independent of each other and of
+the measurements: ``--workers N`` makes them in N processes (the rail state's two runs in one,
+so its chain of rail steps is computed once), the same runs as one after the other. Prints
+the time of every loop run and of the whole diagnosis, the null fit, every finding and the
+verdict. Needs ../shared/reference.
 """
 
 from __future__ import annotations
@@ -18,24 +21,98 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
 from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
-from wearcast.statistics.physics_diagnosis import CATALOGUE, RAIL_TONNAGES_MT, diagnose_physics
+from wearcast.statistics.physics_diagnosis import (
+    CATALOGUE,
+    RAIL_TONNAGES_MT,
+    diagnose_physics,
+    run_sequentially,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT.parent / "shared" / "reference" / "published"
+MEASURED_CSV = REFERENCE / "aosta_measured_FH_FT_QR.csv"
+TRACK_CSV = REFERENCE / "aosta_statistical_track_nclass7.csv"
+
+#: What every run of one process shares: the classes, mileage and step, the first contact
+#: updates (same new profile) and the rail state's worn rails (one chain of rail steps).
+_RUN: dict[str, Any] = {}
+
+
+def _setup(km: float, step: float) -> None:
+    from validate_aosta_measured import aosta_classes  # benchmarks/ on sys.path when run
+
+    _RUN.update(km=km, step=step, contacts={}, rails={},
+                classes=aosta_classes(pd.read_csv(TRACK_CSV, comment="#")))
+
+
+def simulate(params: Mapping[str, Any]) -> Any:
+    """One whole-vehicle run of the catalogue (``{}``: the null), timed."""
+    label = dict(params) or "null"
+    params = dict(params)
+    law = params.pop("law", "usfd")
+    tonnage = params.pop("rail_tonnage_mt", 0.0)
+    classes, rails, km = _RUN["classes"], _RUN["rails"], _RUN["km"]
+    if tonnage:
+        if tonnage not in rails:
+            t0 = time.perf_counter()
+            out = rails_worn_to_tonnages("minuetto", classes,
+                                         sorted({*RAIL_TONNAGES_MT, tonnage}), law="usfd")
+            rails.update(out.rails)
+            print(f"  rails worn to {sorted(out.rails)} Mt: {out.rail_steps} rail steps "
+                  f"of {', '.join(f'{t:.2f}' for t in out.tonnage_per_step_mt)} Mt in "
+                  f"{time.perf_counter() - t0:.1f} s", flush=True)
+        params["rail"] = rails[tonnage]
+    t0 = time.perf_counter()
+    sim = simulate_vehicle_wear("minuetto", classes, law=law, mileage_km=km,
+                                depth_per_step_mm=_RUN["step"],
+                                options=VehicleWearOptions(**params),
+                                contact_cache=_RUN["contacts"])
+    print(f"  loop run {label}: {len(sim.mileage_km) - 1} steps in "
+          f"{time.perf_counter() - t0:.1f} s; FT {sim.mean('sd_mm')[-1]:.2f}, "
+          f"qR {sim.mean('qr_mm')[-1]:.2f} mm at {km:.0f} km", flush=True)
+    return sim
+
+
+def _run_group(sets: Sequence[Mapping[str, Any]]) -> list[Any]:
+    return [_attempt(p) for p in sets]
+
+
+def _attempt(params: Mapping[str, Any]) -> Any:
+    try:
+        return simulate(params)
+    except Exception as exc:  # the cause is skipped, saying why (the null's is raised)
+        return exc
+
+
+def parallel_runs(workers: int, km: float, step: float):
+    """A ``run_all`` for :func:`diagnose_physics` making the runs in ``workers`` processes."""
+
+    def run_all(_simulate: Any, sets: Sequence[Mapping[str, Any]]) -> list[Any]:
+        rail = [p for p in sets if p.get("rail_tonnage_mt")]
+        groups = [[p] for p in sets if not p.get("rail_tonnage_mt")] + ([rail] if rail else [])
+        with ProcessPoolExecutor(workers, initializer=_setup, initargs=(km, step)) as pool:
+            done = [r for g in pool.map(_run_group, groups) for r in g]
+        order = [p for g in groups for p in g]
+        return [done[order.index(p)] for p in sets]
+
+    return run_all
 
 
 def main() -> None:
-    from validate_aosta_measured import aosta_classes  # benchmarks/ on sys.path when run
-
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--step", type=float, default=0.8, help="D_step [mm]")
     parser.add_argument("--km", type=float, default=8000.0, help="simulated mileage [km]")
+    parser.add_argument("--workers", type=int, default=1,
+                        help="processes making the loop runs (1: one after the other)")
     parser.add_argument("--causes", default=",".join(c.name for c in CATALOGUE),
                         help="comma-separated causes of the catalogue (default: all)")
     args = parser.parse_args()
@@ -44,45 +121,27 @@ def main() -> None:
     if unknown:
         parser.error(f"unknown causes: {', '.join(sorted(unknown))}")
     catalogue = tuple(c for c in CATALOGUE if c.name in wanted)
-    measured_csv = REFERENCE / "aosta_measured_FH_FT_QR.csv"
-    track_csv = REFERENCE / "aosta_statistical_track_nclass7.csv"
-    if not measured_csv.exists():
+    if not MEASURED_CSV.exists():
         print(f"skipped: {REFERENCE} not found")
         return
-    measured = pd.read_csv(measured_csv, comment="#")
-    classes = aosta_classes(pd.read_csv(track_csv, comment="#"))
+    measured = pd.read_csv(MEASURED_CSV, comment="#")
+    _setup(args.km, args.step)
+    make = (parallel_runs(args.workers, args.km, args.step) if args.workers > 1
+            else run_sequentially)
+    runs_s = [0.0]
 
-    contacts: dict = {}  # first contact updates shared by the runs (same new profile)
-    rails: dict = {}  # the rail state's worn rails, one chain of rail steps for all tonnages
-
-    def simulate(params):
-        params = dict(params)
-        law = params.pop("law", "usfd")
-        tonnage = params.pop("rail_tonnage_mt", 0.0)
-        if tonnage:
-            if tonnage not in rails:
-                t0 = time.perf_counter()
-                out = rails_worn_to_tonnages("minuetto", classes,
-                                             sorted({*RAIL_TONNAGES_MT, tonnage}), law="usfd")
-                rails.update(out.rails)
-                print(f"  rails worn to {sorted(out.rails)} Mt: {out.rail_steps} rail steps "
-                      f"of {', '.join(f'{t:.2f}' for t in out.tonnage_per_step_mt)} Mt in "
-                      f"{time.perf_counter() - t0:.1f} s", flush=True)
-            params["rail"] = rails[tonnage]
-        t0 = time.perf_counter()
-        sim = simulate_vehicle_wear("minuetto", classes, law=law, mileage_km=args.km,
-                                    depth_per_step_mm=args.step,
-                                    options=VehicleWearOptions(**params),
-                                    contact_cache=contacts)
-        label = {k: getattr(v, "name", v) for k, v in params.items()} or "null"
-        print(f"  loop run {label} law={law}: {len(sim.mileage_km) - 1} steps in "
-              f"{time.perf_counter() - t0:.1f} s; FT {sim.mean('sd_mm')[-1]:.2f}, "
-              f"qR {sim.mean('qr_mm')[-1]:.2f} mm at {args.km:.0f} km", flush=True)
-        return sim
+    def run_all(sim: Any, sets: Sequence[Mapping[str, Any]]) -> list[Any]:
+        t_runs = time.perf_counter()
+        out = make(sim, sets)
+        runs_s[0] = time.perf_counter() - t_runs
+        return out
 
     t0 = time.perf_counter()
-    d = diagnose_physics(simulate, measured, catalogue=catalogue)
-    print(f"physics diagnosis of the Aosta data: {time.perf_counter() - t0:.1f} s")
+    d = diagnose_physics(simulate, measured, catalogue=catalogue, run_all=run_all)
+    total = time.perf_counter() - t0
+    print(f"physics diagnosis of the Aosta data: {total:.1f} s ({args.workers} "
+          f"worker{'s' if args.workers > 1 else ''}; loop runs {runs_s[0]:.1f} s, fits and "
+          f"tests {total - runs_s[0]:.1f} s)")
     print(json.dumps(d.to_dict(), indent=1, default=str))
 
 

@@ -49,6 +49,7 @@ from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear
 from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_loop import (
     BOGIE_WHEELS,
+    MAX_WHEEL_WEAR_MM,
     WHEEL_GRID_MM,
     ClassContacts,
     WearLoopDivergedError,
@@ -318,6 +319,7 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                 other = (3 - axle, side)
                 rates[bi, lead_index[(axle, side)]] = (fwd * lead_rates[(axle, side)]
                                                        + (1.0 - fwd) * lead_rates[other])
+        _check_finite_rates(rates, labels, mileage[-1])
         slopes = np.asarray(np.gradient(profiles, y, axis=-1))
         peak = float(np.max(rates * np.sqrt(1.0 + slopes * slopes)))
         remaining = mileage_km - mileage[-1]
@@ -325,8 +327,7 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         for bi in range(n_b):
             for wi in range(4):
                 profiles[bi, wi] = apply_normal_wear(y, profiles[bi, wi], rates[bi, wi] * ds)
-        if not np.all(np.isfinite(profiles)) or np.max(z0 - profiles) > 40.0:
-            raise WearLoopDivergedError(f"vehicle wear loop diverged near {mileage[-1]:.0f} km")
+        _check_profiles(y, z0, profiles, labels, mileage[-1])
         mileage.append(mileage[-1] + ds)
         params.append(_parameters(y, profiles))
         if progress is not None:
@@ -370,6 +371,35 @@ def simulate_vehicle_wear_converged(vehicle: str | Sequence[tuple[BogieVehicle, 
     result, conv = converge_steps(cached, ends, initial, first_step_mm,
                                   tolerance=tolerance, max_halvings=max_halvings)
     return replace(result, convergence=conv)
+
+
+def _check_finite_rates(rates: NDArray, labels: Sequence[str], mileage_km: float) -> None:
+    """Raise :class:`WearLoopDivergedError` naming the wheels whose wear rate of this step is
+    not finite (a contact with a non-finite patch), before it reaches a profile."""
+    flat = rates.reshape(len(labels), -1)
+    bad = [w for w, r in zip(labels, flat, strict=True) if not np.all(np.isfinite(r))]
+    if bad:
+        raise WearLoopDivergedError(
+            f"vehicle wear loop diverged near {mileage_km:.0f} km: non-finite wear rate of "
+            f"{', '.join(bad)} (a contact patch of this step's contact update is not finite)")
+
+
+def _check_profiles(y: NDArray, z0: NDArray, profiles: NDArray, labels: Sequence[str],
+                    mileage_km: float) -> None:
+    """Raise :class:`WearLoopDivergedError` on a non-finite profile or one worn deeper than
+    ``MAX_WHEEL_WEAR_MM`` below the new profile, naming the wheel and where."""
+    flat = profiles.reshape(len(labels), -1)
+    for label, z in zip(labels, flat, strict=True):
+        if not np.all(np.isfinite(z)):
+            raise WearLoopDivergedError(f"vehicle wear loop diverged near {mileage_km:.0f} km: "
+                                        f"non-finite profile of {label}")
+        depth = z0 - z
+        k = int(np.argmax(depth))
+        if depth[k] > MAX_WHEEL_WEAR_MM:
+            raise WearLoopDivergedError(
+                f"vehicle wear loop diverged near {mileage_km:.0f} km: {label} worn "
+                f"{depth[k]:.3g} mm below the new profile at y = {y[k]:.1f} mm, more than a "
+                f"wheel rim's {MAX_WHEEL_WEAR_MM:.0f} mm")
 
 
 def _parameters(y: NDArray, profiles: NDArray) -> NDArray:

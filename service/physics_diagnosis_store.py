@@ -172,10 +172,19 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
         assert segments is not None  # the cause is in the catalogue only with segments
         return rebinned_classes(segments, int(n_class))
 
+    made: dict[str, Any] = {}  # the runs of this job by their parameters: save_as's run of
+    # the verdict's value is the diagnosis's own run when that value is a catalogue value
+
     def simulate(params: Any) -> Any:
         params = dict(params)
         if not params:
             return model.series
+        key = repr(sorted(params.items()))
+        if key not in made:
+            made[key] = run(params)
+        return made[key]
+
+    def run(params: dict[str, Any]) -> Any:
         label = ", ".join(f"{k}={v}" for k, v in params.items())
 
         def progress(km: float) -> None:

@@ -321,12 +321,52 @@ def _holm(pvalues: Sequence[float]) -> NDArray:
     return adj
 
 
+#: How a diagnosis makes its loop runs: (simulate, [parameter sets]) -> [simulation or the
+#: exception its run raised], in the order given.
+RunAll = Callable[[Callable[[Mapping[str, Any]], Any], Sequence[Mapping[str, Any]]],
+                  list[Any]]
+
+
+def catalogue_runs(catalogue: Sequence[PhysicsCause]) -> list[dict[str, Any]]:
+    """The loop runs a diagnosis of ``catalogue`` needs, each once: the null ({}) first, then
+    every cause's values other than its null ({parameter: value})."""
+    out: list[dict[str, Any]] = [{}]
+    seen = {_run_key({})}
+    for cause in catalogue:
+        for v in cause.values:
+            key = _run_key({cause.parameter: v})
+            if v != cause.null and key not in seen:
+                seen.add(key)
+                out.append({cause.parameter: v})
+    return out
+
+
+def _run_key(params: Mapping[str, Any]) -> tuple[tuple[str, str], ...]:
+    return tuple(sorted((k, repr(v)) for k, v in params.items()))
+
+
+def run_sequentially(simulate: Callable[[Mapping[str, Any]], Any],
+                     sets: Sequence[Mapping[str, Any]]) -> list[Any]:
+    """Each parameter set's run in turn; a run that raises gives its exception (a cause's
+    leaves the cause skipped), except the first (the null's), which is raised at once."""
+    out: list[Any] = []
+    for params in sets:
+        try:
+            out.append(simulate(params))
+        except Exception as exc:
+            if not out:
+                raise
+            out.append(exc)
+    return out
+
+
 def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.DataFrame, *,
                      catalogue: Sequence[PhysicsCause] = CATALOGUE,
                      alpha: float = DEFAULT_ALPHA,
                      min_relative_gain: float = DEFAULT_MIN_RELATIVE_GAIN,
                      n_bootstrap: int = 2000, seed: int = 0,
-                     skipped: Mapping[str, str] | None = None) -> PhysicsDiagnosis:
+                     skipped: Mapping[str, str] | None = None,
+                     run_all: RunAll | None = None) -> PhysicsDiagnosis:
     """Diagnose the physics model against measured vehicle-averaged series.
 
     simulate : {parameter: value} -> simulation (``mileage_km``, ``mean(q)`` for the
@@ -339,6 +379,10 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     skipped : {cause: reason} of causes left out of ``catalogue`` because the model lacks
         what they need (reported as such); default: the curve-classes cause, when the
         catalogue has none, with :data:`NO_SEGMENTS`
+    run_all : how the loop runs are made: (simulate, [parameter sets]) -> [simulation or the
+        exception it raised], in order (:func:`run_sequentially` by default; a caller may run
+        them in parallel, :func:`catalogue_runs` lists them). Every run is independent of the
+        others and of the measurements, so the order and the workers change nothing.
     """
     cols, data = _measured_points(measured)
     km = data["distance_km"].to_numpy(float)
@@ -353,7 +397,12 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         skipped = {} if has else {"curve_classes": NO_SEGMENTS}
     skipped = dict(skipped)
     runs: dict[Any, dict[Any, _Series]] = {}
-    null_runs = {None: _Series(simulate({}), cols)}
+    sets = catalogue_runs(catalogue)
+    done = (run_all or run_sequentially)(simulate, sets)
+    if isinstance(done[0], BaseException):
+        raise done[0]  # the model itself does not run: nothing to diagnose
+    by_params = {_run_key(p): r for p, r in zip(sets, done, strict=True)}
+    null_runs = {None: _Series(done[0], cols)}
 
     def held_out(cause: PhysicsCause | None, cause_runs: Mapping[Any, _Series]) -> NDArray:
         cands = _blends(cause, cause_runs)
@@ -372,13 +421,15 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
                 "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols}
     rows = []
     for cause in catalogue:
-        try:
-            cause_runs = {v: (null_runs[None] if v == cause.null else
-                              _Series(simulate({cause.parameter: v}), cols))
-                          for v in cause.values}
-        except Exception as exc:  # a run that fails leaves the cause unscored, saying why
-            skipped[cause.name] = f"the loop failed for this extension: {exc}"
+        failed = [by_params[_run_key({cause.parameter: v})] for v in cause.values
+                  if v != cause.null]
+        failed = [r for r in failed if isinstance(r, BaseException)]
+        if failed:  # a run that fails leaves the cause unscored, saying why
+            skipped[cause.name] = f"the loop failed for this extension: {failed[0]}"
             continue
+        cause_runs = {v: (null_runs[None] if v == cause.null else
+                          _Series(by_params[_run_key({cause.parameter: v})], cols))
+                      for v in cause.values}
         runs[cause.name] = cause_runs
         after = held_out(cause, cause_runs)
         rows.append((cause, after))

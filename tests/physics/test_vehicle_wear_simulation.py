@@ -205,3 +205,43 @@ def test_runs_sharing_a_contact_cache_solve_the_new_profile_once(monkeypatch):
     for q in ("sd_mm", "sh_mm", "qr_mm"):
         np.testing.assert_array_equal(getattr(cached, q), getattr(fresh, q))
     np.testing.assert_array_equal(cached.profiles_mm, fresh.profiles_mm)
+
+
+def test_a_non_finite_contact_is_named_before_it_reaches_a_profile(monkeypatch):
+    # A contact update whose patch is not finite (e.g. a NaN semi-axis of a failed solve)
+    # must stop the run naming the wheels and the reason, not hand a NaN step to every wheel.
+    from dataclasses import replace
+
+    from wearcast.physics import vehicle_wear_simulation as vws
+    from wearcast.physics.wear_loop import WearLoopDivergedError
+
+    real = vws.class_contacts_all_wheels
+    calls = {"n": 0}
+
+    def broken_on_second_update(*args, **kwargs):
+        out, fb = real(*args, **kwargs)
+        calls["n"] += 1
+        if calls["n"] == 3:  # the motor bogie's second update (one motor, one trailer)
+            c = out[(1, "right")]
+            out[(1, "right")] = replace(c, b_mm=np.where(c.in_contact, np.nan, c.b_mm))
+        return out, fb
+
+    monkeypatch.setattr(vws, "class_contacts_all_wheels", broken_on_second_update)
+    with pytest.raises(WearLoopDivergedError, match=r"non-finite wear rate of motor0-1R"):
+        simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                              depth_per_step_mm=STEP, options=VehicleWearOptions(
+                                  forward_share=1.0))
+
+
+def test_a_wheel_worn_beyond_its_rim_is_named_with_where(monkeypatch):
+    from wearcast.physics import vehicle_wear_simulation as vws
+    from wearcast.physics.wear_loop import MAX_WHEEL_WEAR_MM, WearLoopDivergedError
+
+    def runaway(y, z, depth):
+        return z - np.where(np.abs(y + 40.0) < 1.0, MAX_WHEEL_WEAR_MM + 1.0, 0.0)
+
+    monkeypatch.setattr(vws, "apply_normal_wear", runaway)
+    with pytest.raises(WearLoopDivergedError, match=r"motor0-1L worn 41 mm below the new "
+                                                     r"profile at y = -4\d\.\d mm"):
+        simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                              depth_per_step_mm=STEP)

@@ -15,9 +15,11 @@ from wearcast.statistics.physics_diagnosis import (
     SERIES,
     PhysicsCause,
     catalogue_for,
+    catalogue_runs,
     curve_classes_cause,
     diagnose_physics,
     fit_wear_scale,
+    run_sequentially,
 )
 
 
@@ -114,6 +116,45 @@ def test_a_null_is_answered_none(seed):
     assert {f["cause"] for f in body["findings"]} == {c.name for c in CATALOGUE}
     assert "rail_state" in {f["cause"] for f in body["findings"]}
     assert all({"relative", "ci95_low", "ci95_high"} <= set(f["gain"]) for f in body["findings"])
+
+
+def test_each_loop_run_is_made_once_and_the_order_of_the_runs_changes_nothing():
+    sets = catalogue_runs(CATALOGUE)
+    assert sets[0] == {}
+    expected = sum(len(c.values) - 1 for c in CATALOGUE)  # each cause's values but its null
+    assert len(sets) == 1 + expected
+    assert len({tuple(sorted(p.items())) for p in sets}) == len(sets)
+    made = []
+
+    def simulate(params):
+        made.append(dict(params))
+        return _Series(params)
+
+    def backwards(sim, wanted):  # e.g. workers finishing in another order
+        return list(reversed(run_sequentially(sim, list(reversed(wanted)))))
+
+    measured = _measured({"flange_wear_factor": 0.4}, scale=1.3)
+    one = diagnose_physics(simulate, measured, n_bootstrap=300)
+    assert made == sets  # the null first, every other run once, nothing run twice
+    other = diagnose_physics(_Series, measured, n_bootstrap=300, run_all=backwards)
+    assert one.to_dict() == other.to_dict()
+
+
+def test_a_run_that_fails_skips_its_cause_and_a_null_that_fails_raises():
+    def simulate(params):
+        if params.get("friction") == 0.4:
+            raise RuntimeError("loop diverged near 13,095 km")
+        return _Series(params)
+
+    d = diagnose_physics(simulate, _measured({}, scale=1.0), n_bootstrap=200)
+    assert "13,095" in d.skipped["friction_level"]
+    assert "friction_level" not in {f.cause for f in d.findings}
+
+    def broken(params):
+        raise RuntimeError("no contact")
+
+    with pytest.raises(RuntimeError, match="no contact"):
+        diagnose_physics(broken, _measured({}, scale=1.0), n_bootstrap=200)
 
 
 def test_bad_measurements_are_refused():
