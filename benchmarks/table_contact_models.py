@@ -14,7 +14,8 @@ table (one core).
 The route's left and right halves of a curve class are solved alike (every class is solved
 as a left curve, ``wear_tables``), so each distinct (radius, cant, speed) is counted once.
 
-Run: ``.venv/bin/python benchmarks/table_contact_models.py`` (about 30 s).
+Run: ``.venv/bin/python benchmarks/table_contact_models.py`` (about 30 s; ``--per-class`` also
+prints every class, wheel and region of both models).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # one core
 
+import argparse  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -65,8 +67,9 @@ def _summary(rel: pd.Series) -> str:
 
 
 def compare(label: str, table_c: pd.DataFrame, pipe_c: pd.DataFrame, table_t: pd.DataFrame,
-            pipe_t: pd.DataFrame) -> None:
-    """Print the differences of the per-wheel-region measures and of the merged tables."""
+            pipe_t: pd.DataFrame, per_class: bool = False) -> None:
+    """Print the differences of the per-wheel-region measures and of the merged tables
+    (``per_class``: also every class, wheel and region)."""
     a, b = per_wheel_region(table_c), per_wheel_region(pipe_c)
     m = a.merge(b, on=KEYS, suffixes=("_table", "_pipe"))
     both = m[m["loaded_table"] & m["loaded_pipe"]].copy()
@@ -74,6 +77,11 @@ def compare(label: str, table_c: pd.DataFrame, pipe_c: pd.DataFrame, table_t: pd
           "both models")
     for measure in MEASURES:
         both[f"d_{measure}"] = both[f"{measure}_pipe"] / both[f"{measure}_table"] - 1.0
+    if per_class:
+        shown = m.assign(radius_m=m.radius_m.replace(np.inf, np.nan)).sort_values(
+            ["bogie_type", "radius_m", "cant_mm", "wheelset", "side", "region"])
+        print(shown[KEYS + ["tau_max_table", "tau_max_pipe", "t_gamma_table", "t_gamma_pipe"]]
+              .to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     for measure in MEASURES:
         rel = both[f"d_{measure}"]
         print(f"    {measure:<8s} all        {_summary(rel)}")
@@ -97,9 +105,18 @@ def compare(label: str, table_c: pd.DataFrame, pipe_c: pd.DataFrame, table_t: pd
         for _, r in worst.iterrows():
             radius = "tangent" if not np.isfinite(r.radius_m) else f"R {r.radius_m:.0f} m"
             print(f"      {r.bogie_type:<7s} {radius:<9s} cant {r.cant_mm:5.0f} mm "
-                  f"{r.wheelset:<8s} {r.rail:<7s} {r.region:<6s} table "
+                  f"{r.wheelset:<8s} {r.side:<5s} {r.rail:<7s} {r.region:<6s} table "
                   f"{r[f'{measure}_table']:9.2f}  pipeline {r[f'{measure}_pipe']:9.2f}  "
                   f"({100 * r[f'd_{measure}']:+.1f} %)")
+    wheel = [k for k in KEYS if k != "region"]
+    n_patches = [c[c.in_contact].drop_duplicates(subset=wheel + ["patch"]).groupby(wheel).size()
+                 for c in (table_c.fillna({"radius_m": np.inf}),
+                           pipe_c.fillna({"radius_m": np.inf}))]
+    counts = pd.concat(n_patches, axis=1, keys=["table", "pipe"]).fillna(0)
+    fewer = int((counts["pipe"] < counts["table"]).sum())
+    more = int((counts["pipe"] > counts["table"]).sum())
+    print(f"    loaded patches per wheel: pipeline fewer (merged) on {fewer}, more on {more} of "
+          f"{len(counts)} wheels")
     one = m[m["loaded_table"] != m["loaded_pipe"]]
     print(f"    wheel regions loaded in one model only: {len(one)}")
     for _, r in one.iterrows():
@@ -123,7 +140,7 @@ def compare(label: str, table_c: pd.DataFrame, pipe_c: pd.DataFrame, table_t: pd
           f"{int(((t.value_table > 0) != (t.value_pipe > 0)).sum())} of {len(t)}")
 
 
-def route_tables(vehicle: str, route) -> None:
+def route_tables(vehicle: str, route, per_class: bool) -> None:
     radii = [c.radius_m for c in route.classes]
     cant = [c.cant_mm for c in route.classes]
     speed = [c.speed_kmh for c in route.classes]
@@ -140,14 +157,18 @@ def route_tables(vehicle: str, route) -> None:
           f"and trailer): table contacts {seconds['table']:.2f} s, pipeline contacts "
           f"{seconds['pipeline']:.2f} s (x{seconds['pipeline'] / seconds['table']:.0f})")
     compare(f"{route.name} / {vehicle}", out["table"][1], out["pipeline"][1], out["table"][0],
-            out["pipeline"][0])
+            out["pipeline"][0], per_class)
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--per-class", action="store_true",
+                        help="also print every class, wheel and region of both models")
+    per_class = parser.parse_args().per_class
     print("wear measures from the pipeline's contacts vs the contact table's, at the table's "
           "curving equilibrium; d = pipeline / table - 1")
-    route_tables("minuetto", aosta_route())
-    route_tables("metro_b", metro_route())
+    route_tables("minuetto", aosta_route(), per_class)
+    route_tables("metro_b", metro_route(), per_class)
 
 
 if __name__ == "__main__":
