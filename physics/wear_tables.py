@@ -20,6 +20,18 @@ Conventions
   the sum over its patches [N], tau_max the largest [MPa]; a region without contact gets 0.
 * On tangent track both wheels are ``tangent``; the table gives their mean (they are equal
   by symmetry up to the solver tolerance) with ``radius_m`` NaN.
+* ``contact_model`` chooses the contacts the wear measures come from, both at the table's
+  curving equilibrium (the same pose, ``curving.solve_curving_cases``): ``"table"`` (default)
+  the contact table's Hertz ellipses (``curving_table``), ``"pipeline"`` the one contact
+  pipeline's patches (``curving_contacts``: multi-point geometry, patches merged or split,
+  non-Hertzian normal contact where the patch is not elliptic, FASTSIM forces) evaluated at
+  that pose. Either way tau_max and T-gamma are ``wear_measures.equilibrium_wear_measures`` of
+  the chosen contacts (FASTSIM on the patch's (equivalent) ellipse, elliptic bound for
+  tau_max); ``p0_mpa`` is the Hertz p0 of the table's ellipse or the pipeline's peak pressure.
+  The pipeline costs ~30 ms per wheel and pose (``benchmarks/table_contact_models.py``).
+  The pose is the table's, which the pipeline's forces do not balance: where its patch
+  lies elsewhere (conformal treads, flanges up the flank) its creepages and measures differ
+  from those of its own equilibrium (``curving_contacts``).
 * Several classes with the same radius (different cant or speed, as in seed 003 Table 3) are
   merged into one table row per radius by the share-weighted mean (equal weights when no
   share is given); the raw frame keeps every class.
@@ -52,6 +64,8 @@ from wearcast.physics.wear_measures import (
 TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value"]
 MEASURES = WEAR_MEASURES
 _KMH = 3.6
+#: Contact models a table's wear measures can come from (module docstring).
+CONTACT_MODELS = ("table", "pipeline")
 
 
 ClassLike = CurveClass | Mapping[str, object]
@@ -97,17 +111,36 @@ def _operating_points(classes: Sequence[CurveClass], unbalanced_acceleration_m_s
     return cases, labels, speeds
 
 
+def _contacts_of(result: CurvingResult, contact_model: str) -> dict[str, np.ndarray]:
+    """Per-contact arrays (2 axles, 2 sides, slots) of the chosen contact model at the
+    equilibrium: the table's (the result's own fields) or the pipeline's (``result.pipeline``),
+    with ``p0_mpa`` the table's Hertz p0 or the pipeline's peak pressure."""
+    names = ("normal_force_n", "in_contact", "wheel_y_mm", "rail_y_mm", "contact_angle_rad",
+             "rolling_radius_m", "xi", "eta", "phi_per_mm", "fx_n", "fy_n", "mz_nmm", "a_mm",
+             "b_mm", "tau_max_mpa", "t_gamma_n")
+    if contact_model == "table":
+        out = {name: getattr(result, name) for name in names}
+        out["p0_mpa"] = result.p0_mpa
+        return out
+    if result.pipeline is None:
+        raise ValueError("the curving result carries no pipeline contacts")
+    out = {name: result.pipeline[name] for name in names}
+    out["p0_mpa"] = result.pipeline["peak_pressure_mpa"]
+    return out
+
+
 def _contact_rows(bogie_type: str, k: int, cls: CurveClass, result: CurvingResult,
-                  speed_m_s: float) -> list[dict]:
+                  speed_m_s: float, contact_model: str = "table") -> list[dict]:
+    c = _contacts_of(result, contact_model)
     rows = []
     for axle in range(2):
         for s, side in enumerate(("left", "right")):
-            for slot in range(result.normal_force_n.shape[-1]):
-                fn = float(result.normal_force_n[axle, s, slot])
-                loaded = bool(result.in_contact[axle, s, slot])
-                y_w = float(result.wheel_y_mm[axle, s, slot])
-                a = float(result.a_mm[axle, s, slot])
-                b = float(result.b_mm[axle, s, slot])
+            for slot in range(c["normal_force_n"].shape[-1]):
+                fn = float(c["normal_force_n"][axle, s, slot])
+                loaded = bool(c["in_contact"][axle, s, slot])
+                y_w = float(c["wheel_y_mm"][axle, s, slot])
+                a = float(c["a_mm"][axle, s, slot])
+                b = float(c["b_mm"][axle, s, slot])
                 rows.append({
                     "bogie_type": bogie_type, "class_index": k,
                     "radius_m": (np.nan if cls.is_tangent or cls.radius_m is None
@@ -118,20 +151,20 @@ def _contact_rows(bogie_type: str, k: int, cls: CurveClass, result: CurvingResul
                     "side": side, "rail": result.rail_of(side), "patch": slot,
                     "in_contact": loaded,
                     "region": "flange" if y_w < FLANGE_SPLIT_Y_MM else "tread",
-                    "wheel_y_mm": y_w, "rail_y_mm": float(result.rail_y_mm[axle, s, slot]),
-                    "contact_angle_rad": float(result.contact_angle_rad[axle, s, slot]),
-                    "rolling_radius_m": float(result.rolling_radius_m[axle, s, slot]),
+                    "wheel_y_mm": y_w, "rail_y_mm": float(c["rail_y_mm"][axle, s, slot]),
+                    "contact_angle_rad": float(c["contact_angle_rad"][axle, s, slot]),
+                    "rolling_radius_m": float(c["rolling_radius_m"][axle, s, slot]),
                     "normal_force_n": fn if loaded else 0.0,
-                    "xi": float(result.xi[axle, s, slot]),
-                    "eta": float(result.eta[axle, s, slot]),
-                    "phi_per_mm": float(result.phi_per_mm[axle, s, slot]),
-                    "fx_n": float(result.fx_n[axle, s, slot]) if loaded else 0.0,
-                    "fy_n": float(result.fy_n[axle, s, slot]) if loaded else 0.0,
-                    "mz_nmm": float(result.mz_nmm[axle, s, slot]) if loaded else 0.0,
+                    "xi": float(c["xi"][axle, s, slot]),
+                    "eta": float(c["eta"][axle, s, slot]),
+                    "phi_per_mm": float(c["phi_per_mm"][axle, s, slot]),
+                    "fx_n": float(c["fx_n"][axle, s, slot]) if loaded else 0.0,
+                    "fy_n": float(c["fy_n"][axle, s, slot]) if loaded else 0.0,
+                    "mz_nmm": float(c["mz_nmm"][axle, s, slot]) if loaded else 0.0,
                     "a_mm": a if loaded else 0.0, "b_mm": b if loaded else 0.0,
-                    "p0_mpa": float(result.p0_mpa[axle, s, slot]),
-                    "tau_max_mpa": float(result.tau_max_mpa[axle, s, slot]),
-                    "t_gamma_n": float(result.t_gamma_n[axle, s, slot]),
+                    "p0_mpa": float(c["p0_mpa"][axle, s, slot]),
+                    "tau_max_mpa": float(c["tau_max_mpa"][axle, s, slot]),
+                    "t_gamma_n": float(c["t_gamma_n"][axle, s, slot]),
                     "wheelset_shift_mm": float(result.wheelset_shift_mm[axle]),
                     "wheelset_yaw_rad": float(result.wheelset_yaw_rad[axle]),
                 })
@@ -208,7 +241,7 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
                                      unbalanced_acceleration_m_s2: float = 0.58,
                                      tangent_speed_kmh: float = 100.0,
                                      max_speed_kmh: float | None = None,
-                                     fastsim_grid: int = 20
+                                     fastsim_grid: int = 20, contact_model: str = "table"
                                      ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Curve-radius table and the raw per-contact quantities behind it.
 
@@ -222,6 +255,9 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
     tangent_speed_kmh : speed on tangent classes without a speed [km/h]
     max_speed_kmh : optional line-speed cap for speeds derived from a_nc [km/h]
     fastsim_grid : FASTSIM grid size for tau_max
+    contact_model : ``"table"`` (default) the wear measures of the contact table's Hertz
+        ellipses at the curving equilibrium, ``"pipeline"`` those of the contact pipeline's
+        patches at the same pose (module docstring; ~30 ms per wheel and pose)
 
     Returns
     -------
@@ -234,8 +270,12 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
 
     Raises
     ------
-    ValueError for bad classes; curving.CurvingConvergenceError if a class does not converge.
+    ValueError for bad classes or an unknown ``contact_model``; curving.CurvingConvergenceError
+    if a class does not converge (with ``"pipeline"`` also if the pipeline fails at its pose).
     """
+    if contact_model not in CONTACT_MODELS:
+        raise ValueError(f"contact_model must be one of {list(CONTACT_MODELS)}, not "
+                         f"{contact_model!r}")
     cls = [_as_class(c) for c in classes]
     if not cls:
         raise ValueError("classes must not be empty")
@@ -244,9 +284,10 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
         cases, labels, speeds = _operating_points(cls, unbalanced_acceleration_m_s2,
                                                   tangent_speed_kmh, max_speed_kmh,
                                                   vehicle.traction_torque_nm)
-        results = solve_curving_cases(vehicle, cases, labels, fastsim_grid=fastsim_grid)
+        results = solve_curving_cases(vehicle, cases, labels, fastsim_grid=fastsim_grid,
+                                      contact_pipeline=contact_model == "pipeline")
         for k, (c, res, v) in enumerate(zip(cls, results, speeds, strict=True)):
-            rows.extend(_contact_rows(bogie_type, k, c, res, v))
+            rows.extend(_contact_rows(bogie_type, k, c, res, v, contact_model))
     contacts = _add_indices(pd.DataFrame(rows))
     return table_from_contacts(contacts), contacts
 
@@ -254,11 +295,11 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
 def compute_wear_table(vehicle_motor: BogieVehicle, vehicle_trailer: BogieVehicle,
                        classes: Iterable[ClassLike], unbalanced_acceleration_m_s2: float = 0.58,
                        tangent_speed_kmh: float = 100.0, max_speed_kmh: float | None = None,
-                       fastsim_grid: int = 20) -> pd.DataFrame:
+                       fastsim_grid: int = 20, contact_model: str = "table") -> pd.DataFrame:
     """The curve-radius table only; see :func:`compute_wear_table_with_contacts`."""
     return compute_wear_table_with_contacts(vehicle_motor, vehicle_trailer, classes,
                                             unbalanced_acceleration_m_s2, tangent_speed_kmh,
-                                            max_speed_kmh, fastsim_grid)[0]
+                                            max_speed_kmh, fastsim_grid, contact_model)[0]
 
 
 def wear_table_for_route(vehicle: str | tuple[BogieVehicle, BogieVehicle],
@@ -268,7 +309,7 @@ def wear_table_for_route(vehicle: str | tuple[BogieVehicle, BogieVehicle],
                          shares: Sequence[float] | None = None,
                          unbalanced_acceleration_m_s2: float = 0.58,
                          tangent_speed_kmh: float = 100.0, max_speed_kmh: float | None = None,
-                         with_contacts: bool = False):
+                         with_contacts: bool = False, contact_model: str = "table"):
     """Build a curve-radius table from plain lists (what ``POST /v1/wear-tables/compute``
     needs).
 
@@ -283,6 +324,7 @@ def wear_table_for_route(vehicle: str | tuple[BogieVehicle, BogieVehicle],
     unbalanced_acceleration_m_s2, tangent_speed_kmh, max_speed_kmh : as
         :func:`compute_wear_table_with_contacts`
     with_contacts : also return the raw per-contact frame
+    contact_model : ``"table"`` or ``"pipeline"`` (:func:`compute_wear_table_with_contacts`)
 
     Returns
     -------
@@ -313,5 +355,5 @@ def wear_table_for_route(vehicle: str | tuple[BogieVehicle, BogieVehicle],
                for r, c, v, s in zip(radii_m, cants, speeds, share_list, strict=True)]
     table, contacts = compute_wear_table_with_contacts(
         motor, trailer, classes, unbalanced_acceleration_m_s2, tangent_speed_kmh,
-        max_speed_kmh)
+        max_speed_kmh, contact_model=contact_model)
     return (table, contacts) if with_contacts else table

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
@@ -65,6 +65,11 @@ class WearTableComputeIn(MeasuredProfilesIn):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
+    contact_model: Literal["table", "pipeline"] = Field(default="table", description=(
+        "contacts the wear measures come from, at the curving equilibrium: the contact "
+        "table's Hertz ellipses, or the one contact pipeline's patches (non-Hertzian where "
+        "the patch is not elliptic; about 30 ms per wheel and class, ~10 s for the Aosta "
+        "route)"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:

@@ -274,7 +274,7 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
             (motor, trailer), classes.radii_m, classes.cant_mm, classes.speed_kmh,
             classes.shares, unbalanced_acceleration_m_s2=body.unbalanced_acceleration_m_s2,
             tangent_speed_kmh=body.tangent_speed_kmh, max_speed_kmh=body.max_speed_kmh,
-            with_contacts=True)
+            with_contacts=True, contact_model=body.contact_model)
     except CurvingConvergenceError as exc:
         radius = exc.radius_m
         where = "tangent track" if not math.isfinite(radius) else f"radius {abs(radius):g} m"

@@ -190,3 +190,27 @@ def test_compute_from_radii_and_uploaded_tables_have_no_contacts(tmp_path: Path)
     assert up["kind"] == "uploaded"
     r = client.get(f"/v1/wear-tables/{up['id']}/contacts")
     assert r.status_code == 404 and r.json()["errors"][0]["field"] == "table_id"
+
+
+def test_compute_with_the_contact_pipelines_wear_measures(tmp_path: Path) -> None:
+    """``contact_model: "pipeline"`` (issue 11): the same classes and table format, the wear
+    measures from the one contact pipeline's patches at the curving equilibrium; the default
+    stays the contact table's; an unknown model is a 422 naming the field."""
+    client = _client(tmp_path)
+    body = {"name": "m", "vehicle": "metro_b",
+            "radii": [{"radius_m": 475, "cant_mm": 40, "speed_kmh": 40}]}
+    default = client.post("/v1/wear-tables/compute", json=body)
+    piped = client.post("/v1/wear-tables/compute", json={**body, "contact_model": "pipeline"})
+    assert default.status_code == 201 and piped.status_code == 201, piped.text
+    assert default.json()["spec"]["contact_model"] == "table"
+    assert piped.json()["spec"]["contact_model"] == "pipeline"
+    a, b = _rows(default.json()), _rows(piped.json())
+    keys = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure"]
+    assert a[keys].fillna(-1).equals(b[keys].fillna(-1))
+    assert np.isfinite(b["value"]).all() and (b["value"] >= 0).all()
+    assert not np.allclose(a["value"], b["value"])
+    assert piped.json()["sha256"] != default.json()["sha256"]
+    contacts = client.get(f"/v1/wear-tables/{piped.json()['id']}/contacts").json()
+    assert contacts["n_contacts"] == 2 * 2 * 2 * 2 * 3  # bogies, classes, axles, sides, slots
+    r = client.post("/v1/wear-tables/compute", json={**body, "contact_model": "bem"})
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "contact_model"
