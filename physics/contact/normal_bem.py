@@ -178,7 +178,10 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
     max_iter : iteration limit; RuntimeError if reached without convergence
     initial_pressure_mpa : optional start pressure (ny, nx) [MPa], e.g. the solution of a
         nearby problem on the same grid (a warm start: fewer iterations, the same solution
-        to ``tol``); default sqrt of the rigid interpenetration
+        to ``tol``); default sqrt of the rigid interpenetration. A warm start that loses
+        every element in contact, or does not converge, is solved again from the default
+        start (the iteration, not the problem, failed: e.g. a nearby patch that no longer
+        overlaps the interpenetration)
     compiled : run the compiled direct iteration (``normal_bem_kernel``) instead of the FFT
         one; default: compiled when numba is there and the grid has at most
         ``DIRECT_MAX_ELEMENTS`` elements (the two agree to rounding)
@@ -188,6 +191,21 @@ def solve_normal_bem(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike,
     NormalBemResult; Polonsky & Keer 1999 CG with Kalker/Love influence coefficients
     (module docstring).
     """
+    if initial_pressure_mpa is not None:
+        try:
+            return _solve(gap_mm, x_mm, y_mm, normal_force_n, approach_mm, young_mpa, poisson,
+                          tol, max_iter, initial_pressure_mpa, compiled)
+        except RuntimeError:
+            pass  # the warm iteration failed: solved again from the default start
+    return _solve(gap_mm, x_mm, y_mm, normal_force_n, approach_mm, young_mpa, poisson, tol,
+                  max_iter, None, compiled)
+
+
+def _solve(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike, normal_force_n: float | None,
+           approach_mm: float | None, young_mpa: float, poisson: float, tol: float,
+           max_iter: int, initial_pressure_mpa: ArrayLike | None, compiled: bool | None
+           ) -> NormalBemResult:
+    """:func:`solve_normal_bem` from one start."""
     h = np.asarray(gap_mm, dtype=float)
     x = np.asarray(x_mm, dtype=float)
     y = np.asarray(y_mm, dtype=float)

@@ -1,6 +1,8 @@
 """Boundary-element normal contact (Kalker/Love coefficients, Polonsky-Keer CG): Hertz limit,
 force-approach monotonicity, symmetry, and the two ways of prescribing the problem."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -86,3 +88,23 @@ def test_influence_coefficient_of_a_square():
     assert c.shape == (1, 1)
     assert c[0, 0] == pytest.approx(8.0 * np.log(1.0 + np.sqrt(2.0)) / (np.pi * e_star),
                                     rel=1e-12)
+
+
+#: A coarse-grid normal problem of the contact pipeline on a raw MiniProf wheel
+#: (left-wheel-v1-pre-dry on 60E1, shift +2 mm, yaw -0.01 rad, roll +0.002 rad from the rigid
+#: one, 10 kN) with the warm start the pipeline gave it: from that start the iteration lost
+#: every element in contact (found by the slow raw-wheel sweep of test_contact_robustness).
+WARM_CASE = Path(__file__).with_name("data") / "bem_warm_start_case.npz"
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_warm_start_that_loses_the_contact_is_solved_again_from_the_default_start(compiled):
+    case = np.load(WARM_CASE)
+    kw = {"approach_mm": float(case["approach_mm"]), "young_mpa": float(case["young_mpa"]),
+          "poisson": float(case["poisson"]), "tol": 1e-6, "compiled": compiled}
+    cold = solve_normal_bem(case["gap_mm"], case["x_mm"], case["y_mm"], **kw)
+    warm = solve_normal_bem(case["gap_mm"], case["x_mm"], case["y_mm"],
+                            initial_pressure_mpa=case["warm_mpa"], **kw)
+    assert cold.normal_force_n > 0
+    np.testing.assert_allclose(warm.pressure_mpa, cold.pressure_mpa,
+                               atol=1e-4 * cold.peak_pressure_mpa)
