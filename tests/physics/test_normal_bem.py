@@ -94,7 +94,7 @@ def test_influence_coefficient_of_a_square():
 #: (left-wheel-v1-pre-dry on 60E1, shift +2 mm, yaw -0.01 rad, roll +0.002 rad from the rigid
 #: one, 10 kN) with the warm start the pipeline gave it: from that start the iteration lost
 #: every element in contact (found by the slow raw-wheel sweep of test_contact_robustness).
-WARM_CASE = Path(__file__).with_name("data") / "bem_warm_start_case.npz"
+WARM_CASE = Path(__file__).with_name("fixtures") / "bem_warm_start_case.npz"
 
 
 @pytest.mark.parametrize("compiled", [True, False])
