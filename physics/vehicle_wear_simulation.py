@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.step_convergence import DEFAULT_TOLERANCE, StepConvergence, converge_steps
+from wearcast.physics.vehicle_wheel_series import VehicleWheelSeries
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
 from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear
 from wearcast.physics.wear_laws import WearLaw
@@ -111,21 +112,12 @@ class VehicleWearOptions:
 
 
 @dataclass(frozen=True)
-class VehicleWearSimulation:
-    """Result of :func:`simulate_vehicle_wear`.
-
-    mileage_km (n_steps+1,); wheels: labels ``"<bogie>-<axle><L|R>"`` (n_wheels,); weights
-    (n_wheels,) summing to 1 (bogie number / wheels); sd_mm, sh_mm, qr_mm (n_steps+1, n_wheels)
-    per wheel; y_mm (n,), profiles_mm (n_wheels, n) at the end; contact_updates,
-    contact_fallbacks, elapsed_s, depth_per_step_mm (D_step), options.
+class VehicleWearSimulation(VehicleWheelSeries):
+    """Result of :func:`simulate_vehicle_wear`: the per-wheel series of
+    :class:`VehicleWheelSeries` with y_mm (n,), profiles_mm (n_wheels, n) at the end;
+    contact_updates, contact_fallbacks, elapsed_s, depth_per_step_mm (D_step), options.
     """
 
-    mileage_km: NDArray
-    wheels: tuple[str, ...]
-    weights: NDArray
-    sd_mm: NDArray
-    sh_mm: NDArray
-    qr_mm: NDArray
     y_mm: NDArray
     initial_profile_mm: NDArray
     profiles_mm: NDArray
@@ -136,17 +128,6 @@ class VehicleWearSimulation:
     options: VehicleWearOptions
     law: str
     convergence: StepConvergence | None = None
-
-    def mean(self, quantity: str) -> NDArray:
-        """Vehicle average of ``sd_mm`` | ``sh_mm`` | ``qr_mm`` per step (as measured) [mm]."""
-        return np.asarray(getattr(self, quantity)) @ self.weights
-
-    def mean_at(self, quantity: str, mileage_km: Any) -> NDArray:
-        """Vehicle average of a quantity at mileages (linear between steps) [mm]."""
-        km = np.asarray(mileage_km, dtype=float)
-        if np.any(km > self.mileage_km[-1] + 1e-6) or np.any(km < 0):
-            raise ValueError(f"mileage outside the simulated 0..{self.mileage_km[-1]:.0f} km")
-        return np.interp(km, self.mileage_km, self.mean(quantity))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (vehicle means per step)."""

@@ -12,10 +12,11 @@ new profile's value) of each.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 #: Measured column -> simulation quantity (``VehicleWearSimulation.mean``).
 QUANTITIES = {"FT_mm": "sd_mm", "FH_mm": "sh_mm", "QR_mm": "qr_mm"}
@@ -60,7 +61,20 @@ def _summary(rows: pd.DataFrame, new_values: dict[str, float]) -> dict[str, floa
             "loss_error_pct": 100.0 * (sim_rate / meas_rate - 1.0) if meas_rate else np.nan}
 
 
-def compare_with_measured(simulation: Any, measured: pd.DataFrame,
+class VehicleMeans(Protocol):
+    """What :func:`compare_with_measured` reads of a run: its mileages [km] and its vehicle
+    averages per step and at mileages [mm] (``physics.vehicle_wheel_series.VehicleWheelSeries``,
+    ``physics_model.ScaledVehicle``)."""
+
+    @property
+    def mileage_km(self) -> NDArray: ...
+
+    def mean(self, quantity: str) -> NDArray: ...
+
+    def mean_at(self, quantity: str, mileage_km: Any) -> NDArray: ...
+
+
+def compare_with_measured(simulation: VehicleMeans, measured: pd.DataFrame,
                           new_values: dict[str, float] | None = None) -> MeasuredComparison:
     """Compare a vehicle simulation with measured series (columns ``vehicle``, ``distance_km``
     and any of ``FT_mm``, ``FH_mm``, ``QR_mm``). ``new_values``: the parameters of the new

@@ -28,13 +28,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from wearcast.physics.vehicle_wheel_series import VehicleWheelSeries
 from wearcast.statistics.physics_comparison import compare_with_measured
 from wearcast.statistics.physics_diagnosis import SERIES, ScaleFit, fit_wear_scale
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
@@ -47,22 +48,14 @@ TAIL_SHARE = 0.25
 
 
 @dataclass(frozen=True)
-class VehicleSeries:
-    """Per-wheel Sd/Sh/qR of a whole-vehicle run: mileage_km (n,), wheels (labels
-    ``<bogie><i>-<axle><L|R>``), weights (bogie numbers, sum 1), sd_mm/sh_mm/qr_mm (n, w)."""
-
-    mileage_km: NDArray
-    wheels: tuple[str, ...]
-    weights: NDArray
-    sd_mm: NDArray
-    sh_mm: NDArray
-    qr_mm: NDArray
+class VehicleSeries(VehicleWheelSeries):
+    """Per-wheel Sd/Sh/qR of a whole-vehicle run (:class:`VehicleWheelSeries`: mileage_km
+    (n,), wheels ``<bogie><i>-<axle><L|R>``, weights summing to 1, sd_mm/sh_mm/qr_mm (n, w)),
+    as stored with a physics model."""
 
     @classmethod
-    def from_simulation(cls, sim: Any) -> VehicleSeries:
-        return cls(np.asarray(sim.mileage_km, float), tuple(sim.wheels),
-                   np.asarray(sim.weights, float), np.asarray(sim.sd_mm, float),
-                   np.asarray(sim.sh_mm, float), np.asarray(sim.qr_mm, float))
+    def from_simulation(cls, sim: VehicleWheelSeries) -> VehicleSeries:
+        return cls(*(getattr(sim, f.name) for f in fields(VehicleWheelSeries)))
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> VehicleSeries:
@@ -74,13 +67,6 @@ class VehicleSeries:
         return {"mileage_km": self.mileage_km.tolist(), "wheels": list(self.wheels),
                 "weights": self.weights.tolist(), "sd_mm": self.sd_mm.tolist(),
                 "sh_mm": self.sh_mm.tolist(), "qr_mm": self.qr_mm.tolist()}
-
-    def mean(self, quantity: str) -> NDArray:
-        """Vehicle average per step (as measured) [mm]."""
-        return np.asarray(getattr(self, quantity)) @ self.weights
-
-    def mean_at(self, quantity: str, mileage_km: Any) -> NDArray:
-        return np.interp(np.asarray(mileage_km, float), self.mileage_km, self.mean(quantity))
 
     def wheel_columns(self, bogie_type: str, axle: int, side: str) -> list[int]:
         """Columns of the wheels at a position (one per bogie of that type in the run)."""
