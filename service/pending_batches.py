@@ -163,6 +163,11 @@ def _adopt_registered(session: Session, batch_id: int, wheel_ids: list[str]) -> 
     """Wheels (and their vehicles) this batch measured that another import still pending
     registered become visible with this batch: their ``registered_batch_id`` is cleared."""
     w, v = db.Wheel, db.Vehicle
+    if not session.scalar(select(
+            exists().where(w.registered_batch_id.is_not(None), w.registered_batch_id != batch_id)
+            | exists().where(v.registered_batch_id.is_not(None),
+                             v.registered_batch_id != batch_id))):
+        return  # no other import has registered anything: nothing to adopt (indexed check)
     for start in range(0, len(wheel_ids), DISCARD_CHUNK):
         chunk = wheel_ids[start:start + DISCARD_CHUNK]
         session.execute(update(v).where(
