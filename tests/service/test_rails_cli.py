@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from wearcast.service import cli as cli_module
 from wearcast.service.cli import app
 
 
@@ -17,6 +18,9 @@ def datadir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path / "data"))
     monkeypatch.delenv("WEARCAST_DATABASE_URL", raising=False)
     monkeypatch.setenv("COLUMNS", "160")
+    # the CLI's console is made when wearcast.service.cli is first imported (by whichever
+    # test comes first in this process); give it the width too
+    monkeypatch.setattr(cli_module.console, "width", 160)
     return tmp_path
 
 
