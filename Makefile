@@ -6,6 +6,9 @@ STAMP  := $(VENV)/.installed-stamp
 TYPES  := .typecheck/wearcast
 HOST   ?= 127.0.0.1
 PORT   ?= 8000
+# the suites run in one pytest-xdist process per CPU, a test file per process at a time;
+# PARALLEL= (empty) runs them in one process
+PARALLEL ?= -n auto --dist loadfile
 
 .PHONY: run test test-slow test-all lint typecheck bench demo clean lock worker
 
@@ -34,13 +37,13 @@ worker: $(STAMP)
 	$(BIN)/wearcast worker
 
 test: lint typecheck
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest $(PARALLEL)
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -m slow
+	$(BIN)/python -m pytest -m slow $(PARALLEL)
 
 test-all: $(STAMP)
-	$(BIN)/python -m pytest -m ''
+	$(BIN)/python -m pytest -m '' $(PARALLEL)
 
 # mypy sees the installed package layout (wearcast.physics -> physics/ ...) through a tree of
 # links, so every cross-module import is typed instead of resolving to Any.
