@@ -268,10 +268,6 @@ class WearLaw:
         if self.usfd_jump not in ("continuous", "as_printed"):
             raise ValueError("usfd_jump must be 'continuous' or 'as_printed'")
 
-    @property
-    def is_zone_linear(self) -> bool:
-        """Worn volume is linear in per-zone coefficients (Archard/KTH)."""
-        return self.name == "archard_kth"
 
 
 def wheel_rail_split(law: WearLaw) -> tuple[float, float]:

@@ -110,11 +110,9 @@ def clear_caches() -> None:
         model_store,
         physics_model_store,
         prediction_store,
-        route_store,
     )
 
-    for module in (model_loading, model_store, prediction_store, route_store,
-                   physics_model_store):
+    for module in (model_loading, model_store, prediction_store, physics_model_store):
         for value in vars(module).values():
             clear = getattr(value, "clear", None)
             if clear is not None and type(value).__name__ == "LruCache":

@@ -23,7 +23,6 @@ from __future__ import annotations
 import datetime as dt
 import logging
 import threading
-from typing import Any
 
 from sqlalchemy.orm import Session
 
@@ -171,7 +170,3 @@ class JobRunner:
                 sweep_abandoned_imports(self.factory)
             except Exception as exc:
                 log.warning("job sweep failed: %s", exc)
-
-
-def runner_of(app: Any) -> JobRunner:
-    return app.state.jobs

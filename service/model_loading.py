@@ -169,19 +169,6 @@ def wheel_model(model: AnyModel, route: Route, table: WearTable, *, bogie_type: 
                            covariates=covariates)
 
 
-def route_covariates(session: Session, route_name: str,
-                     given: dict[str, Any] | None) -> dict[str, Any]:
-    """A stored route's attributes overlaid with the request's covariates (extended models
-    read e.g. ``flange_lubrication`` from the route and ``load_t`` from the request)."""
-    out: dict[str, Any] = {}
-    if route_name != "inline":
-        row = route_store.find_route(session, route_name)
-        if row is not None:
-            out.update(row.attributes or {})
-    out.update(given or {})
-    return out
-
-
 # --- the hot path: inputs served from process memory -----------------------------------------
 
 

@@ -45,12 +45,6 @@ class RouteRef(Strict):
         return self
 
 
-class WheelPosition(RouteRef):
-    bogie_type: BogieType
-    axle: Axle
-    side: Side
-
-
 class PredictIn(RouteRef):
     bogie_type: BogieType | None = None
     axle: Axle | None = None

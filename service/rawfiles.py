@@ -63,7 +63,3 @@ def discard(raw_dir: Path, stored: StoredFile) -> None:
     """Remove a file this import created (used when the import rolls back)."""
     if stored.created:
         (raw_dir / stored.relative_path).unlink(missing_ok=True)
-
-
-def open_raw(raw_dir: Path, relative_path: str) -> BinaryIO:
-    return (raw_dir / relative_path).open("rb")

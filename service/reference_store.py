@@ -182,12 +182,3 @@ def list_references(session: Session) -> list[dict[str, Any]]:
     for row in session.scalars(select(db.ReferenceProfile).order_by(db.ReferenceProfile.name)):
         out.append(reference_out(row))
     return out
-
-
-def reference_points(session: Session, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """Points [mm] of a reference (built-ins sampled every 0.2 mm) for pictures."""
-    spec = resolve_reference(session, name)
-    if spec.kind == "points":
-        return np.asarray(spec.y_mm), np.asarray(spec.z_mm)
-    y = np.linspace(-70.0, 60.0, 651)
-    return y, np.asarray(height_of(spec)(y))

@@ -8,12 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy import bindparam, select
+from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from wearcast.service import models_db as db
-from wearcast.service.cache import LruCache
 from wearcast.service.errors import Conflict, NotFound, Unprocessable, from_value_error
 from wearcast.service.id_text import decimal_id
 from wearcast.service.route_schemas import RouteIn, RouteOut, RouteSpec
@@ -106,49 +105,6 @@ def resolve(session: Session, route_id: int | str | None, route: RouteSpec | Non
     if route is None:
         raise Unprocessable("route_id", "give either route_id or route")
     return build_route(route, "inline", "route."), None
-
-
-#: Domain routes kept in process, keyed by (database URL, route id, created_at).
-ROUTE_CACHE_SIZE = 256
-_routes: LruCache[stat_routes.Route] = LruCache(ROUTE_CACHE_SIZE)
-
-
-_ROUTE_KEY_BY_ID = (select(db.Route.id, db.Route.name, db.Route.created_at)
-                    .where(db.Route.id == bindparam("route_id")))
-_ROUTE_KEY_BY_NAME = (select(db.Route.id, db.Route.name, db.Route.created_at)
-                      .where(db.Route.name == bindparam("name")))
-
-
-def _stored_route_key(session: Session, id_or_name: int | str) -> tuple[int, str, Any] | None:
-    """(id, name, created_at) of a stored route by id or name, as :func:`find_route`."""
-    number = id_or_name if isinstance(id_or_name, int) else decimal_id(id_or_name)
-    if number is not None:
-        found = session.execute(_ROUTE_KEY_BY_ID, {"route_id": number}).first()
-        if found is not None:
-            return found[0], found[1], found[2]
-    found = session.execute(_ROUTE_KEY_BY_NAME, {"name": str(id_or_name)}).first()
-    return None if found is None else (found[0], found[1], found[2])
-
-
-def resolve_cached(session: Session, route_id: int | str | None, route: RouteSpec | None,
-                   ) -> tuple[stat_routes.Route, str]:
-    """:func:`resolve` for the hot paths: the route and its name (``inline`` for a route
-    given in the request).
-
-    Stored routes are never updated, so the domain route is cached in process under
-    (database URL, id, created_at); a hit costs one small query of three columns.
-    """
-    if route_id is None:
-        return resolve(session, route_id, route)[0], "inline"
-    key = _stored_route_key(session, route_id)
-    if key is None:
-        raise NotFound("route_id", f"no route with id or name {route_id!r}")
-    route_pk = key[0]
-
-    def load() -> stat_routes.Route:
-        return to_domain(get_route(session, route_pk))
-
-    return _routes.get_or_create((str(session.get_bind().engine.url), *key), load), key[1]
 
 
 def list_routes(session: Session) -> list[db.Route]:

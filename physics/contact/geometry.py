@@ -446,10 +446,6 @@ class ContactTable:
         """Delta r = r_left - r_right at the primary patches [mm]; > 0 for a left shift."""
         return self.left.primary.rolling_radius_mm - self.right.primary.rolling_radius_mm
 
-    @property
-    def two_point(self) -> NDArray[np.bool_]:
-        """True where either wheel has a secondary patch."""
-        return self.left.secondary.valid | self.right.secondary.valid
 
 
 @dataclass(frozen=True)
