@@ -13,13 +13,14 @@ reported (file, line, field). Across blocks, the importing process checks that n
 measurement reappears (the same error as the reader's).
 
 When it pays: the import runs at about min(1 / importer CPU, cores / total CPU) profiles per
-second (CPU per profile). Parsing in the workers takes about 0.15 ms per profile off the
-importing process but costs them more than that (the block goes through a pipe, each worker
-loads pandas), so with 2 cores the total CPU bounds the rate and the import is no faster
-(measured: as fast or up to a fifth slower under load); with 3 cores or more the importing
-process is the bound and parsing in the workers raises it. So :func:`parse_in_workers`
-says yes from :data:`MIN_WORKERS` pool workers on (the ``import_parse_in_workers`` setting
-forces either way).
+second (CPU per profile). Measured with a warm pool (``benchmarks/bench_import.py --warm``,
+2 cores, 10,000 profiles), parsing in the workers takes the importing process from 0.5 to
+0.29 ms per profile but the workers from 0.25 to 0.60 ms (the block goes through a pipe and
+is parsed in pieces of a few MB): with 2 cores the total CPU bounds the rate and the import
+is no faster (measured 10-20 % slower on a loaded machine); from 3 cores on the importing
+process is the bound and parsing in the workers raises it (by the formula about 2,200 →
+3,400 profiles/s). So :func:`parse_in_workers` says yes from :data:`MIN_WORKERS` pool
+workers on; the ``import_parse_in_workers`` setting forces either way.
 
 A file that fits in one block, or a pool that cannot run (one core,
 ``WEARCAST_IMPORT_WORKERS=0``, a broken pool), is parsed in this process with the same

@@ -143,8 +143,9 @@ def test_an_import_parsed_in_the_workers_stores_what_the_importer_parsing_stores
     monkeypatch.setattr(import_csv_blocks, "BLOCK_BYTES", 20_000)
     data = _csv(40, points=120).encode()
     stored = []
-    for in_workers in (False, True):
-        settings = Settings(data_dir=tmp_path / f"w{in_workers}", database_url=None,
+    # parsed here into SQLite, then in the workers into the backend under test
+    for in_workers, url in ((False, None), (True, backend_url)):
+        settings = Settings(data_dir=tmp_path / f"w{in_workers}", database_url=url,
                             import_parse_in_workers=in_workers)
         database = Database(settings)
         database.migrate()
@@ -157,3 +158,13 @@ def test_an_import_parsed_in_the_workers_stores_what_the_importer_parsing_stores
     import_pool.discard_pool()
     assert stored[0] == stored[1]
     assert {row[2] for row in stored[1]} == {f"route, {i}" for i in range(4)}
+
+
+def test_workers_parse_from_min_workers_on_unless_the_setting_says(monkeypatch):
+    few, many = import_csv_blocks.MIN_WORKERS - 1, import_csv_blocks.MIN_WORKERS
+    monkeypatch.setenv("WEARCAST_IMPORT_WORKERS", str(few))
+    assert not import_csv_blocks.parse_in_workers()
+    assert import_csv_blocks.parse_in_workers(True)
+    monkeypatch.setenv("WEARCAST_IMPORT_WORKERS", str(many))
+    assert import_csv_blocks.parse_in_workers()
+    assert not import_csv_blocks.parse_in_workers(False)
