@@ -17,6 +17,9 @@ machine to itself (on a shared machine the measured rate is lower by the others'
 ``--baseline-python PY`` imports each file also with another interpreter (another
 checkout's venv, e.g. ``/work/main/.venv/bin/python``) right before this one's: before and
 after under the same load.
+``--warm`` imports a 1,000-profile file first in the same child, as a running service has
+(the pool's workers started, numpy/pandas loaded): the workers' CPU is then that of the
+measured import alone, without their start-up.
 ``WEARCAST_IMPORT_WORKERS`` (default: one per CPU; 0 or 1: in the importing process) sets the
 processing pool, as for the service; the header prints it and the machine's load average.
 
@@ -40,6 +43,8 @@ from pathlib import Path
 
 POINTS = 400
 MILEAGES_PER_WHEEL = 6
+#: Profiles of the file a ``--warm`` child imports first (several read blocks and pool chunks)
+WARM_PROFILES = 1_000
 
 
 def _pool(points: int) -> list[tuple[str, list[str]]]:
@@ -76,20 +81,32 @@ def write_csv(path: Path, n_profiles: int, points: int = POINTS) -> int:
     return path.stat().st_size
 
 
-def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None
-                ) -> dict[str, float]:
+def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None,
+                warm_csv: Path | None = None) -> dict[str, float]:
     """Import one file into a fresh database (run in a child process).
 
     Besides the time: this process's peak RSS and CPU seconds, the largest peak RSS of its
     processing pool's workers, and their summed CPU seconds (the pool is shut down and waited
-    for first, so that ``RUSAGE_CHILDREN`` holds them)."""
+    for first, so that ``RUSAGE_CHILDREN`` holds them). With ``warm_csv`` that file is
+    imported first (into another SQLite database), as by a service that has imported before:
+    the pool is running and warm, and the workers' CPU is what they spent on this import
+    (read from /proc)."""
     from wearcast.service import import_pool, importing
     from wearcast.service.db import Database
     from wearcast.service.settings import Settings
 
+    if warm_csv is not None:
+        warm = Settings(data_dir=work_dir / "warm-up", database_url=None)
+        warm_db = Database(warm)
+        warm_db.migrate()
+        with warm_db.session_factory() as session, warm_csv.open("rb") as stream:
+            importing.import_upload(session, warm.raw_dir, stream, warm_csv.name)
+        warm_db.dispose()
     settings = Settings(data_dir=work_dir, database_url=database_url or None)
     database = Database(settings)
     database.migrate()
+    warm_pids = list(getattr(getattr(import_pool, "_POOL", None), "_processes", None) or {})
+    warm_cpu0 = sum(_proc_cpu(pid) for pid in warm_pids)
     own_cpu0 = _cpu(resource.RUSAGE_SELF)
     start = time.perf_counter()
     with database.session_factory() as session, csv_path.open("rb") as stream:
@@ -100,6 +117,8 @@ def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None
     database.dispose()
     pool = getattr(import_pool, "_POOL", None)
     worker_pids = list(getattr(pool, "_processes", None) or {})
+    warm_cpu = (sum(_proc_cpu(pid) for pid in worker_pids) - warm_cpu0
+                if warm_csv is not None and worker_pids == warm_pids else None)
     worker_peak_kib = max((_peak_rss_kib(pid) for pid in worker_pids), default=0)
     try:
         import_pool.discard_pool(wait=True)
@@ -111,7 +130,17 @@ def import_once(csv_path: Path, work_dir: Path, database_url: str | None = None
     return {"profiles": result.created, "points": result.points, "seconds": seconds,
             "peak_rss_mb": own.ru_maxrss / 1024.0,  # KiB on Linux
             "worker_peak_rss_mb": worker_peak_kib / 1024.0,
-            "own_cpu_s": own_cpu, "worker_cpu_s": _cpu(resource.RUSAGE_CHILDREN)}
+            "own_cpu_s": own_cpu, "worker_cpu_s": (
+                warm_cpu if warm_cpu is not None else _cpu(resource.RUSAGE_CHILDREN))}
+
+
+def _proc_cpu(pid: int) -> float:
+    """User + system CPU seconds of a live process (/proc/<pid>/stat; 0 if unknown)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return 0.0
 
 
 def _peak_rss_kib(pid: int) -> int:
@@ -144,12 +173,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--baseline-python", default=None, metavar="PY",
                         help="also import each file with this interpreter (another "
                              "checkout's venv), right before this one's")
+    parser.add_argument("--warm", action="store_true",
+                        help="import a 1,000-profile file first in the same process, as a "
+                             "service that has imported before (pool running and warm); the "
+                             "workers' CPU is then that of the measured import alone")
     parser.add_argument("--child", nargs=3, metavar=("CSV", "DIR", "URL"),
                         help=argparse.SUPPRESS)
+    parser.add_argument("--warm-csv", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
         print(json.dumps(import_once(Path(args.child[0]), Path(args.child[1]),
-                                     args.child[2])))
+                                     args.child[2],
+                                     Path(args.warm_csv) if args.warm_csv else None)))
         return
     sizes = args.sizes or ([1_000, 10_000] if args.quick else [10_000, 100_000])
     workers = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip() or f"{os.cpu_count()}"
@@ -168,6 +203,11 @@ def main(argv: list[str] | None = None) -> None:
         with tempfile.TemporaryDirectory(prefix="wearcast-bench-") as tmp:
             csv_path = Path(tmp) / f"profiles_{n}.csv"
             size = write_csv(csv_path, n)
+            warm_args = []
+            if args.warm:
+                warm_path = Path(tmp) / "warm_up.csv"
+                write_csv(warm_path, WARM_PROFILES)
+                warm_args = ["--warm-csv", str(warm_path)]
             backends = [("sqlite", None)] + ([("postgresql", args.postgres)]
                                              if args.postgres else [])
             for name, server_url in backends:
@@ -175,7 +215,7 @@ def main(argv: list[str] | None = None) -> None:
                     with _database(server_url) as url:
                         child = subprocess.run(
                             [python, __file__, "--child", str(csv_path),
-                             str(Path(tmp) / f"data-{name}-{label}"), url],
+                             str(Path(tmp) / f"data-{name}-{label}"), url, *warm_args],
                             capture_output=True, text=True, check=False)
                     if child.returncode != 0:
                         sys.exit(f"import of {n} profiles into {name} ({label}) failed:\n"

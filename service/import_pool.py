@@ -50,6 +50,13 @@ _POOL_WORKERS = 0
 _POOL_LOCK = threading.Lock()
 
 
+def configured_workers() -> int:
+    """Worker processes of the pool: ``WEARCAST_IMPORT_WORKERS``, else one per core (0 or 1:
+    no pool)."""
+    configured = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip()  # empty: unset
+    return int(configured) if configured else (os.cpu_count() or 1)
+
+
 def worker_pool() -> ProcessPoolExecutor | None:
     """A process pool of one worker per core (spawned once, on the first large chunk).
 
@@ -57,8 +64,7 @@ def worker_pool() -> ProcessPoolExecutor | None:
     can inherit held locks. None on a single core or when ``WEARCAST_IMPORT_WORKERS=0``.
     """
     global _POOL, _POOL_WORKERS
-    configured = os.environ.get("WEARCAST_IMPORT_WORKERS", "").strip()  # empty: unset
-    workers = int(configured) if configured else (os.cpu_count() or 1)
+    workers = configured_workers()
     if workers <= 1:
         return None
     with _POOL_LOCK:
@@ -66,6 +72,11 @@ def worker_pool() -> ProcessPoolExecutor | None:
             _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
             _POOL_WORKERS = workers
         return _POOL
+
+
+def pool_workers() -> int:
+    """The number of worker processes of the running pool (0 when none runs)."""
+    return _POOL_WORKERS if _POOL is not None else 0
 
 
 def discard_pool(wait: bool = False) -> None:

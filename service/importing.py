@@ -175,6 +175,7 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
         if manifest is not None:
             stored_files.append(rawfiles.store(raw_dir, io.BytesIO(manifest),
                                                hashlib.sha256(manifest).hexdigest()))
+        from wearcast.service.import_csv_blocks import parse_in_workers, read_profiles
         from wearcast.service.readers.bundle import iter_upload
 
         batch_id = open_batch(session, checksum=checksum, idempotency_key=idempotency_key,
@@ -184,7 +185,9 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
             for role, stored, name in zip(("file", "manifest"), stored_files,
                                           (file_name, manifest_name or "manifest.csv"),
                                           strict=False)])
-        records = iter_upload(stream, file_name, manifest=manifest, limits=_limits(settings))
+        records = iter_upload(stream, file_name, manifest=manifest, limits=_limits(settings),
+                              profile_reader=read_profiles if parse_in_workers(
+                                  getattr(settings, "import_parse_in_workers", None)) else None)
         with seeing_pending(session):
             written = write_records(session, records, batch_id, chunk_size=chunk_size,
                                     max_points=settings.max_points_per_profile,

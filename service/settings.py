@@ -35,6 +35,10 @@ class Settings(BaseSettings):
     data_dir: Path = Field(default=Path("./data"), description="data directory")
     database_url: str | None = Field(default=None, description="SQLAlchemy URL")
     import_chunk_size: int = Field(default=500, ge=1, description="profiles per bulk insert")
+    import_parse_in_workers: bool | None = Field(
+        default=None, description="parse long profile CSVs in the import worker processes "
+        "(true), in the importing process (false), or when the pool has at least "
+        "3 workers (unset; wearcast.service.import_csv_blocks)")
 
     # --- authentication -------------------------------------------------------------------
     api_key: SecretStr | None = Field(

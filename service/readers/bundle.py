@@ -25,7 +25,7 @@ import hashlib
 import io
 import posixpath
 import zipfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import IO, Any, BinaryIO, TypeAlias
 
@@ -43,6 +43,8 @@ from wearcast.service.readers.parameter_csv import iter_parameter_records
 from wearcast.service.readers.records import MeasurementMeta, ParameterRecord, ProfileRecord
 
 Record: TypeAlias = ProfileRecord | ParameterRecord
+#: A reader of long profile CSVs: (stream at the header, file name) -> its records.
+ProfileReader: TypeAlias = Callable[[IO[bytes], str], Iterator[ProfileRecord]]
 ManifestArg = Mapping[str, MeasurementMeta] | bytes | BinaryIO | None
 
 
@@ -96,9 +98,10 @@ def _read_all(data_or_stream: bytes | BinaryIO) -> bytes:
     return data_or_stream.read()
 
 
-def _csv_records(stream: IO[bytes], name: str,
-                 limits: ZipLimits = DEFAULT_LIMITS) -> Iterator[Record]:
-    """Sniff the header, then stream the right CSV reader over the whole file."""
+def _csv_records(stream: IO[bytes], name: str, limits: ZipLimits = DEFAULT_LIMITS,
+                 profile_reader: ProfileReader | None = None) -> Iterator[Record]:
+    """Sniff the header, then stream the right CSV reader over the whole file
+    (``profile_reader``, default :func:`iter_profile_records`, for a long profile CSV)."""
     from wearcast.service.upload_limits import guarded
 
     if not stream.seekable():
@@ -112,7 +115,7 @@ def _csv_records(stream: IO[bytes], name: str,
         raise ImportFileError(name, str(exc), line=1) from None
     stream.seek(start)
     if kind == "profile":
-        yield from iter_profile_records(stream, name)
+        yield from (profile_reader or iter_profile_records)(stream, name)
     else:
         yield from iter_parameter_records(stream, name)
 
@@ -249,7 +252,8 @@ def _check_zip_limits(infos: list[zipfile.ZipInfo], name: str, limits: ZipLimits
 
 
 def _zip_records(data_or_stream: bytes | BinaryIO, name: str, manifest: ManifestArg,
-                 keep_raw: bool, limits: ZipLimits) -> Iterator[tuple[Record, RawMember | None]]:
+                 keep_raw: bool, limits: ZipLimits, profile_reader: ProfileReader | None = None
+                 ) -> Iterator[tuple[Record, RawMember | None]]:
     stream = _as_stream(data_or_stream)
     if not stream.seekable():
         stream = io.BytesIO(stream.read())
@@ -294,11 +298,13 @@ def _zip_records(data_or_stream: bytes | BinaryIO, name: str, manifest: Manifest
             if ext == ".csv":
                 if keep_raw:
                     csv_raw = RawMember.of(display, archive.read(info))
-                    for record in _csv_records(io.BytesIO(csv_raw.data), display, limits):
+                    for record in _csv_records(io.BytesIO(csv_raw.data), display, limits,
+                                               profile_reader):
                         yield record, csv_raw
                 else:
                     with archive.open(info) as member:
-                        for record in _csv_records(member, display, limits):
+                        for record in _csv_records(member, display, limits,
+                                                   profile_reader):
                             yield record, None
             else:
                 data = archive.read(info)
@@ -310,7 +316,8 @@ def _zip_records(data_or_stream: bytes | BinaryIO, name: str, manifest: Manifest
 
 
 def _iter(data_or_stream: bytes | BinaryIO, file_name: str, manifest: ManifestArg,
-          keep_raw: bool, limits: ZipLimits) -> Iterator[tuple[Record, RawMember | None]]:
+          keep_raw: bool, limits: ZipLimits, profile_reader: ProfileReader | None = None
+          ) -> Iterator[tuple[Record, RawMember | None]]:
     ext = _extension(file_name)
     if ext not in (".csv", ".zip", *WHEEL_EXTENSIONS, *RAIL_EXTENSIONS):
         stream = _as_stream(data_or_stream)
@@ -324,14 +331,17 @@ def _iter(data_or_stream: bytes | BinaryIO, file_name: str, manifest: ManifestAr
             raise ImportFileError(file_name, f"unsupported file type {ext or '(none)'!r}: "
                                   "expected .csv, .whl, .mpt or .zip")
     if ext == ".zip":
-        yield from _zip_records(data_or_stream, file_name, manifest, keep_raw, limits)
+        yield from _zip_records(data_or_stream, file_name, manifest, keep_raw, limits,
+                                profile_reader)
     elif ext == ".csv":
         if keep_raw:
             csv_raw = RawMember.of(file_name, _read_all(data_or_stream))
-            for record in _csv_records(io.BytesIO(csv_raw.data), file_name, limits):
+            for record in _csv_records(io.BytesIO(csv_raw.data), file_name, limits,
+                                       profile_reader):
                 yield record, csv_raw
         else:
-            for record in _csv_records(_as_stream(data_or_stream), file_name, limits):
+            for record in _csv_records(_as_stream(data_or_stream), file_name, limits,
+                                       profile_reader):
                 yield record, None
     else:
         data = _read_all(data_or_stream)
@@ -343,14 +353,18 @@ def _iter(data_or_stream: bytes | BinaryIO, file_name: str, manifest: ManifestAr
 
 
 def iter_upload(data_or_stream: bytes | BinaryIO, file_name: str, *,
-                manifest: ManifestArg = None, limits: ZipLimits = DEFAULT_LIMITS
-                ) -> Iterator[Record]:
+                manifest: ManifestArg = None, limits: ZipLimits = DEFAULT_LIMITS,
+                profile_reader: ProfileReader | None = None) -> Iterator[Record]:
     """Records of an uploaded file (CSV, MiniProf with ``manifest``, or zip), streaming.
 
     ``manifest`` (for a bare ``.whl``/``.mpt``): the result of ``read_manifest`` or the
-    manifest CSV's bytes/stream. Raises ImportFileError on the first problem.
+    manifest CSV's bytes/stream. ``profile_reader`` reads long profile CSVs (default
+    :func:`iter_profile_records`; the import parses them in its worker processes,
+    :func:`wearcast.service.import_csv_blocks.read_profiles`). Raises ImportFileError on the
+    first problem.
     """
-    for record, _ in _iter(data_or_stream, file_name, manifest, False, limits):
+    for record, _ in _iter(data_or_stream, file_name, manifest, False, limits,
+                           profile_reader):
         yield record
 
 

@@ -96,19 +96,20 @@ def read_header(stream: IO[bytes], file_name: str, delimiter: str = ",") -> list
 
 def read_chunks(stream: IO[bytes], file_name: str, columns: Sequence[str],
                 text_columns: Sequence[str], chunk_rows: int, *, delimiter: str = ",",
-                decimal: str = "."
+                decimal: str = ".", first_line: int = 2
                 ) -> Iterator[tuple[pd.DataFrame, np.ndarray]]:
     """Chunks of the CSV body (after the header) with each row's 1-based file line.
 
     Text columns are categorical; other columns are left to pandas' type inference (the
     numeric validation turns bad tokens into errors naming the line). Blank rows are dropped.
+    ``first_line`` is the file line of the stream's first row (2: right after the header).
     """
     reader = pd.read_csv(
         stream, header=None, names=list(columns), index_col=False,
         dtype={name: "category" for name in text_columns}, keep_default_na=False,
         na_values=[""], skip_blank_lines=False, chunksize=chunk_rows, encoding="utf-8",
         engine="c", sep=delimiter, decimal=decimal)
-    next_line = 2
+    next_line = first_line
     try:
         with reader:
             for chunk in reader:
@@ -124,7 +125,7 @@ def read_chunks(stream: IO[bytes], file_name: str, columns: Sequence[str],
     except pd.errors.ParserError as exc:
         message = str(exc).strip().splitlines()[-1]
         found = _PANDAS_LINE.search(message)
-        line = int(found.group(1)) + 1 if found else None
+        line = int(found.group(1)) + first_line - 1 if found else None
         reason = re.sub(r"^Error tokenizing data\. C error: ", "", message)
         raise ImportFileError(file_name, reason, line=line) from None
     except UnicodeDecodeError:
@@ -214,7 +215,15 @@ def _check_consistency(coded: Sequence[CodedColumn], starts_mask: np.ndarray,
         raise ImportFileError(file_name, worst[2], line=worst[0], field=worst[1])
 
 
-def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int = 200_000
+def reappeared(file_name: str, meta: MeasurementMeta, first: int) -> ImportFileError:
+    """The error of a measurement whose rows reappear after other rows (first row ``first``)."""
+    return ImportFileError(
+        file_name, f"{describe(meta)} appears again; it started on line {first} and its rows "
+        "must be contiguous", line=meta.source_line, field="wheel_id")
+
+
+def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int = 200_000,
+                         columns: Sequence[str] | None = None, first_line: int = 2
                          ) -> Iterator[ProfileRecord]:
     """Yield one ProfileRecord per measurement of a long profile CSV, streaming.
 
@@ -223,13 +232,18 @@ def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int =
     stream : binary file object positioned at the start of the CSV (UTF-8, optional BOM)
     file_name : the name used in errors and in ``meta.source_file``
     chunk_rows : rows parsed per pandas chunk (bounds the memory used)
+    columns : the header's column names when the header was read (and checked) already;
+        the stream then holds body lines only, the first of them file line ``first_line``
+        (a block of a file, :func:`parse_block`)
 
     Raises ImportFileError on the first problem (file, line, field and reason).
     """
     if chunk_rows < 1:
         raise ValueError("chunk_rows must be >= 1")
-    columns = read_header(stream, file_name)
-    check_header(columns, file_name, REQUIRED_META_COLUMNS + PROFILE_COLUMNS)
+    if columns is None:
+        columns = read_header(stream, file_name)
+        check_header(columns, file_name, REQUIRED_META_COLUMNS + PROFILE_COLUMNS)
+        first_line = 2
     text_columns, covariates = split_columns(columns, PROFILE_COLUMNS)
     pending: _Pending | None = None
     seen: dict[tuple[str, float], int] = {}
@@ -244,12 +258,11 @@ def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int =
     def _claim(key: tuple[str, float], meta: MeasurementMeta) -> None:
         first = seen.get(key)
         if first is not None:
-            raise ImportFileError(
-                file_name, f"{describe(meta)} appears again; it started on line {first} and "
-                "its rows must be contiguous", line=meta.source_line, field="wheel_id")
+            raise reappeared(file_name, meta, first)
         seen[key] = meta.source_line or 0
 
-    for chunk, lines in read_chunks(stream, file_name, columns, text_columns, chunk_rows):
+    for chunk, lines in read_chunks(stream, file_name, columns, text_columns, chunk_rows,
+                                    first_line=first_line):
         y = numeric_column(chunk["y_mm"], "y_mm", lines, file_name)
         z = numeric_column(chunk["z_mm"], "z_mm", lines, file_name)
         mileage = numeric_column(chunk["mileage_km"], "mileage_km", lines, file_name,
@@ -301,3 +314,31 @@ def iter_profile_records(stream: IO[bytes], file_name: str, *, chunk_rows: int =
             yield ProfileRecord(meta, y[a:b].copy(), z[a:b].copy(), None)
     if pending is not None:
         yield finish(pending)
+
+
+#: What :func:`parse_block` returns: the block's records and, when the block holds a problem,
+#: the ImportFileError's (file, reason, line, field) after the records before it.
+BlockRecords = tuple[list[ProfileRecord], tuple[str, str, int | None, str | None] | None]
+
+
+def parse_block(file_name: str, columns: Sequence[str], first_line: int, data: bytes,
+                more: bytes = b"", more_end: int = 0) -> BlockRecords:
+    """The records of a block of whole body lines of a long profile CSV whose header
+    ``columns`` were read and checked already; ``first_line`` is the file line of the block's
+    first line. The block is ``data`` followed by ``more[:more_end]`` (a caller's two reads,
+    joined here so that the caller copies neither). Runs in import worker processes too, so
+    the first problem comes back as plain values (:data:`BlockRecords`) rather than raised.
+    Contiguity is checked within the block only: across blocks it is the caller's
+    (:func:`reappeared`)."""
+    import io
+
+    if more_end:
+        data = data + more[:more_end]
+    records: list[ProfileRecord] = []
+    try:
+        for record in iter_profile_records(io.BytesIO(data), file_name, columns=columns,
+                                           first_line=first_line):
+            records.append(record)
+    except ImportFileError as exc:
+        return records, (exc.file, exc.reason, exc.line, exc.field)
+    return records, None
