@@ -75,9 +75,9 @@ def test_equilibrium_with_the_pipelines_forces_puts_the_flange_contact_where_the
     # pipeline's loaded flange patch is centred on the root (measured -34.85 mm, 45.1 deg;
     # residual 4.4e-4), 0.26 mm from the table's (-35.11 mm, 43.3 deg). The unloaded first
     # touch at that pose (-38.5 mm) is no reference for the loaded patch: its approach
-    # (~0.1 mm) exceeds the gap differences between flank and root, so the patch spans both and its centre lies on the root
-    # (benchmarks/curving_flange_vs_geometry.py, second block; 150 and 200 m:
-    # test_pipeline_force_equilibrium.py).
+    # (~0.1 mm) exceeds the gap differences between flank and root, so the patch spans both
+    # and its centre lies on the root (benchmarks/curving_flange_vs_geometry.py, second block;
+    # 150 and 200 m: test_pipeline_force_equilibrium.py).
     trailer = vehicle_preset("manchester", "trailer")
     res = cv.solve_curving(trailer, 250.0, cant_mm=0.0, contact_pipeline=True,
                            pipeline_equilibrium=True)
