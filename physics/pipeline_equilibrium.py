@@ -47,11 +47,14 @@ def pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_gri
 
 
 #: Scaled residual (as DEFAULT_TOLERANCE) at which the equilibrium with the pipeline's forces
-#: counts as found (``pipeline_force_equilibrium``): 1e-3 of the static wheel load, 50 N on a 50 kN
-#: wheel. The pipeline's forces are only piecewise smooth in the pose (patches merge and split,
-#: Hertz and the coarse BEM take turns, its normal / tangential coupling settles to 1e-4 of the
-#: load), so a tighter tolerance is not reached.
-PIPELINE_TOLERANCE = 1e-3
+#: counts as found (``pipeline_force_equilibrium``): 2e-3 of the static wheel load, 100 N on a
+#: 50 kN wheel. The pipeline's forces are only piecewise smooth in the pose (patches merge and
+#: split, Hertz and the coarse BEM take turns, its normal / tangential coupling settles to 1e-4
+#: of the load), so a tighter tolerance is not always reached: on the Aosta and metro B classes
+#: (``benchmarks/table_contact_models.py``) 46 of 48 operating points stop below 1e-3, the
+#: Minuetto trailer at 162 m (cant 110 mm) at 1.01e-3 and at 774 m (cant 40 mm) at 1.9e-3,
+#: where no step of the line search lowers the residual further.
+PIPELINE_TOLERANCE = 2e-3
 #: First load step of the homotopy F_table + lambda (F_pipeline - F_table) from the table's
 #: equilibrium (lambda = 0) to the pipeline's (lambda = 1) in ``pipeline_force_equilibrium``;
 #: a solved step doubles the next (up to ``PIPELINE_LARGEST_STEP``), a failed one is halved.
@@ -120,8 +123,18 @@ def _defect_jacobian(q, defect, vehicle: BogieVehicle, table: ContactTable, para
         qq = q.copy()
         qq[:, [c, 5 + c]] += h
         d_c, ok_c = _pipeline_defect(qq, vehicle, table, params, grid, creep_grid, compiled)
-        ok &= ok_c
         diff = (d_c - defect) / h
+        if not np.all(ok_c):
+            # the pipeline fails at a few isolated poses (an empty patch list within 5 um of a
+            # patch split on a flange root): a backward difference there
+            b = np.nonzero(~ok_c)[0]
+            qb = q[b].copy()
+            qb[:, [c, 5 + c]] -= h
+            d_b, ok_b = _pipeline_defect(qb, vehicle, table, params[b], grid, creep_grid,
+                                         compiled)
+            diff[b] = (defect[b] - d_b) / h
+            ok_c[b] = ok_b
+        ok &= ok_c
         jac[:, 0:5, c] = diff[:, 0:5]
         jac[:, 5:10, 5 + c] = diff[:, 5:10]
     return jac, ok

@@ -51,7 +51,7 @@ def test_pipeline_forces_balance_at_the_solution_on_tight_curves(flanging):
                                               cv.DEFAULT_CREEP_GRID, cv.DEFAULT_CREEP_GRID)
         assert np.linalg.norm(res_t[0]) > 100 * cv.PIPELINE_TOLERANCE
         # the balanced flange patch of the leading high-rail wheel is centred near the root
-        # (measured 47.7-50.9 deg, wheel y -35.4 to -36.0 mm), not up the flank where the
+        # (measured 47.7-50.8 deg, wheel y -35.4 to -36.0 mm), not up the flank where the
         # table's pose puts it (66-70 deg)
         high = cv.SIDES.index(res.high_rail_side)
         p = res.pipeline
