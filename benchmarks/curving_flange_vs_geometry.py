@@ -16,7 +16,7 @@ angle [deg]:
 The pipeline's residual column is the scaled bogie equilibrium residual with the pipeline's
 forces in place of the table's (the table's equilibrium is solved to 1e-6): how far the
 pipeline's forces are from balancing the curving's state. The second block solves the
-equilibrium with the pipeline's forces (``pipeline_equilibrium=True``, Broyden from the table's
+equilibrium with the pipeline's forces (``pipeline_equilibrium=True``, homotopy from the table's
 equilibrium) and compares its flange contact with the table's contact, and shows the unloaded
 first touch at that pose (``contact.locus``, the same roll) with the range of wheel y where the
 gap is within 10 um of it (up to 6.7 mm on the conformal root-flank region): under a
@@ -104,7 +104,7 @@ def main() -> None:
               f"curving's pipeline contacts {max(diffs['pipeline']):.2f} mm, its table contacts "
               f"{max(diffs['table']):.2f} mm")
 
-    print("\nequilibrium with the pipeline's forces (Broyden from the table's):")
+    print("\nequilibrium with the pipeline's forces (homotopy from the table's):")
     print("radius  shift  roll[mrad] | pipeline y angle | first touch, gap < 10 um from .. to | "
           "|pipeline - table| | residual")
     consistent = curving.solve_curving_cases(vehicle, cases, table=table, contact_pipeline=True,

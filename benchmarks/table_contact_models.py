@@ -1,7 +1,9 @@
 """Benchmark: the curve-radius tables' wear measures from the contact table's Hertz ellipses
-against those from the one contact pipeline at the same curving equilibrium (issue 11).
+against those from the one contact pipeline, at the table's curving equilibrium and at the
+equilibrium of the pipeline's own forces (issue 11).
 
-``wear_tables.wear_table_for_route(..., contact_model="table" | "pipeline")`` on the Aosta route
+``wear_tables.wear_table_for_route(..., contact_model="table" | "pipeline" |
+"pipeline_equilibrium")`` on the Aosta route
 (seed 003 Table 3, Minuetto motor and trailer bogies) and the metro route (seed 000 Table 1,
 metro B). Per curve class, bogie type, wheelset, wheel (rail) and region (tread, flange) it
 compares tau_max [MPa] (largest of the region's patches) and T-gamma [N] (their sum), as
@@ -9,13 +11,16 @@ compares tau_max [MPa] (largest of the region's patches) and T-gamma [N] (their 
 (pipeline - table) / table over the wheel regions loaded in both models (median and max of
 the magnitude, median signed), split by region, rail and radius; the largest ones; the wheel
 regions loaded in one model only; the same for the merged tables' rows; and the time of each
-table (one core).
+table (one core). With ``pipeline_equilibrium`` (the default ``--models``) also the pipeline's
+equilibrium per operating point: the time per point and the residual reached
+(``curving.solve_curving_cases`` with ``pipeline_equilibrium=True``, the solve the table makes).
 
 The route's left and right halves of a curve class are solved alike (every class is solved
 as a left curve, ``wear_tables``), so each distinct (radius, cant, speed) is counted once.
 
-Run: ``.venv/bin/python benchmarks/table_contact_models.py`` (about 30 s; ``--per-class`` also
-prints every class, wheel and region of both models).
+Run: ``.venv/bin/python benchmarks/table_contact_models.py`` (about 10 min, mostly the pipeline's
+equilibria; ``--models pipeline`` about 30 s; ``--per-class`` also prints every class,
+wheel and region of both models).
 """
 
 from __future__ import annotations
@@ -31,7 +36,15 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from wearcast.physics.wear_tables import wear_table_for_route  # noqa: E402
+from wearcast.physics import curving  # noqa: E402
+from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
+from wearcast.physics.wear_tables import (  # noqa: E402
+    _add_indices,
+    _contact_rows,
+    _operating_points,
+    table_from_contacts,
+    wear_table_for_route,
+)
 from wearcast.statistics.generators.twin_routes import aosta_route, metro_route  # noqa: E402
 
 #: Wheel-level keys of the comparison (the class's radius, cant and speed identify it).
@@ -140,7 +153,53 @@ def compare(label: str, table_c: pd.DataFrame, pipe_c: pd.DataFrame, table_t: pd
           f"{int(((t.value_table > 0) != (t.value_pipe > 0)).sum())} of {len(t)}")
 
 
-def route_tables(vehicle: str, route, per_class: bool) -> None:
+def pipeline_equilibria(vehicle: str, route):
+    """Per bogie type: the pipeline's equilibrium at every distinct class of the route (its
+    time per operating point, the scaled residual reached, ``PIPELINE_TOLERANCE``), and the
+    (contacts, table) frames of the table's and of the pipeline's contacts at it over the
+    classes where it was found (``wear_tables``' rows of ``contact_model="table"`` and
+    ``"pipeline_equilibrium"``: what ``wear_table_for_route`` builds, without the classes
+    whose pipeline equilibrium was not found, where it raises)."""
+    distinct = {(c.radius_m, c.cant_mm, c.speed_kmh): c for c in route.classes}
+    classes = list(distinct.values())
+    rows: dict[str, list[dict]] = {"table": [], "pipeline_equilibrium": []}
+    for bogie_type in ("motor", "trailer"):
+        veh = vehicle_preset(vehicle, bogie_type)
+        cases, labels, speeds = _operating_points(classes, 0.58, 100.0, None,
+                                                  veh.traction_torque_nm)
+        t0 = time.perf_counter()
+        at_pose = np.array([r.pipeline_residual_norm for r in curving.solve_curving_cases(
+            veh, cases, labels, contact_pipeline=True)])
+        t_pose = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        balanced = curving.solve_curving_cases(veh, cases, labels, contact_pipeline=True,
+                                               pipeline_equilibrium=True)
+        t_eq = time.perf_counter() - t0
+        norms = np.array([r.pipeline_residual_norm for r in balanced])
+        n = len(cases)
+        ok = norms < curving.PIPELINE_TOLERANCE
+        print(f"  {vehicle} {bogie_type}: {n} operating points, pipeline equilibrium "
+              f"{t_eq / n:.2f} s per point (pipeline at the table's pose {t_pose / n:.2f} s), "
+              f"found for {int(ok.sum())} of {n} (residual < {curving.PIPELINE_TOLERANCE:g}); "
+              f"residual at the table's pose median {np.median(at_pose):.3f} max "
+              f"{np.max(at_pose):.3f}, at the pipeline's equilibrium median "
+              f"{np.median(norms):.1e} max {np.max(norms):.1e}")
+        for k, c in enumerate(classes):
+            if not ok[k]:
+                print(f"    not found: R {c.radius_m} m cant {c.cant_mm:g} mm "
+                      f"{speeds[k] * 3.6:.0f} km/h, residual {norms[k]:.3g}")
+                continue
+            for model in rows:
+                rows[model].extend(_contact_rows(bogie_type, k, c, balanced[k], speeds[k],
+                                                 model))
+    out = {}
+    for model, r in rows.items():
+        contacts = _add_indices(pd.DataFrame(r))
+        out[model] = (table_from_contacts(contacts), contacts)
+    return out
+
+
+def route_tables(vehicle: str, route, per_class: bool, models: list[str]) -> None:
     radii = [c.radius_m for c in route.classes]
     cant = [c.cant_mm for c in route.classes]
     speed = [c.speed_kmh for c in route.classes]
@@ -148,7 +207,7 @@ def route_tables(vehicle: str, route, per_class: bool) -> None:
     args = (vehicle, radii, cant, speed, shares)
     wear_table_for_route(*args)  # warm the contact table and the compiled kernels
     out, seconds = {}, {}
-    for model in ("table", "pipeline"):
+    for model in ["table", "pipeline"]:
         t0 = time.perf_counter()
         out[model] = wear_table_for_route(*args, with_contacts=True, contact_model=model)
         seconds[model] = time.perf_counter() - t0
@@ -156,19 +215,31 @@ def route_tables(vehicle: str, route, per_class: bool) -> None:
     print(f"{route.name} route, {vehicle} ({len(radii)} classes, {n_distinct} distinct, motor "
           f"and trailer): table contacts {seconds['table']:.2f} s, pipeline contacts "
           f"{seconds['pipeline']:.2f} s (x{seconds['pipeline'] / seconds['table']:.0f})")
-    compare(f"{route.name} / {vehicle}", out["table"][1], out["pipeline"][1], out["table"][0],
-            out["pipeline"][0], per_class)
+    if "pipeline" in models:
+        compare(f"{route.name} / {vehicle}, pipeline at the table's pose vs table",
+                out["table"][1], out["pipeline"][1], out["table"][0], out["pipeline"][0],
+                per_class)
+    if "pipeline_equilibrium" in models:
+        balanced = pipeline_equilibria(vehicle, route)
+        (t_t, t_c), (p_t, p_c) = balanced["table"], balanced["pipeline_equilibrium"]
+        compare(f"{route.name} / {vehicle}, pipeline at its own equilibrium vs table (distinct "
+                "classes where it was found, each with its own share)", t_c, p_c, t_t, p_t,
+                per_class)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--per-class", action="store_true",
                         help="also print every class, wheel and region of both models")
-    per_class = parser.parse_args().per_class
-    print("wear measures from the pipeline's contacts vs the contact table's, at the table's "
-          "curving equilibrium; d = pipeline / table - 1")
-    route_tables("minuetto", aosta_route(), per_class)
-    route_tables("metro_b", metro_route(), per_class)
+    parser.add_argument("--models", nargs="+", default=["pipeline", "pipeline_equilibrium"],
+                        choices=["pipeline", "pipeline_equilibrium"],
+                        help="the pipeline's contact models compared with the table's")
+    parsed = parser.parse_args()
+    print("wear measures from the pipeline's contacts vs the contact table's: at the table's "
+          "curving equilibrium (pipeline) and at the pipeline's own (pipeline_equilibrium); "
+          "d = pipeline / table - 1")
+    route_tables("minuetto", aosta_route(), parsed.per_class, parsed.models)
+    route_tables("metro_b", metro_route(), parsed.per_class, parsed.models)
 
 
 if __name__ == "__main__":

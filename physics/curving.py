@@ -207,8 +207,10 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         leave up to 1.7 wheel loads unbalanced on a flange (``pipeline_residual_norm``;
         ``benchmarks/curving_flange_vs_geometry.py``)
     pipeline_equilibrium : with ``contact_pipeline``, evaluate the pipeline at the equilibrium
-        of ITS forces instead of the table's (``pipeline_force_equilibrium``: Broyden's method from
-        the table's equilibrium; 20-40 pipeline evaluations, ~20 s per operating point);
+        of ITS forces instead of the table's (``pipeline_force_equilibrium``: a homotopy from
+        the table's equilibrium, Newton with the pipeline's forward-difference Jacobian;
+        ~60 pipeline evaluations of the point, a few seconds per operating point on one core,
+        ``benchmarks/table_contact_models.py``);
         ``CurvingResult.pipeline`` then also holds that equilibrium's pose. A point that does
         not reach ``PIPELINE_TOLERANCE`` keeps its best state and reports its residual
         (``pipeline_residual_norm``); the table's results are unchanged either way
@@ -274,7 +276,8 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         grid = DEFAULT_CREEP_GRID if creep_grid is None else creep_grid
         q_p = q[rows]
         if pipeline_equilibrium:
-            q_p = pipeline_force_equilibrium(q_p, vehicle, table, p_end[rows], grid, creep_grid)
+            q_p, _ = pipeline_force_equilibrium(q_p, vehicle, table, p_end[rows], grid,
+                                                creep_grid)
         cp, peak, ok_p, errors, res_p = pipeline_residual(q_p, vehicle, table, p_end[rows],
                                                            grid, creep_grid)
         wear_p = equilibrium_wear_measures(cp.xi, cp.eta, cp.phi_per_mm, cp.a_mm, cp.b_mm,

@@ -13,8 +13,10 @@ equilibrium pose, or the equilibrium of the pipeline's own forces
 At the table's pose on a flange the table loads the gap minimum near the root (contact angle
 30-50 deg) where the pipeline's patch lies up the flank (66-70 deg), and the pipeline's forces
 do not balance the state; at the equilibrium of the pipeline's forces (a smaller roll) its
-flange patch is centred on the root too, within 0.11-0.53 mm of the table's at 250-600 m (at
-150 and 200 m that equilibrium was not found; ``benchmarks/curving_flange_vs_geometry.py``).
+flange patch is centred on the root too, within 0.11-0.53 mm of the table's at 250-600 m
+(``benchmarks/curving_flange_vs_geometry.py``); at 150 and 200 m, where Broyden's method did not
+find that equilibrium, the homotopy of ``pipeline_force_equilibrium`` does: flange patch at
+wheel y -35.4 to -36.0 mm, 47.7-50.8 deg (``tests/physics/test_pipeline_force_equilibrium.py``).
 
 Conventions: the pipeline reports each wheel in its own frame with CONTACT's signs (forces on
 the rail, creepages rail minus wheel, delta < 0 on tread and flange); the curving reports

@@ -31,7 +31,12 @@ Conventions
   The pipeline costs ~30 ms per wheel and pose (``benchmarks/table_contact_models.py``).
   The pose is the table's, which the pipeline's forces do not balance: where its patch
   lies elsewhere (conformal treads, flanges up the flank) its creepages and measures differ
-  from those of its own equilibrium (``curving_contacts``).
+  from those of its own equilibrium (``curving_contacts``). ``"pipeline_equilibrium"``: the
+  pipeline's patches at the equilibrium of the pipeline's own forces
+  (``pipeline_equilibrium.pipeline_force_equilibrium``, a homotopy from the table's
+  equilibrium; a few seconds per operating point); a class whose equilibrium is not found to
+  ``curving.PIPELINE_TOLERANCE`` fails like one that does not converge. The table's
+  ``wheelset_shift_mm`` and ``wheelset_yaw_rad`` are then the pipeline's equilibrium's.
 * Several classes with the same radius (different cant or speed, as in seed 003 Table 3) are
   merged into one table row per radius by the share-weighted mean (equal weights when no
   share is given); the raw frame keeps every class.
@@ -47,6 +52,8 @@ import pandas as pd
 
 from wearcast.physics.curving import (
     FLANGE_SPLIT_Y_MM,
+    PIPELINE_TOLERANCE,
+    CurvingConvergenceError,
     CurvingResult,
     curve_case,
     solve_curving_cases,
@@ -65,7 +72,7 @@ TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measur
 MEASURES = WEAR_MEASURES
 _KMH = 3.6
 #: Contact models a table's wear measures can come from (module docstring).
-CONTACT_MODELS = ("table", "pipeline")
+CONTACT_MODELS = ("table", "pipeline", "pipeline_equilibrium")
 
 
 ClassLike = CurveClass | Mapping[str, object]
@@ -121,11 +128,18 @@ def _contacts_of(result: CurvingResult, contact_model: str) -> dict[str, np.ndar
     if contact_model == "table":
         out = {name: getattr(result, name) for name in names}
         out["p0_mpa"] = result.p0_mpa
+        out["wheelset_shift_mm"] = result.wheelset_shift_mm
+        out["wheelset_yaw_rad"] = result.wheelset_yaw_rad
         return out
     if result.pipeline is None:
         raise ValueError("the curving result carries no pipeline contacts")
     out = {name: result.pipeline[name] for name in names}
     out["p0_mpa"] = result.pipeline["peak_pressure_mpa"]
+    pose = result.pipeline if contact_model == "pipeline_equilibrium" else {
+        "wheelset_shift_mm": result.wheelset_shift_mm,
+        "wheelset_yaw_rad": result.wheelset_yaw_rad}
+    out["wheelset_shift_mm"] = pose["wheelset_shift_mm"]
+    out["wheelset_yaw_rad"] = pose["wheelset_yaw_rad"]
     return out
 
 
@@ -165,8 +179,8 @@ def _contact_rows(bogie_type: str, k: int, cls: CurveClass, result: CurvingResul
                     "p0_mpa": float(c["p0_mpa"][axle, s, slot]),
                     "tau_max_mpa": float(c["tau_max_mpa"][axle, s, slot]),
                     "t_gamma_n": float(c["t_gamma_n"][axle, s, slot]),
-                    "wheelset_shift_mm": float(result.wheelset_shift_mm[axle]),
-                    "wheelset_yaw_rad": float(result.wheelset_yaw_rad[axle]),
+                    "wheelset_shift_mm": float(c["wheelset_shift_mm"][axle]),
+                    "wheelset_yaw_rad": float(c["wheelset_yaw_rad"][axle]),
                 })
     return rows
 
@@ -257,7 +271,9 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
     fastsim_grid : FASTSIM grid size for tau_max
     contact_model : ``"table"`` (default) the wear measures of the contact table's Hertz
         ellipses at the curving equilibrium, ``"pipeline"`` those of the contact pipeline's
-        patches at the same pose (module docstring; ~30 ms per wheel and pose)
+        patches at the same pose (module docstring; ~30 ms per wheel and pose),
+        ``"pipeline_equilibrium"`` those of the pipeline's patches at the equilibrium of its
+        own forces (a few seconds per operating point)
 
     Returns
     -------
@@ -271,7 +287,8 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
     Raises
     ------
     ValueError for bad classes or an unknown ``contact_model``; curving.CurvingConvergenceError
-    if a class does not converge (with ``"pipeline"`` also if the pipeline fails at its pose).
+    if a class does not converge (with ``"pipeline"`` also if the pipeline fails at its pose,
+    with ``"pipeline_equilibrium"`` if the equilibrium of its forces is not found).
     """
     if contact_model not in CONTACT_MODELS:
         raise ValueError(f"contact_model must be one of {list(CONTACT_MODELS)}, not "
@@ -284,9 +301,16 @@ def compute_wear_table_with_contacts(vehicle_motor: BogieVehicle, vehicle_traile
         cases, labels, speeds = _operating_points(cls, unbalanced_acceleration_m_s2,
                                                   tangent_speed_kmh, max_speed_kmh,
                                                   vehicle.traction_torque_nm)
+        balanced = contact_model == "pipeline_equilibrium"
         results = solve_curving_cases(vehicle, cases, labels, fastsim_grid=fastsim_grid,
-                                      contact_pipeline=contact_model == "pipeline")
+                                      contact_pipeline=contact_model != "table",
+                                      pipeline_equilibrium=balanced)
         for k, (c, res, v) in enumerate(zip(cls, results, speeds, strict=True)):
+            if balanced and not res.pipeline_residual_norm < PIPELINE_TOLERANCE:
+                raise CurvingConvergenceError(
+                    "the equilibrium with the contact pipeline's forces was not found",
+                    np.inf if c.is_tangent or c.radius_m is None else float(c.radius_m),
+                    res.pipeline_residual_norm)
             rows.extend(_contact_rows(bogie_type, k, c, res, v, contact_model))
     contacts = _add_indices(pd.DataFrame(rows))
     return table_from_contacts(contacts), contacts
@@ -324,7 +348,8 @@ def wear_table_for_route(vehicle: str | tuple[BogieVehicle, BogieVehicle],
     unbalanced_acceleration_m_s2, tangent_speed_kmh, max_speed_kmh : as
         :func:`compute_wear_table_with_contacts`
     with_contacts : also return the raw per-contact frame
-    contact_model : ``"table"`` or ``"pipeline"`` (:func:`compute_wear_table_with_contacts`)
+    contact_model : ``"table"``, ``"pipeline"`` or ``"pipeline_equilibrium"``
+        (:func:`compute_wear_table_with_contacts`)
 
     Returns
     -------

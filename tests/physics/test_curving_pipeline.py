@@ -70,14 +70,14 @@ def test_pipeline_contacts_carry_the_wheel_loads_with_curving_signs(flanging):
 def test_equilibrium_with_the_pipelines_forces_puts_the_flange_contact_where_the_table_does():
     # At the table's pose the pipeline's flange patch lies up the flank (69 deg at 250 m) and
     # its forces leave 1.1 wheel loads unbalanced: the table's roll is that of a wheel climbing
-    # its flange. Solving the equilibrium with the pipeline's forces (Broyden from the table's)
-    # takes the wheelset back to a roll of -0.75 mrad, where the pipeline's loaded flange patch
-    # is centred on the root (measured -34.85 mm, 45.1 deg; residual 4.4e-4), 0.26 mm from the
-    # table's (-35.11 mm, 43.3 deg). The unloaded first touch at that pose (-38.5 mm) is no
-    # reference for the loaded patch: its approach (~0.1 mm) exceeds the gap differences
-    # between flank and root, so the patch spans both and its centre lies on the root
-    # (benchmarks/curving_flange_vs_geometry.py, second block; at 150 and 200 m Broyden runs
-    # off into flange climbing and does not converge, README known gaps).
+    # its flange. Solving the equilibrium with the pipeline's forces (homotopy from the table's;
+    # Broyden found the same state) takes the wheelset back to a roll of -0.75 mrad, where the
+    # pipeline's loaded flange patch is centred on the root (measured -34.85 mm, 45.1 deg;
+    # residual 4.4e-4), 0.26 mm from the table's (-35.11 mm, 43.3 deg). The unloaded first
+    # touch at that pose (-38.5 mm) is no reference for the loaded patch: its approach
+    # (~0.1 mm) exceeds the gap differences between flank and root, so the patch spans both
+    # and its centre lies on the root (benchmarks/curving_flange_vs_geometry.py, second block;
+    # 150 and 200 m: test_pipeline_force_equilibrium.py).
     trailer = vehicle_preset("manchester", "trailer")
     res = cv.solve_curving(trailer, 250.0, cant_mm=0.0, contact_pipeline=True,
                            pipeline_equilibrium=True)
