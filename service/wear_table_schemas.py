@@ -65,11 +65,14 @@ class WearTableComputeIn(MeasuredProfilesIn):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
-    contact_model: Literal["table", "pipeline"] = Field(default="table", description=(
-        "contacts the wear measures come from, at the curving equilibrium: the contact "
-        "table's Hertz ellipses, or the one contact pipeline's patches (non-Hertzian where "
-        "the patch is not elliptic; about 30 ms per wheel and class, ~10 s for the Aosta "
-        "route)"))
+    contact_model: Literal["table", "pipeline", "pipeline_equilibrium"] = Field(
+        default="table", description=(
+            "contacts the wear measures come from: the contact table's Hertz ellipses at the "
+            "curving equilibrium (`table`); the one contact pipeline's patches (non-Hertzian "
+            "where the patch is not elliptic) at that same pose, where its forces need not "
+            "balance (`pipeline`, about 0.1 s per class); or the pipeline's patches at the "
+            "equilibrium of the pipeline's own forces (`pipeline_equilibrium`, 1-12 s per "
+            "class, minutes for a route: send it as a job)"))
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:

@@ -214,3 +214,22 @@ def test_compute_with_the_contact_pipelines_wear_measures(tmp_path: Path) -> Non
     assert contacts["n_contacts"] == 2 * 2 * 2 * 2 * 3  # bogies, classes, axles, sides, slots
     r = client.post("/v1/wear-tables/compute", json={**body, "contact_model": "bem"})
     assert r.status_code == 422 and r.json()["errors"][0]["field"] == "contact_model"
+
+
+def test_compute_with_the_pipelines_own_equilibrium(tmp_path: Path) -> None:
+    """``contact_model: "pipeline_equilibrium"`` (issue 11): the pipeline's patches at the
+    equilibrium of its own forces — same classes and format, recorded in the spec, the
+    wheelset poses of the balanced state (not the contact table's)."""
+    client = _client(tmp_path)
+    body = {"name": "m", "vehicle": "metro_b",
+            "radii": [{"radius_m": 475, "cant_mm": 40, "speed_kmh": 40}]}
+    at_pose = client.post("/v1/wear-tables/compute", json={**body, "contact_model": "pipeline"})
+    balanced = client.post("/v1/wear-tables/compute",
+                           json={**body, "contact_model": "pipeline_equilibrium"})
+    assert at_pose.status_code == 201 and balanced.status_code == 201, balanced.text
+    assert balanced.json()["spec"]["contact_model"] == "pipeline_equilibrium"
+    a, b = _rows(at_pose.json()), _rows(balanced.json())
+    keys = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure"]
+    assert a[keys].fillna(-1).equals(b[keys].fillna(-1))
+    assert np.isfinite(b["value"]).all() and (b["value"] >= 0).all()
+    assert balanced.json()["sha256"] != at_pose.json()["sha256"]
