@@ -5,7 +5,8 @@ reports every contact point with its contact angle, rolling radius and Hertz cur
 module docstring fixes the frames and sign conventions the other contact modules use.
 ``locus.wheel_locus`` (roll solved or prescribed) feeds the non-Hertzian chain:
 ``patches`` (patches merged or split by the interpenetration region, as CONTACT),
-``normal_contact`` (per-wheel normal contact: BEM ``normal_bem``, coarse BEM, Kik-Piotrowski,
-Hertz; the function for the curving model is ``normal_contact.wheel_normal_contact``) and
+``patch_plane`` (a patch's planar problem and grid), ``normal_contact`` (per-wheel normal
+contact: BEM ``normal_bem``, coarse BEM, Kik-Piotrowski ``kik_piotrowski``, Hertz; the
+function for the curving model is ``normal_contact.wheel_normal_contact``) and
 ``wheel_rail`` (creepages and FASTSIM on top: ``loaded_wheel_contact``).
 """

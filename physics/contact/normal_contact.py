@@ -24,32 +24,17 @@ enters the vertical equilibrium sum F_n (cos delta + (F_s/F_n) sin delta) = W.
 
 Planar patch problem
 --------------------
-Each patch is solved in its contact plane (CONTACT's planar approach: the plane through the
-reference point at the reference angle delta_r).  A locus sample k lies at the lateral
-coordinate s_k = e_s . (P_k - P_ref) of the plane (e_s = (sign cos delta_r, -sin delta_r) in
-track (y, z)); the undeformed normal gap at (x, s_k) at vertical approach d is
-
-    h(x, s_k) = (g_k + A_k (x - x_k)^2 - d) cos(delta_k) / cos(delta_k - delta_r),
-
-the vertical gap turned into the distance along the plane normal (exact for locally parallel
-surfaces), interpolated in s onto a grid of ``element_mm`` (CONTACT's 0.2 mm) elements.
+Each patch is solved in its contact plane (CONTACT's planar approach) on a grid of
+``element_mm`` (CONTACT's 0.2 mm) elements: ``patch_plane`` (the gap h(x, s) along the plane
+normal at vertical approach d, the grid, the patch's totals).
 
 Methods
 -------
 "bem": ``normal_bem.solve_normal_bem`` on that grid (Kalker's NORM-type influence
   coefficients, FFT, Polonsky-Keer) with the approach prescribed; the exact solution of the
   half-space problem on the discretised geometry.
-"kp": Kik & Piotrowski's fast method (Piotrowski & Kik, Vehicle System Dynamics 46 (2008)
-  27-48) with Hertz-consistent virtual penetrations: instead of one factor eps = 0.55 the
-  lateral virtual penetration is eps_y delta and the strip lengths are scaled by
-  sqrt(eps_x / eps_y), eps_x, eps_y those of the Hertz ellipse whose lateral curvature
-  B_eq = delta / w0^2 (w0 the half width of the rigid overlap) matches the patch
-  (``hertz_virtual_penetrations``); the contact area is then {x_l(s)^2 > (x - x_s)^2} with
-  x_l(s)^2 = (eps_x / eps_y) (g_min + eps_y delta - g(s)) / A(s); the pressure is
-  semi-elliptic along each strip, p = C A(s) sqrt(x_l(s)^2 - (x - x_s)^2) (Hertz's ellipse
-  exactly when A is constant and the gap quadratic); its force-approach relation is that of
-  the Hertz ellipse with the virtual area's length and width (F = 2 pi E* a_long delta_n /
-  (3 K(m)), Johnson 1985 eq. 4.39 ff.).
+"kp": Kik & Piotrowski's fast method with Hertz-consistent virtual penetrations
+  (``kik_piotrowski``).
 "hertz": one ellipse from the curvatures at the deepest point of the patch
   (``hertz.hertz_contact``; A from the wheel radius, B from the normal gap's second
   derivative along the plane).
@@ -78,22 +63,26 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import ellipe, ellipk
 
 from wearcast.physics.contact.hertz import (
     STEEL_POISSON,
     STEEL_YOUNG_MPA,
-    effective_modulus_mpa,
     hertz_contact,
 )
+from wearcast.physics.contact.kik_piotrowski import kp_patch
 from wearcast.physics.contact.locus import NoContactError, WheelLocus
 from wearcast.physics.contact.normal_bem import solve_normal_bem
+from wearcast.physics.contact.patch_plane import (
+    NormalPatch,
+    PlaneSamples,
+    finish_patch,
+    patch_grid,
+    plane_samples,
+)
 from wearcast.physics.contact.patches import PatchRegion, patch_regions
 
 _FloatArray = NDArray[np.float64]
 
-#: Kik & Piotrowski's virtual-penetration factor eps.
-KP_VIRTUAL_PENETRATION = 0.55
 #: Largest weighted relative spread of the lateral curvature B across a patch for Hertz
 #: ("auto"; ``curvature_spread``), measured against the BEM (module docstring).
 HERTZ_CURVATURE_VARIATION = 0.25
@@ -101,31 +90,8 @@ HERTZ_CURVATURE_VARIATION = 0.25
 METHODS = ("bem", "bem-coarse", "kp", "hertz", "auto")
 #: Elements per direction of the "bem-coarse" grid (over the rigid interpenetration region).
 COARSE_ELEMENTS = 24
-
-
-@dataclass(frozen=True)
-class NormalPatch:
-    """Solved normal contact of one patch (module docstring, "API")."""
-
-    region: PatchRegion
-    method: str
-    normal_force_n: float
-    x_mm: _FloatArray
-    s_mm: _FloatArray
-    pressure_mpa: _FloatArray
-    peak_pressure_mpa: float
-    area_mm2: float
-    centre_x_mm: float
-    centre_s_mm: float
-    centre_y_wheel_mm: float
-    centre_y_track_mm: float
-    a_mm: float
-    b_mm: float
-
-    @property
-    def contact_angle_rad(self) -> float:
-        """delta at the reference [rad]."""
-        return self.region.contact_angle_rad
+#: Smallest approach [mm] the search for the approach carrying a wheel load starts from.
+MIN_APPROACH_MM = 1e-12
 
 
 @dataclass(frozen=True)
@@ -149,150 +115,7 @@ class WheelNormalContact:
         return float(sum(p.normal_force_n * np.cos(p.contact_angle_rad) for p in self.patches))
 
 
-@dataclass(frozen=True)
-class _PlaneSamples:
-    s: _FloatArray       # lateral plane coordinate of the samples, ascending
-    g: _FloatArray       # vertical gap [mm]
-    x: _FloatArray       # locus x relative to the reference [mm]
-    a: _FloatArray       # rolling curvature A [1/mm]
-    c: _FloatArray       # cos(delta_k) / cos(delta_k - delta_r)
-    y_wheel: _FloatArray
-    y_track: _FloatArray
-    b: _FloatArray       # lateral relative curvature B = -(1/2) d2 g / ds2 along the plane [1/mm]
-
-
-#: Smallest approach [mm] the search for the approach carrying a wheel load starts from.
-MIN_APPROACH_MM = 1e-12
-
-def _gradient(f: _FloatArray, s: _FloatArray) -> _FloatArray:
-    """``np.gradient(f, s)`` of a 1-D array on strictly increasing samples (>= 3), the same
-    formulas (second-order central differences on the uneven samples, first-order one-sided
-    at the ends) without numpy's generic axis handling, which cost more than the sums."""
-    dx = np.diff(s)
-    dx1, dx2 = dx[:-1], dx[1:]
-    out = np.empty_like(f)
-    a = -(dx2) / (dx1 * (dx1 + dx2))
-    b = (dx2 - dx1) / (dx1 * dx2)
-    c = dx1 / (dx2 * (dx1 + dx2))
-    out[1:-1] = a * f[:-2] + b * f[1:-1] + c * f[2:]
-    out[0] = (f[1] - f[0]) / dx[0]
-    out[-1] = (f[-1] - f[-2]) / dx[-1]
-    return out
-
-
-def _plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: float
-                   ) -> _PlaneSamples:
-    m = locus.gap_mm.shape[1]
-    step = float(np.median(np.diff(locus.arc_length_mm)))
-    n_ext = int(np.ceil(extend_mm / step)) + 2
-    lo = max(int(region.samples.min()) - n_ext, 0)
-    hi = min(int(region.samples.max()) + n_ext + 1, m)
-    idx = np.arange(lo, hi)
-    idx = idx[locus.valid[row, idx]]
-    dr = region.contact_angle_rad
-    sign = locus.sign
-    dy = locus.y_track_mm[row, idx] - region.y_track_mm
-    dz = locus.z_rail_mm[row, idx] - region.z_rail_mm
-    s = sign * np.cos(dr) * dy - np.sin(dr) * dz
-    # keep the monotone run of s that contains the patch
-    if s.size < 2:
-        raise ValueError("patch: fewer than 2 locus samples across it")
-    inc = np.diff(s) > 0
-    # the monotone run through the deepest sample of the patch (always interpenetrating)
-    deepest = int(region.samples[np.argmin(locus.gap_mm[row, region.samples])])
-    centre = int(np.clip(np.searchsorted(idx, deepest), 0, s.size - 1))
-    # the run of equal directions around it: from after the last change below the centre
-    # to the first change at or above it
-    other = inc != inc[min(centre, inc.size - 1)]
-    below = np.flatnonzero(other[:centre])
-    above = np.flatnonzero(other[centre:])
-    keep_lo = int(below[-1]) + 1 if below.size else 0
-    keep_hi = centre + int(above[0]) + 1 if above.size else s.size
-    sel = slice(keep_lo, keep_hi)
-    idx, s = idx[sel], s[sel]
-    order = np.argsort(s)
-    idx, s = idx[order], s[order]
-    delta = locus.contact_angle_rad[row, idx]
-    g = locus.gap_mm[row, idx]
-    c = np.cos(delta) / np.cos(delta - dr)
-    gn = g * c
-    if s.size >= 3:
-        b = 0.5 * _gradient(_gradient(gn, s), s)  # B = (1/2) d2(h)/ds2, > 0 convex
-    else:
-        b = np.full(s.shape, np.nan)
-    return _PlaneSamples(s=s, g=g, x=locus.x_track_mm[row, idx] - region.x_track_mm,
-                         a=locus.curvature_a_per_mm[idx], c=c,
-                         y_wheel=locus.y_wheel_mm[idx], y_track=locus.y_track_mm[row, idx],
-                         b=b)
-
-
-def _lattice(lo: float, hi: float, step: float) -> _FloatArray:
-    """Element centres (k + 1/2) step covering [lo, hi], at least 3: a grid anchored to one
-    lattice whatever the extent, so that as the approach grows the patch gains elements at its
-    margin (out of contact) instead of every element moving, which made the discrete force a
-    jumping function of the approach (up to 6 % of the load on measured wheels)."""
-    k0 = int(np.floor(lo / step))
-    k1 = max(int(np.ceil(hi / step)), k0 + 3)
-    return np.asarray((np.arange(k0, k1) + 0.5) * step, dtype=np.float64)
-
-
-def _grid(ps: _PlaneSamples, approach_mm: float, element_mm: float, margin_mm: float,
-          max_elements: int | None = None) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """Normal gap h(x, s) [mm] on the patch grid at vertical approach d (module docstring);
-    ``max_elements`` caps the elements per direction (coarser elements, same extent; on the
-    lattice of ``_lattice`` per direction)."""
-    pen = approach_mm - ps.g
-    inside = pen > 0
-    if not np.any(inside):
-        raise ValueError("no interpenetration at this approach")
-    half = np.sqrt(np.clip(pen, 0.0, None) / ps.a)
-    s_lo = ps.s[inside].min() - margin_mm
-    s_hi = ps.s[inside].max() + margin_mm
-    x_lo = np.min((ps.x - half)[inside]) - margin_mm
-    x_hi = np.max((ps.x + half)[inside]) + margin_mm
-    def step(extent: float) -> float:
-        # the fine grid: element_mm (CONTACT's 0.2 mm); the coarse one 20-24 elements over
-        # the extent, sizes from the ladder element_mm * 2^(k/4), so that a growing patch
-        # keeps its elements until the ladder's next rung
-        if max_elements is None:
-            return element_mm
-        rung = np.ceil(4.0 * np.log2(extent / (element_mm * max_elements)))
-        return float(element_mm * 2.0 ** (rung / 4.0))
-
-    s = _lattice(s_lo, s_hi, step(s_hi - s_lo))
-    x = _lattice(x_lo, x_hi, step(x_hi - x_lo))
-    g = np.interp(s, ps.s, ps.g, left=np.inf, right=np.inf)
-    xs = np.interp(s, ps.s, ps.x)
-    a = np.interp(s, ps.s, ps.a)
-    c = np.interp(s, ps.s, ps.c)
-    h = (g[:, None] + a[:, None] * (x[None, :] - xs[:, None]) ** 2 - approach_mm) * c[:, None]
-    h = np.where(np.isfinite(h), h, 1e3)
-    return h, x, s
-
-
-def _finish(region: PatchRegion, method: str, ps: _PlaneSamples, x: _FloatArray,
-            s: _FloatArray, p: _FloatArray) -> NormalPatch:
-    dx = float(x[1] - x[0])
-    ds = float(s[1] - s[0])
-    fn = float(p.sum() * dx * ds)
-    contact = p > 0
-    if fn <= 0 or not np.any(contact):
-        return NormalPatch(region, method, 0.0, x, s, p, 0.0, 0.0, 0.0, 0.0,
-                           region.y_wheel_mm, region.y_track_mm, 0.0, 0.0)
-    cx = float((p.sum(axis=0) * x).sum() / p.sum())
-    cs = float((p.sum(axis=1) * s).sum() / p.sum())
-    rows = np.flatnonzero(contact.any(axis=1))
-    b = 0.5 * (s[rows[-1]] - s[rows[0]] + ds)
-    area = float(np.count_nonzero(contact) * dx * ds)
-    return NormalPatch(
-        region=region, method=method, normal_force_n=fn, x_mm=x, s_mm=s, pressure_mpa=p,
-        peak_pressure_mpa=float(p.max()), area_mm2=area, centre_x_mm=cx, centre_s_mm=cs,
-        centre_y_wheel_mm=float(np.interp(cs, ps.s, ps.y_wheel)),
-        centre_y_track_mm=float(np.interp(cs, ps.s, ps.y_track)),
-        a_mm=area / (np.pi * b), b_mm=float(b))
-
-
-def curvature_spread(ps: _PlaneSamples, approach_mm: float) -> tuple[float, float]:
+def curvature_spread(ps: PlaneSamples, approach_mm: float) -> tuple[float, float]:
     """(mean, relative spread) of the lateral relative curvature B over the interpenetration
     region, weighted by pen^(3/2) (pen = d - g, the Hertz-like pressure weight): the spread
     is the weighted standard deviation over the weighted mean (inf where B <= 0 or fewer
@@ -309,7 +132,7 @@ def curvature_spread(ps: _PlaneSamples, approach_mm: float) -> tuple[float, floa
     return mean, float(np.sqrt(np.sum(w * (b - mean) ** 2) / np.sum(w)) / mean)
 
 
-def is_elliptic(ps: _PlaneSamples, approach_mm: float) -> bool:
+def is_elliptic(ps: PlaneSamples, approach_mm: float) -> bool:
     """Hertz criterion ("auto", module docstring): the weighted relative spread of B across
     the interpenetration region (``curvature_spread``) is below
     ``HERTZ_CURVATURE_VARIATION``, and B > 0 (convex)."""
@@ -317,7 +140,7 @@ def is_elliptic(ps: _PlaneSamples, approach_mm: float) -> bool:
     return bool(spread < HERTZ_CURVATURE_VARIATION)
 
 
-def _hertz_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float,
+def _hertz_patch(region: PatchRegion, ps: PlaneSamples, approach_mm: float,
                  young_mpa: float, poisson: float, element_mm: float) -> NormalPatch:
     k = int(np.argmin(ps.g))
     c_ref = float(ps.c[k])
@@ -341,84 +164,11 @@ def _hertz_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float,
         (s.size, x.size))
     p = p0 * np.sqrt(np.clip(rho, 0.0, None))
     if not fn > 0:
-        return _finish(region, "hertz", ps, x, s, p)
+        return finish_patch(region, "hertz", ps, x, s, p)
     # exact Hertz totals instead of the sampled ones
     return NormalPatch(region, "hertz", fn, x, s, p, p0, float(np.pi * a * b),
                        0.0, s0, float(np.interp(s0, ps.s, ps.y_wheel)),
                        float(np.interp(s0, ps.s, ps.y_track)), a, b)
-
-
-def _ends(s: _FloatArray, pen: _FloatArray) -> tuple[float, float]:
-    """Lateral ends of the region pen > 0 on the samples, interpolated to pen = 0."""
-    inside = np.flatnonzero(pen > 0)
-    lo, hi = int(inside[0]), int(inside[-1])
-    s_lo = float(s[lo]) if lo == 0 else float(np.interp(0.0, [pen[lo - 1], pen[lo]],
-                                                         [s[lo - 1], s[lo]]))
-    s_hi = float(s[hi]) if hi == s.size - 1 else float(np.interp(0.0, [pen[hi + 1], pen[hi]],
-                                                                 [s[hi + 1], s[hi]]))
-    return s_lo, s_hi
-
-
-def hertz_virtual_penetrations(ratio_b_over_a: float) -> tuple[float, float]:
-    """(eps_x, eps_y): Hertz contact semi-axes over the rigid-overlap semi-axes, squared, for
-    the ellipse with curvature ratio B/A: a^2 = eps_x delta / A, b^2 = eps_y delta / B
-    (from Johnson 1985 eqs. 4.39 ff.: eps_x = (K - E) / (m K) along the long axis,
-    (E - k^2 K) / (m K) along the short one; both 1/2 for a circle)."""
-    r = max(ratio_b_over_a, 1.0 / max(ratio_b_over_a, 1e-12))
-    m = float(np.clip(-np.expm1(2.0 * _log_k_from_ratio(r)), 0.0, 1.0 - 1e-15))
-    k2 = 1.0 - m
-    if m < 1e-6:
-        return 0.5, 0.5
-    big_k, big_e = float(ellipk(m)), float(ellipe(m))
-    eps_long = (big_k - big_e) / (m * big_k)
-    eps_short = (big_e - k2 * big_k) / (m * big_k)
-    # the long axis lies along the smaller curvature
-    return (eps_long, eps_short) if ratio_b_over_a >= 1.0 else (eps_short, eps_long)
-
-
-def _log_k_from_ratio(ratio: float) -> float:
-    """log(b/a) of the Hertz ellipse with curvature ratio (>= 1), as ``hertz``."""
-    hz = hertz_contact(1.0, 1.0, ratio)
-    return float(np.log(min(hz.a_mm, hz.b_mm) / max(hz.a_mm, hz.b_mm)))
-
-
-def _kp_patch(region: PatchRegion, ps: _PlaneSamples, approach_mm: float, young_mpa: float,
-              poisson: float, element_mm: float, margin_mm: float) -> NormalPatch:
-    e_star = effective_modulus_mpa(young_mpa, poisson)
-    h, x, s = _grid(ps, approach_mm, element_mm, margin_mm)
-    k_min = int(np.argmin(ps.g))
-    pen = (approach_mm - ps.g) * ps.c                  # rigid overlap along the normal
-    delta_n = float(pen[k_min])
-    a_ref = float(ps.a[k_min] * ps.c[k_min])
-    s_lo, s_hi = _ends(ps.s, pen)
-    half_width0 = 0.5 * (s_hi - s_lo)
-    b_eq = delta_n / max(half_width0, 1e-9) ** 2      # equivalent lateral curvature
-    eps_x, eps_y = hertz_virtual_penetrations(b_eq / a_ref)
-    # virtual lateral penetration eps_y delta; strip lengths scaled by sqrt(eps_x / eps_y)
-    g_n = ps.g * ps.c
-    pen_v = (float(g_n[k_min]) + eps_y * delta_n) - g_n
-    c = np.interp(s, ps.s, ps.c)
-    g = np.interp(s, ps.s, g_n, left=np.inf, right=np.inf)
-    a = np.interp(s, ps.s, ps.a) * c
-    xs = np.interp(s, ps.s, ps.x)
-    pen_s = np.clip(float(g_n[k_min]) + eps_y * delta_n - g, 0.0, None)
-    x_l2 = (eps_x / eps_y) * pen_s / a
-    shape = a[:, None] * np.sqrt(np.clip(x_l2[:, None] - (x[None, :] - xs[:, None]) ** 2,
-                                         0.0, None))
-    dx, ds = float(x[1] - x[0]), float(s[1] - s[0])
-    if shape.sum() <= 0 or not np.any(pen_v > 0):
-        return _finish(region, "kp", ps, x, s, np.zeros_like(h))
-    # force from the Hertz ellipse of the virtual area's length and width (continuous in d)
-    v_lo, v_hi = _ends(ps.s, pen_v)
-    half_width = 0.5 * (v_hi - v_lo)
-    inside = pen_v > 0
-    half_length = float(np.sqrt(np.max((eps_x / eps_y) * pen_v[inside]
-                                       / (ps.a[inside] * ps.c[inside]))))
-    long_ax, short_ax = max(half_width, half_length), min(half_width, half_length)
-    m = 1.0 - (short_ax / long_ax) ** 2
-    fn = 2.0 * np.pi * e_star * long_ax * delta_n / (3.0 * float(ellipk(m)))
-    p = shape * (fn / (shape.sum() * dx * ds))
-    return _finish(region, "kp", ps, x, s, p)
 
 
 def warm_pressure(previous: NormalPatch | None, x: _FloatArray, s: _FloatArray
@@ -468,7 +218,7 @@ def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, appro
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, not {method!r}")
-    ps = _plane_samples(locus, row, region, extend_mm=margin_mm + 2.0 * element_mm)
+    ps = plane_samples(locus, row, region, extend_mm=margin_mm + 2.0 * element_mm)
     if method == "auto":
         method = "hertz" if is_elliptic(ps, approach_mm) else "bem-coarse"
     if method == "hertz" and float(ps.b[np.argmin(ps.g)]) <= 0:
@@ -476,14 +226,14 @@ def patch_normal_contact(locus: WheelLocus, row: int, region: PatchRegion, appro
     if method == "hertz":
         return _hertz_patch(region, ps, approach_mm, young_mpa, poisson, element_mm)
     if method == "kp":
-        return _kp_patch(region, ps, approach_mm, young_mpa, poisson, element_mm, margin_mm)
+        return kp_patch(region, ps, approach_mm, young_mpa, poisson, element_mm, margin_mm)
     coarse = method == "bem-coarse"
-    h, x, s = _grid(ps, approach_mm, element_mm, margin_mm,
+    h, x, s = patch_grid(ps, approach_mm, element_mm, margin_mm,
                     COARSE_ELEMENTS if coarse else None)
     res = solve_normal_bem(h, x, s, approach_mm=0.0, young_mpa=young_mpa, poisson=poisson,
                            tol=1e-6 if coarse else 1e-7,
                            initial_pressure_mpa=warm_pressure(warm, x, s))
-    return _finish(region, method, ps, x, s, res.pressure_mpa)
+    return finish_patch(region, method, ps, x, s, res.pressure_mpa)
 
 
 def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: float,
@@ -506,7 +256,7 @@ def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: fl
         region = regions[0]
         fn = load_n / max(np.cos(region.contact_angle_rad)
                           + ratio * np.sin(region.contact_angle_rad), 0.05)
-        ps = _plane_samples(locus, row, region, extend_mm=margin_mm + 2.0 * element_mm)
+        ps = plane_samples(locus, row, region, extend_mm=margin_mm + 2.0 * element_mm)
         chosen = method
         if chosen == "auto":
             chosen = "hertz" if is_elliptic(ps, d) else "bem-coarse"
@@ -521,14 +271,14 @@ def _single_patch_by_force(locus: WheelLocus, row: int, load_n: float, ratio: fl
             patch = _hertz_patch(region, ps, d_new, young_mpa, poisson, element_mm)
         elif chosen in ("bem", "bem-coarse"):
             coarse = chosen == "bem-coarse"
-            h, x, s = _grid(ps, d, element_mm, margin_mm, COARSE_ELEMENTS if coarse else None)
+            h, x, s = patch_grid(ps, d, element_mm, margin_mm, COARSE_ELEMENTS if coarse else None)
             res = solve_normal_bem(h, x, s, normal_force_n=fn, young_mpa=young_mpa,
                                    poisson=poisson, tol=1e-6 if coarse else 1e-7,
                                    initial_pressure_mpa=warm_pressure(warm, x, s))
             border = np.concatenate([res.pressure_mpa[0], res.pressure_mpa[-1],
                                      res.pressure_mpa[:, 0], res.pressure_mpa[:, -1]])
             d_new = d + res.approach_mm / c_min
-            patch = _finish(region, chosen, ps, x, s, res.pressure_mpa)
+            patch = finish_patch(region, chosen, ps, x, s, res.pressure_mpa)
             warm = patch
             if np.any(border > 0):  # the grid was too small: grow it and solve again
                 d = max(d_new, 1.2 * d)

@@ -42,11 +42,8 @@ from wearcast.physics.contact.creepages import rigid_creepages
 from wearcast.physics.contact.fastsim import Bound, fastsim_forces
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import WheelLocus
-from wearcast.physics.contact.normal_contact import (
-    NormalPatch,
-    WheelNormalContact,
-    wheel_normal_contact,
-)
+from wearcast.physics.contact.normal_contact import WheelNormalContact, wheel_normal_contact
+from wearcast.physics.contact.patch_plane import NormalPatch
 
 _FloatArray = NDArray[np.float64]
 

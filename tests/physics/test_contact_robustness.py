@@ -64,7 +64,7 @@ def test_worn_wheels_on_a_worn_measured_rail_sweep_without_exceptions(reference_
 
 
 def test_the_coarse_boundary_element_force_is_continuous_in_the_approach(reference_dir):
-    # The coarse BEM grid sits on a fixed lattice (normal_contact._lattice): as the approach
+    # The coarse BEM grid sits on a fixed lattice (patch_plane.lattice): as the approach
     # grows, elements join at the margin, out of contact. With a grid stretched over the
     # interpenetration region instead, the force of this measured wheel on avg_low2.ban jumped
     # by 2 % of the load within 1e-9 mm of approach (an element count changing), and the
