@@ -98,7 +98,9 @@ def parallel_runs(workers: int, km: float, step: float):
 
     def run_all(_simulate: Any, sets: Sequence[Mapping[str, Any]]) -> list[Any]:
         rail = [p for p in sets if p.get("rail_tonnage_mt")]
-        groups = [[p] for p in sets if not p.get("rail_tonnage_mt")] + ([rail] if rail else [])
+        # the rail state's group first: it holds the chain of rail steps and two runs, the
+        # longest task; started last it would run alone at the end (longest task first)
+        groups = ([rail] if rail else []) + [[p] for p in sets if not p.get("rail_tonnage_mt")]
         with ProcessPoolExecutor(workers, initializer=_setup, initargs=(km, step)) as pool:
             done = [r for g in pool.map(_run_group, groups) for r in g]
         order = [p for g in groups for p in g]

@@ -7,6 +7,8 @@ equilibria solved at once (``curving.solve_curving_cases_or_none``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import root
 
@@ -81,28 +83,39 @@ def newton_batch(fun, q0, params, tol, max_iter=20, h=1e-6, jac=None):
     return q, norm, norm < tol
 
 
+def _all_finite(a) -> bool:
+    """Every entry of the array ``a`` is finite: one Python sum of its entries (finite: all
+    entries are; Python floats overflow and meet inf - inf without numpy's warnings), the
+    element test only when the sum is not finite (a non-finite entry, or an overflow)."""
+    return math.isfinite(sum(a.ravel().tolist())) or bool(np.all(np.isfinite(a)))
+
+
 def scipy_polish(fun, q0, param, tol, jac=None):
     """scipy.optimize.root (Powell hybrid) on one row, the fallback of the batched Newton.
     ``jac``: as :func:`newton_batch`'s (the same forward differences, faster)."""
     # MINPACK may probe non-finite states on a badly worn profile; answer those (and any
     # non-finite residual) with a large finite residual so it backs off instead of indexing the
     # contact table with NaN.
+    # MINPACK calls f and jacobian hundreds of times per row, one state each: the finiteness
+    # checks go through one sum (finite sum: every entry finite; a non-finite or overflowing
+    # sum falls back to the element test), the same values as testing every entry.
     big = np.full(np.shape(q0), 1e12)
+    param_row = np.ascontiguousarray(param, dtype=float)[None, :]
 
     def f(z):
-        if not np.all(np.isfinite(z)):
+        if not _all_finite(z):
             return big
-        r = fun(z[None, :], param[None, :])[0]
-        return np.where(np.isfinite(r), r, 1e12)
+        r = fun(z[None, :], param_row)[0]
+        return r if _all_finite(r) else np.where(np.isfinite(r), r, 1e12)
 
     def jacobian(z):
-        if not np.all(np.isfinite(z)):
+        if not _all_finite(z):
             return np.eye(len(z))
         if jac is None:
-            j = _jacobian(lambda qq: fun(qq, np.repeat(param[None, :], len(qq), axis=0)), z)
+            j = _jacobian(lambda qq: fun(qq, np.repeat(param_row, len(qq), axis=0)), z)
         else:
-            j = jac(z[None, :], param[None, :], 1e-6 * np.maximum(1.0, np.abs(z))[None, :])[1][0]
-        return np.where(np.isfinite(j), j, 0.0)
+            j = jac(z[None, :], param_row, 1e-6 * np.maximum(1.0, np.abs(z))[None, :])[1][0]
+        return j if _all_finite(j) else np.where(np.isfinite(j), j, 0.0)
 
     sol = root(f, q0, jac=jacobian, method="hybr", options={"xtol": 1e-13, "maxfev": 300})
     if not np.all(np.isfinite(sol.x)):

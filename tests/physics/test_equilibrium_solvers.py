@@ -83,3 +83,15 @@ def test_a_warm_row_newton_solves_is_newtons_answer():
     assert ok_n[0] and ok[0]
     np.testing.assert_array_equal(q, q_n)
     np.testing.assert_allclose(q[0], p[0], atol=1e-8)
+
+
+def test_the_polish_finiteness_check_is_the_element_test_also_on_overflow_and_nan():
+    """scipy_polish checks states and residuals through one sum: a sum that overflows from
+    finite entries must still count them finite, a NaN or infinite entry must not."""
+    huge = np.array([1e308, 1e308, -1.0])  # finite entries whose sum overflows
+    assert not np.isfinite(sum(huge.tolist()))
+    for a in (np.array([1.0, -2.0, 3.5]), huge, np.array([1.0, np.nan, 2.0]),
+              np.array([np.inf, -np.inf]), np.array([[1.0, 2.0], [np.inf, 0.0]]),
+              np.zeros((2, 3))):
+        assert es._all_finite(a) == bool(np.all(np.isfinite(a)))
+
