@@ -6,6 +6,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
+         [--shape-weighting area|none]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -49,6 +50,7 @@ import pandas as pd
 
 from wearcast.statistics import cause_base as cb
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import depot as dp
@@ -282,6 +284,10 @@ def main() -> None:
                     help="precision weights of the finder's rows: one noise scale per region, "
                          "a variance function of the predicted area, or Huber weights alone "
                          "(cause_base.NOISE_WEIGHTING)")
+    ap.add_argument("--shape-weighting", default=fsw.SHAPE_WEIGHTING, choices=("area", "none"),
+                    help="precision weights of the wear-curve (instrument) cause's rows: a "
+                         "variance function of the predicted worn area, or none "
+                         "(finder_shape_weights.SHAPE_WEIGHTING)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
                     help="loop generator: baseline grows as the loop runs say or linearly")
     ap.add_argument("--progression-stretch", type=float, default=1.0,
@@ -294,6 +300,7 @@ def main() -> None:
     fs.MARGIN_TEST = args.margin_test
     fs.NUISANCE_OF_MARGIN = args.margin_nuisance
     cb.NOISE_WEIGHTING = args.noise_weighting
+    fsw.SHAPE_WEIGHTING = args.shape_weighting
     LOOP_NULL[0] = args.loop_null
     LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):

@@ -285,8 +285,12 @@ class ProfileMisalignment(Cause):
         est = copy.copy(self)
         inst = self.instruments(data)
         coef = shape_coefficients(data)
-        est.coefs_ = {i: coef[rows & (inst == i)].mean(axis=0) if (rows & (inst == i)).any()
-                      else np.zeros(3) for i in _levels(inst)}
+        # the finder's precision weights of the rows when it set them (``diagnose``,
+        # ``finder_shape_weights``), else plain means
+        w = np.asarray(data.cache.get("shape_weights", np.ones(data.n)), dtype=float)
+        est.coefs_ = {i: np.average(coef[rows & (inst == i)], axis=0,
+                                    weights=w[rows & (inst == i)])
+                      if (rows & (inst == i)).any() else np.zeros(3) for i in _levels(inst)}
         est.reference_ = self.reference_instrument(data, inst, rows)
         est.theta_, est.log_scale_ = np.zeros(0), np.zeros(2)
         return est

@@ -29,7 +29,9 @@ scores it out of sample and names a cause only when it is specific:
    not resampled as nuisance), widened for the degrees of freedom that fit used; the
    wear-curve shape cause is tested the same way on its coefficients, in the metric of
    their wheel-to-wheel nuisance covariance (``_noise_whitened``; its gain is reported in
-   curve space);
+   curve space), every measurement weighted by the inverse of the shape nuisance's
+   variance at its predicted worn area (``finder_shape_weights``: the late, worn rows no
+   longer drown a signature that is the same at every mileage);
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a parametric
@@ -80,6 +82,7 @@ from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.discrepancy_findings import (
     Scored,
@@ -304,16 +307,24 @@ def diagnose(
     if shape_cause is not None:
         coef = _whitened_shape(data)
         inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
-        before = np.sum(fs.held_out_shape(coef, None, folds) ** 2, axis=1)
-        after = np.sum(fs.held_out_shape(coef, inst, folds) ** 2, axis=1)
         inst_codes = fs.codes_of(inst)
         z = _noise_whitened(coef, inst_codes, wheel)
-        z_gain = _relative(np.sum(fs.held_out_shape(z, None, folds) ** 2, axis=1),
-                           np.sum(fs.held_out_shape(z, inst, folds) ** 2, axis=1))
-        nm = fs.NuisanceModel.fit(_instrument_centred(z, inst_codes), np.ones_like(z),
-                                  vehicle, wheel)
+        centred = _instrument_centred(z, inst_codes)
+        # precision weights of the rows (``finder_shape_weights``): in the means, the
+        # held-out errors and the resampled datasets alike
+        w_shape = fsw.shape_weights(centred, data.base.sum(axis=1))
+        data.cache["shape_weights"] = w_shape
+        before = w_shape * np.sum(fs.held_out_shape(coef, None, folds, w_shape) ** 2, axis=1)
+        after = w_shape * np.sum(fs.held_out_shape(coef, inst, folds, w_shape) ** 2, axis=1)
+        z_gain = _relative(
+            w_shape * np.sum(fs.held_out_shape(z, None, folds, w_shape) ** 2, axis=1),
+            w_shape * np.sum(fs.held_out_shape(z, inst, folds, w_shape) ** 2, axis=1))
+        sw_shape = np.sqrt(w_shape)[:, None] * np.ones_like(z)
+        nm = fs.NuisanceModel.fit(sw_shape * centred, sw_shape, vehicle, wheel)
         draws = nm.draws(n_null, rng, used_dof=int(inst_codes.max()))
-        boot = fs.bootstrap_gains(_shape_design(data.n, None), [_shape_design(data.n, inst)],
+        sw_flat = sw_shape.reshape(-1)[:, None]
+        boot = fs.bootstrap_gains(sw_flat * _shape_design(data.n, None),
+                                  [sw_flat * _shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
         shape_row = (z_gain, boot[0])
         scored[shape_cause.code] = Scored(shape_cause, before, after, _relative(before, after),

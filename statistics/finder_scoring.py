@@ -73,16 +73,22 @@ def held_out(data: cz.FinderData, cause: cz.Cause, folds: NDArray[np.int64]) -> 
 
 
 def held_out_shape(coef: Array, instrument: NDArray[Any] | None,
-                   folds: NDArray[np.int64]) -> Array:
+                   folds: NDArray[np.int64], weights: Array | None = None) -> Array:
     """(n, 3) held-out shape residual coefficients: common mean (instrument None) or one
-    mean per instrument, fitted on the other folds."""
+    mean per instrument, fitted on the other folds; ``weights`` (n,): the means are
+    weighted by them (``finder_shape_weights``; plain means when None)."""
     out = np.zeros_like(coef)
     inst = np.zeros(coef.shape[0], dtype=np.int64) if instrument is None else codes_of(instrument)
+    w = np.ones(coef.shape[0]) if weights is None else np.asarray(weights, dtype=float)
+
+    def mean_of(rows: NDArray[np.bool_]) -> Array:
+        return np.asarray(np.average(coef[rows], axis=0, weights=w[rows]))
+
     for k in np.unique(folds):
         test = folds == k
         for i in np.unique(inst[test]):
             tr = ~test & (inst == i)
-            mean = coef[tr].mean(axis=0) if tr.any() else coef[~test].mean(axis=0)
+            mean = mean_of(tr) if tr.any() else mean_of(~test)
             sel = test & (inst == i)
             out[sel] = coef[sel] - mean
     return out
