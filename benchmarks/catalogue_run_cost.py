@@ -147,6 +147,9 @@ class _RetryFailures:
             else:
                 q, r = np.asarray(res.state), np.zeros(12)
                 row.update(stage="solved", t=1.0, norm=float(res.residual_norm))
+                qs = np.asarray(res.saturation_state)[None, :]
+                jm = fun_s.__self__.jacobian(qs, p, 1e-6 * np.maximum(1.0, np.abs(qs)))[1][0]
+                row.update(cond=float(np.linalg.cond(jm)))
             worst = int(np.argmax(np.abs(r)))
             row.update(y1=float(q[0]), y2=float(q[5]), dmin=float(min(q[[3, 4, 8, 9]])),
                        worst_eq=_EQUATIONS[worst] if res is None else "")
@@ -196,9 +199,9 @@ class _RetryFailures:
         print(f"failed {len(fails)} of {len(d)}: stage "
               f"{fails.stage.value_counts().to_dict()}, largest residual equation "
               f"{fails.worst_eq.value_counts().head(4).to_dict()}, at the table range "
-              f"{int(fails.at_range.sum())}; Jacobian condition at the stall (saturation) "
-              f"median {fails.cond.median():.3g}, solved points' wheels see "
-              f"{d[d.stage == 'solved'].shape[0]} equilibria")
+              f"{int(fails.at_range.sum())}; Jacobian condition number median "
+              f"{fails.cond.median():.3g} at the stalls (last accepted state), "
+              f"{d[d.stage == 'solved'].cond.median():.3g} at the solved equilibria")
 
 
 def main() -> None:
