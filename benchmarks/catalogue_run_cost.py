@@ -49,6 +49,34 @@ _EQUATIONS = [f"{n}{a}" for a in (1, 2) for n in ("Fy", "Mz", "My", "QL", "QR")]
                                                                                    "Mzb"]
 
 
+def _beyond_stall(fun: Any, q: Any, t: float, p: Any, floor: float = 2.0 ** -10) -> dict:
+    """From the continuation's last accepted state q at load fraction t, continue again with
+    a step floor (``floor`` of the path; the solver's own budget counts failures) to where no
+    step of the floor converges (t2, Newton's residual there), then the scaled residual along
+    the Newton step of the floor from that state (401 points): its largest jump between
+    neighbouring points against the median one (a discontinuity of the contacts, e.g. a
+    contact-table slot switching, is a jump; a fold is a near-singular Jacobian)."""
+    jac = fun.__self__.jacobian
+    step, n_end = 1.0 / 64.0, 0.0
+    while t < 1.0 - 1e-12 and step >= floor:
+        t_try = min(t + step, 1.0)
+        q_new, n_new, ok = solvers.newton_batch(fun, q[None, :], t_try * p, 1e-6, jac=jac)
+        if ok[0]:
+            q, t, step = q_new[0], t_try, min(2.0 * step, 1.0)
+        else:
+            step, n_end = step / 2.0, float(n_new[0])
+    if t >= 1.0 - 1e-12:
+        return {"t2": 1.0, "n2": 0.0, "jump": np.nan, "jump_med": np.nan}
+    p2 = min(t + floor, 1.0) * p
+    r0, jm = jac(q[None, :], p2, 1e-6 * np.maximum(1.0, np.abs(q))[None, :])
+    dx = np.linalg.lstsq(jm[0], -r0[0], rcond=None)[0]
+    s = np.linspace(0.0, 1.0, 401)
+    r = fun(q[None, :] + s[:, None] * dx[None, :], np.repeat(p2, len(s), axis=0))
+    jumps = np.linalg.norm(np.diff(r, axis=0), axis=1)
+    return {"t2": t, "n2": n_end, "jump": float(jumps.max()),
+            "jump_med": float(np.median(jumps))}
+
+
 class _RetryFailures:
     """Why the retried operating points (continuation from centred wheelsets) fail: the stage
     (the saturation law's continuation, or Newton with FASTSIM's forces from its equilibrium),
@@ -169,7 +197,8 @@ class _RetryFailures:
                 ang = np.degrees(np.asarray(cts.contact_angle_rad)[0, ax, sd])
                 loaded = fn > 0.01 * v.wheel_load_n
                 row.update(cond=float(np.linalg.cond(jm)), patches=int(loaded.sum()),
-                           angle_max=float(ang[loaded].max()) if loaded.any() else np.nan)
+                           angle_max=float(ang[loaded].max()) if loaded.any() else np.nan,
+                           **_beyond_stall(fun_s, q, float(t_all[i]), p))
             self.rows.append(row)
 
     def report(self) -> None:
@@ -177,7 +206,7 @@ class _RetryFailures:
             print("why: no retries")
             return
         d = pd.DataFrame(self.rows)
-        for col in ("cond", "patches", "angle_max"):
+        for col in ("cond", "patches", "angle_max", "t2", "n2", "jump", "jump_med"):
             if col not in d:
                 d[col] = np.nan
         d["|y|max"] = d[["y1", "y2"]].abs().max(axis=1)
@@ -192,7 +221,8 @@ class _RetryFailures:
                     norm_med=("norm", "median"), ymax_med=("|y|max", "median"),
                     at_range=("at_range", "mean"), dmin_med=("dmin", "median"),
                     cond_med=("cond", "median"), patches=("patches", "median"),
-                    angle_max=("angle_max", "median"),
+                    angle_max=("angle_max", "median"), t2_med=("t2", "median"),
+                    n2_med=("n2", "median"), jump_med=("jump", "median"),
                     worst=("worst_eq", lambda s: s.value_counts().index[0] if len(s) else ""))
               .round(3).to_string())
         fails = d[d.stage != "solved"]
@@ -202,6 +232,17 @@ class _RetryFailures:
               f"{int(fails.at_range.sum())}; Jacobian condition number median "
               f"{fails.cond.median():.3g} at the stalls (last accepted state), "
               f"{d[d.stage == 'solved'].cond.median():.3g} at the solved equilibria")
+        sat = fails[fails.stage == "saturation"]
+        if len(sat):
+            print(f"saturation stalls continued again with a step floor of 2^-10: "
+                  f"{int((sat.t2 >= 1.0).sum())} of {len(sat)} reach full load; the others "
+                  f"stop at t2 median {sat[sat.t2 < 1].t2.median():.3f} (from t "
+                  f"{sat[sat.t2 < 1].t.median():.3f}) with Newton's residual median "
+                  f"{sat[sat.t2 < 1].n2.median():.2g}; along the last Newton step the "
+                  f"residual jumps by up to {sat.jump.median():.3g} (median over points; "
+                  f"median increment {sat.jump_med.median():.2g}): "
+                  f"{int((sat.jump > 100 * sat.jump_med.clip(lower=1e-6)).sum())} points "
+                  f"with a jump > 100 x the median increment")
 
 
 def main() -> None:
