@@ -52,7 +52,7 @@ import logging
 import zipfile
 import zlib
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import BinaryIO
 
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
@@ -71,6 +71,7 @@ from wearcast.service.import_staging import DEFAULT_CHUNK, Progress, write_recor
 from wearcast.service.pending_batches import complete_batch, discard_batch, open_batch
 from wearcast.service.readers.bundle import ZipLimits
 from wearcast.service.readers.errors import ImportFileError
+from wearcast.service.settings import Settings
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +100,7 @@ DAMAGED_UPLOAD = (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError,
                   UnicodeDecodeError, zipfile.LargeZipFile)
 
 
-def _limits(settings: Any) -> ZipLimits:
+def _limits(settings: Settings) -> ZipLimits:
     return ZipLimits(max_members=settings.max_zip_members,
                      max_member_bytes=settings.max_decompressed_bytes,
                      max_total_bytes=settings.max_decompressed_bytes,
@@ -109,7 +110,8 @@ def _limits(settings: Any) -> ZipLimits:
 def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: str, *,
                   manifest: bytes | None = None, manifest_name: str | None = None,
                   idempotency_key: str | None = None, chunk_size: int = DEFAULT_CHUNK,
-                  progress: Progress | None = None, settings: Any = None) -> ImportResult:
+                  progress: Progress | None = None, settings: Settings | None = None
+                  ) -> ImportResult:
     """Import one upload atomically; see the module docstring for the rules.
 
     The records are read, checked and processed outside any write transaction and inserted
@@ -123,7 +125,6 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
 
     if settings is None:
         from wearcast.service.auth import current_settings
-        from wearcast.service.settings import Settings
 
         settings = current_settings.get() or Settings()
     if idempotency_key is not None and not 1 <= len(idempotency_key) <= 200:
@@ -163,7 +164,7 @@ def import_upload(session: Session, raw_dir: Path, stream: BinaryIO, file_name: 
 def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name: str,
                     file_sha: str, checksum: str, manifest: bytes | None,
                     manifest_name: str | None, idempotency_key: str | None, chunk_size: int,
-                    progress: Progress | None, settings: Any) -> ImportResult:
+                    progress: Progress | None, settings: Settings) -> ImportResult:
     found = _existing_batch(session, checksum=checksum)
     if found is not None:
         return _answer_existing(session, found)
@@ -187,7 +188,7 @@ def _import_claimed(session: Session, raw_dir: Path, stream: BinaryIO, file_name
                                           strict=False)])
         records = iter_upload(stream, file_name, manifest=manifest, limits=_limits(settings),
                               profile_reader=read_profiles if parse_in_workers(
-                                  getattr(settings, "import_parse_in_workers", None)) else None)
+                                  settings.import_parse_in_workers) else None)
         with seeing_pending(session):
             written = write_records(session, records, batch_id, chunk_size=chunk_size,
                                     max_points=settings.max_points_per_profile,
