@@ -4,6 +4,7 @@ the same records and the same first error as the reader of the whole file."""
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.service import import_csv_blocks, import_pool
 from wearcast.service.readers.errors import ImportFileError
 from wearcast.service.readers.long_csv import iter_profile_records
+from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 
 HEADER = "wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,y_mm,z_mm,route_id\n"
 
@@ -168,3 +170,26 @@ def test_workers_parse_from_min_workers_on_unless_the_setting_says(monkeypatch):
     monkeypatch.setenv("WEARCAST_IMPORT_WORKERS", str(many))
     assert import_csv_blocks.parse_in_workers()
     assert not import_csv_blocks.parse_in_workers(False)
+
+
+def test_block_parsing_equals_the_whole_file_on_measured_miniprof_wheels(
+        reference_dir: Path) -> None:
+    """Real data: the raw points of every measured MiniProf wheel in
+    ``../shared/reference/miniprof`` written as one long CSV (measured values as the instrument
+    gave them, full precision), parsed a few kB at a time, give exactly the records of the
+    whole-file reader."""
+    paths = sorted((reference_dir / "miniprof").glob("*.whl"))
+    assert len(paths) >= 5
+    out = [HEADER]
+    for i, path in enumerate(paths):
+        y, z = to_wheel_frame(parse_miniprof(path.read_bytes(), path.name))
+        prefix = f"{path.stem},U1,trailer,{1 + i % 2},left,{1000.0 * (i + 1)},"
+        out.extend(f"{prefix}{float(a)!r},{float(b)!r},r1\n" for a, b in zip(y, z, strict=True))
+    text = "".join(out)
+    whole = _records(text, iter_profile_records)
+    assert len(whole) == len(paths)
+
+    def by_blocks(stream, name):  # type: ignore[no-untyped-def]
+        return import_csv_blocks.read_profiles(stream, name, block_bytes=4000)
+
+    assert _records(text, by_blocks) == whole
