@@ -59,14 +59,12 @@ class VehicleSeries(VehicleWheelSeries):
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> VehicleSeries:
-        return cls(np.asarray(d["mileage_km"], float), tuple(d["wheels"]),
-                   np.asarray(d["weights"], float), np.asarray(d["sd_mm"], float),
-                   np.asarray(d["sh_mm"], float), np.asarray(d["qr_mm"], float))
+        return cls(*(tuple(d[f.name]) if f.name == "wheels" else np.asarray(d[f.name], float)
+                     for f in fields(VehicleWheelSeries)))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"mileage_km": self.mileage_km.tolist(), "wheels": list(self.wheels),
-                "weights": self.weights.tolist(), "sd_mm": self.sd_mm.tolist(),
-                "sh_mm": self.sh_mm.tolist(), "qr_mm": self.qr_mm.tolist()}
+        return {f.name: list(self.wheels) if f.name == "wheels"
+                else getattr(self, f.name).tolist() for f in fields(VehicleWheelSeries)}
 
     def wheel_columns(self, bogie_type: str, axle: int, side: str) -> list[int]:
         """Columns of the wheels at a position (one per bogie of that type in the run)."""
