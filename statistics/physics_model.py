@@ -59,8 +59,9 @@ class VehicleSeries(VehicleWheelSeries):
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> VehicleSeries:
-        return cls(*(tuple(d[f.name]) if f.name == "wheels" else np.asarray(d[f.name], float)
-                     for f in fields(VehicleWheelSeries)))
+        values: dict[str, Any] = {f.name: np.asarray(d[f.name], float)
+                                  for f in fields(VehicleWheelSeries) if f.name != "wheels"}
+        return cls(wheels=tuple(d["wheels"]), **values)
 
     def to_dict(self) -> dict[str, Any]:
         return {f.name: list(self.wheels) if f.name == "wheels"
