@@ -58,7 +58,9 @@ Two-point contact: a second local minimum of the gap whose gap is at most
 
 All solutions are vectorised over shifts: ``contact_table`` for an array of shifts is the main
 entry point; ``contact_points`` is a convenience for one shift.  Valid for shifts up to a few
-mm beyond flange contact (before the flange climbs over the rail) and |yaw| <= 0.1 rad.
+mm beyond flange contact (before the flange climbs over the rail) and |yaw| <= 0.1 rad.  The
+result types are in ``geometry_results``; a table's equivalent conicity in
+``equivalent_conicity``.
 """
 
 from __future__ import annotations
@@ -68,6 +70,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.contact.geometry_results import (
+    ContactPatches,
+    ContactPoint,
+    ContactTable,
+    WheelContacts,
+    WheelsetContact,
+)
 from wearcast.physics.contact.min_gap_kernel import min_gap_no_yaw
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
 
@@ -342,129 +351,6 @@ def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray
     return roll, gap
 
 
-# ------------------------------------------------------------------------------------------
-# results
-# ------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class ContactPatches:
-    """One kind of contact patch (primary or secondary) on one wheel, for N shifts.
-
-    Every field is an array of shape (N,); fields are NaN where ``valid`` is False.
-
-    valid : the patch exists (always True for the primary)
-    gap_mm : undeformed vertical gap at the patch [mm] (0 for the primary)
-    y_wheel_mm, z_wheel_mm : contact point in the wheel frame [mm]
-    y_rail_mm, z_rail_mm : contact point in the rail frame [mm]
-    x_track_mm, y_track_mm, z_track_mm : contact point in the track frame [mm] (y positive to
-        the left; x ahead of the wheelset centre, non-zero only with yaw: the wheel centres
-        themselves sit at x = -/+ (d/2) sin(yaw) for the left/right wheel)
-    contact_angle_rad : delta [rad], negative on tread and flange (module docstring)
-    wheel_angle_rad : profile angle in the wheel frame atan(dz/dy) [rad] (roll excluded)
-    rolling_radius_mm : r0 + z_wheel [mm]
-    curvature_a_per_mm, curvature_b_per_mm : Hertz A (rolling) and B (lateral) [1/mm]
-    wheel_curvature_per_mm, rail_curvature_per_mm : lateral profile curvatures [1/mm],
-        positive where convex towards the other body
-    """
-
-    valid: NDArray[np.bool_]
-    gap_mm: _FloatArray
-    y_wheel_mm: _FloatArray
-    z_wheel_mm: _FloatArray
-    y_rail_mm: _FloatArray
-    z_rail_mm: _FloatArray
-    x_track_mm: _FloatArray
-    y_track_mm: _FloatArray
-    z_track_mm: _FloatArray
-    contact_angle_rad: _FloatArray
-    wheel_angle_rad: _FloatArray
-    rolling_radius_mm: _FloatArray
-    curvature_a_per_mm: _FloatArray
-    curvature_b_per_mm: _FloatArray
-    wheel_curvature_per_mm: _FloatArray
-    rail_curvature_per_mm: _FloatArray
-
-    def row(self, i: int) -> ContactPoint | None:
-        """The patch of shift number ``i`` as a scalar ``ContactPoint`` (None if absent)."""
-        if not self.valid[i]:
-            return None
-        values = {name: float(getattr(self, name)[i]) for name in _POINT_FIELDS}
-        return ContactPoint(**values)
-
-
-@dataclass(frozen=True)
-class ContactPoint:
-    """One contact point of one wheel (fields as ``ContactPatches``, scalars)."""
-
-    gap_mm: float
-    y_wheel_mm: float
-    z_wheel_mm: float
-    y_rail_mm: float
-    z_rail_mm: float
-    x_track_mm: float
-    y_track_mm: float
-    z_track_mm: float
-    contact_angle_rad: float
-    wheel_angle_rad: float
-    rolling_radius_mm: float
-    curvature_a_per_mm: float
-    curvature_b_per_mm: float
-    wheel_curvature_per_mm: float
-    rail_curvature_per_mm: float
-
-
-_POINT_FIELDS = tuple(ContactPoint.__dataclass_fields__)
-
-
-@dataclass(frozen=True)
-class WheelContacts:
-    """Primary (gap 0) and secondary (two-point) patches of one wheel over N shifts."""
-
-    primary: ContactPatches
-    secondary: ContactPatches
-
-
-@dataclass(frozen=True)
-class ContactTable:
-    """Contact geometry for an array of lateral shifts (see the module docstring for signs).
-
-    shift_mm : wheelset lateral shift [mm], positive towards the left rail
-    yaw_rad : wheelset yaw [rad] (input), positive turning the front to the left
-    roll_rad : wheelset roll [rad], positive when the left wheel rises
-    height_mm : vertical displacement of the axle from nominal [mm]
-    left, right : contact patches of each wheel
-    """
-
-    shift_mm: _FloatArray
-    yaw_rad: _FloatArray
-    roll_rad: _FloatArray
-    height_mm: _FloatArray
-    left: WheelContacts
-    right: WheelContacts
-
-    @property
-    def rolling_radius_difference_mm(self) -> _FloatArray:
-        """Delta r = r_left - r_right at the primary patches [mm]; > 0 for a left shift."""
-        return self.left.primary.rolling_radius_mm - self.right.primary.rolling_radius_mm
-
-
-
-@dataclass(frozen=True)
-class WheelsetContact:
-    """Contact geometry at one shift: pose and all contact points per wheel."""
-
-    shift_mm: float
-    yaw_rad: float
-    roll_rad: float
-    height_mm: float
-    left: tuple[ContactPoint, ...]
-    right: tuple[ContactPoint, ...]
-
-    @property
-    def rolling_radius_difference_mm(self) -> float:
-        """r_left - r_right at the primary patches [mm]."""
-        return self.left[0].rolling_radius_mm - self.right[0].rolling_radius_mm
-
-
 def _patches(wt: WheelsetTrack, side: _Side, shift: _FloatArray, roll: _FloatArray,
              yaw: _FloatArray, height: _FloatArray, gap: _FloatArray, idx: NDArray[np.intp],
              valid: NDArray[np.bool_]) -> ContactPatches:
@@ -649,32 +535,3 @@ def contact_points(wt: WheelsetTrack, lateral_shift_mm: float, yaw_rad: float = 
     return WheelsetContact(float(table.shift_mm[0]), float(table.yaw_rad[0]),
                            float(table.roll_rad[0]), float(table.height_mm[0]),
                            points(table.left), points(table.right))
-
-
-def equivalent_conicity(table: ContactTable, amplitude_mm: ArrayLike,
-                        method: str = "harmonic") -> _FloatArray:
-    """Equivalent conicity of the wheelset for a lateral amplitude [mm].
-
-    ``method="harmonic"`` (default): harmonic linearisation of Delta r(y) (the first Fourier
-    coefficient of Delta r over a sinusoidal oscillation of amplitude y_hat, the principle of
-    EN 15302's linearisation): lambda = 1/(2 pi y_hat) * integral_0^2pi Delta r(y_hat sin t)
-    sin t dt.  ``method="secant"``: lambda = Delta r(y_hat) / (2 y_hat).  For a cone of
-    half-angle tan(gamma) both give gamma.  Delta r is interpolated linearly in the table, which
-    must cover +/- amplitude.
-    """
-    amp = np.atleast_1d(np.asarray(amplitude_mm, dtype=float))
-    shifts = table.shift_mm
-    order = np.argsort(shifts)
-    dr = table.rolling_radius_difference_mm[order]
-    shifts = shifts[order]
-    if np.any(amp <= 0) or amp.max() > min(-shifts[0], shifts[-1]) + 1e-12:
-        raise ValueError("amplitude must be > 0 and covered by the table's shifts on both sides")
-    if method == "secant":
-        return np.interp(amp, shifts, dr) / (2.0 * amp)
-    if method != "harmonic":
-        raise ValueError(f"unknown method {method!r}; use 'harmonic' or 'secant'")
-    theta = (np.arange(512) + 0.5) * (2.0 * np.pi / 512)
-    y = amp[:, None] * np.sin(theta)[None, :]
-    values = np.interp(y, shifts, dr)
-    first_harmonic = np.mean(values * np.sin(theta)[None, :], axis=1) * 2.0
-    return first_harmonic / (2.0 * amp)
