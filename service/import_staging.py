@@ -26,7 +26,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-from itertools import islice
+from itertools import groupby, islice
 from typing import Any
 
 from sqlalchemy import func, insert, select, tuple_
@@ -286,10 +286,10 @@ def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
             try:
                 if rows:
                     write_new_wheels(session, registry, {row["wheel_id"] for row in rows})
-                    result = session.connection().execute(statement, rows)
+                    inserted = _insert_runs(session, statement, rows)
                     # the driver's count of inserted rows when it has one (SQLite, psycopg
                     # sum the executemany's); fewer (a row stored meanwhile) or none: ask
-                    if result.rowcount != len(rows):
+                    if inserted != len(rows):
                         keys = [(row["wheel_id"], float(row["mileage_km"])) for row in rows]
                         if _inserted(session, keys, batch_id) < len(rows):
                             in_flight_conflict(session, keys, batch_id)
@@ -302,6 +302,23 @@ def write_records(session: Session, records: Iterable[Record], batch_id: int, *,
             progress(n_read)
     session.commit()
     return written
+
+
+def _insert_runs(session: Session, statement: Any, rows: list[dict[str, Any]]) -> int:
+    """Insert ``rows`` in order, one executemany per run of rows with the same keys, and
+    return the driver's count of inserted rows (-1 where it has none).
+
+    SQLAlchemy compiles an executemany for its first row's keys and asks every other row
+    for them, so a chunk mixing profiles and parameter records (which carry no points, no
+    reference fits) must go as separate runs; order is kept, so ids follow the file."""
+    total = 0
+    for _, run in groupby(rows, key=lambda row: tuple(row)):
+        count = session.connection().execute(statement, list(run)).rowcount
+        if count < 0 or total < 0:
+            total = -1
+        else:
+            total += count
+    return total
 
 
 def _inserted(session: Session, keys: list[tuple[str, float]], batch_id: int) -> int:
