@@ -311,8 +311,11 @@ def _insert_runs(session: Session, statement: Any, rows: list[dict[str, Any]]) -
     SQLAlchemy compiles an executemany for its first row's keys and asks every other row
     for them, so a chunk mixing profiles and parameter records (which carry no points, no
     reference fits) must go as separate runs; order is kept, so ids follow the file."""
+    def keys(row: dict[str, Any]) -> tuple[str, ...]:
+        return tuple(row)
+
     total = 0
-    for _, run in groupby(rows, key=lambda row: tuple(row)):
+    for _, run in groupby(rows, key=keys):
         count = session.connection().execute(statement, list(run)).rowcount
         if count < 0 or total < 0:
             total = -1
