@@ -87,7 +87,7 @@ def gradient(f: _FloatArray, s: _FloatArray) -> _FloatArray:
 def plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: float
                    ) -> PlaneSamples:
     m = locus.gap_mm.shape[1]
-    step = float(np.median(np.diff(locus.arc_length_mm)))
+    step = locus.arc_step_mm
     n_ext = int(np.ceil(extend_mm / step)) + 2
     lo = max(int(region.samples.min()) - n_ext, 0)
     hi = min(int(region.samples.max()) + n_ext + 1, m)

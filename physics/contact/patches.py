@@ -78,10 +78,12 @@ def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
 def sample_weights(locus: WheelLocus, row: int, approach_mm: float) -> _FloatArray:
     """Interpenetration weight per locus sample (M,) at vertical approach d [mm] (module
     docstring, step 2): (16/15) pen^(5/2) / sqrt(A) |dy_track|, 0 where pen <= 0."""
-    pen = np.where(locus.valid[row], approach_mm - locus.gap_mm[row], 0.0)
-    pen = np.clip(pen, 0.0, None)
-    width = np.abs(np.gradient(locus.y_track_mm[row]))
-    return (16.0 / 15.0) * pen**2.5 / np.sqrt(locus.curvature_a_per_mm) * width
+    pen = approach_mm - locus.gap_mm[row]
+    inside = np.flatnonzero(locus.valid[row] & (pen > 0.0))
+    out = np.zeros(pen.shape)
+    out[inside] = ((16.0 / 15.0) * pen[inside]**2.5 / locus.sqrt_curvature_a[inside]
+                   * locus.track_width_mm[row, inside])
+    return out
 
 
 def _region(locus: WheelLocus, row: int, samples: NDArray[np.intp], weights: _FloatArray,
