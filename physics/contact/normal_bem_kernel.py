@@ -13,9 +13,10 @@ kept up to date from the conjugate direction's product r = C t (the pressure mov
 or that closed added, and scaled with p in force mode (C is linear): the same iteration as
 recomputing u = C p every step, to rounding (the FFT solver recomputes it; the two agree to
 rounding, ``benchmarks/bench_normal_bem.py`` prints the largest difference).  On the coarse
-grids of the production method ("bem-coarse", at most ~26 x 26 elements) one product costs (elements in contact) x
-(elements) multiply-adds, ~0.2 M, about half a numpy FFT product of the same grid with its
-per-call overhead, and the whole iteration runs without returning to Python
+grids of the production method ("bem-coarse", at most ~26 x 26 elements) one product costs
+(elements in contact) x (elements) multiply-adds, ~0.2 M, about half a numpy FFT product of
+the same grid with its per-call overhead, and the whole iteration runs without returning to
+Python
 (``benchmarks/bench_normal_bem.py`` prints both solvers' times).  The
 numpy FFT solver stays the reference and the path for large grids (the fine 0.2 mm grids);
 the two agree to rounding (tests/physics/test_normal_bem.py).
@@ -49,14 +50,22 @@ def _dense_influence_py(kernel: NDArray[np.float64], ny: int, nx: int
     contiguous so that u = sum_j D[j] p_j runs over long contiguous rows."""
     n = ny * nx
     d = np.empty((n, n))
+    _dense_influence_into(kernel, ny, nx, d)
+    return d
+
+
+def _dense_influence_into_py(kernel: NDArray[np.float64], ny: int, nx: int,
+                             out: NDArray[np.float64]) -> None:
+    """``dense_influence`` written into ``out`` (ny nx, ny nx), e.g. a recycled buffer (a
+    fresh one costs a page fault per 4 kB, more than filling it)."""
+    n = ny * nx
     for j in range(n):
         jy = j // nx
         jx = j - jy * nx
+        dj = out[j]
         for iy in range(ny):
-            row = kernel[iy - jy + ny - 1]
-            for ix in range(nx):
-                d[j, iy * nx + ix] = row[ix - jx + nx - 1]
-    return d
+            # a contiguous run of the kernel's row (views: the copy vectorises)
+            dj[iy * nx:(iy + 1) * nx] = kernel[iy - jy + ny - 1, nx - 1 - jx:2 * nx - 1 - jx]
 
 
 def _convolve_py(d: NDArray[np.float64], p: NDArray[np.float64],
@@ -185,10 +194,14 @@ def _polonsky_keer_py(d: NDArray[np.float64], h: NDArray[np.float64],
 if HAVE_NUMBA:
     _convolve_add = njit(cache=True, error_model="numpy")(_convolve_add_py)
     _convolve = njit(cache=True, error_model="numpy")(_convolve_py)
+    _dense_influence_into = njit(cache=True)(_dense_influence_into_py)
     dense_influence = njit(cache=True)(_dense_influence_py)
+    dense_influence_into = _dense_influence_into
     polonsky_keer = njit(cache=True, error_model="numpy")(_polonsky_keer_py)
 else:  # pragma: no cover - exercised only without numba
     _convolve_add = _convolve_add_py  # type: ignore[assignment]
     _convolve = _convolve_py  # type: ignore[assignment]
+    _dense_influence_into = _dense_influence_into_py  # type: ignore[assignment]
     dense_influence = _dense_influence_py  # type: ignore[assignment]
+    dense_influence_into = _dense_influence_into_py  # type: ignore[assignment]
     polonsky_keer = None  # type: ignore[assignment]
