@@ -282,7 +282,7 @@ def _solve(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike, normal_force_n: 
 
     warm = None
     if initial_pressure_mpa is not None:
-        warm = np.clip(np.asarray(initial_pressure_mpa, dtype=float), 0.0, None)
+        warm = np.maximum(np.asarray(initial_pressure_mpa, dtype=float), 0.0)
         if warm.shape != h.shape:
             raise ValueError("initial_pressure_mpa must have the shape of gap_mm")
         if not warm.sum() > 0:
@@ -294,9 +294,9 @@ def _solve(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike, normal_force_n: 
     else:
         # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
         if force_mode:
-            pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
+            pen = np.maximum(np.quantile(h, 0.02) - h + 1e-12, 0.0)
         else:
-            pen = np.clip(delta - h, 0.0, None)
+            pen = np.maximum(delta - h, 0.0)
         p = np.sqrt(pen)
         if force_mode:
             p *= load / (area * p.sum())
