@@ -266,7 +266,7 @@ def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
     def pick(a: np.ndarray) -> Any:
         return a[row:row + 1]
 
-    return WheelLocus(
+    single = WheelLocus(
         side=locus.side, shift_mm=pick(locus.shift_mm), yaw_rad=pick(locus.yaw_rad),
         roll_rad=pick(locus.roll_rad), height_mm=pick(locus.height_mm),
         gap_mm=pick(locus.gap_mm), y_wheel_mm=locus.y_wheel_mm, z_wheel_mm=locus.z_wheel_mm,
@@ -276,3 +276,9 @@ def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
         rolling_radius_mm=locus.rolling_radius_mm,
         curvature_a_per_mm=locus.curvature_a_per_mm, arc_length_mm=locus.arc_length_mm,
         valid=pick(locus.valid))
+    # the derived arrays of the whole locus (computed once for all poses, row by row the
+    # same numbers) handed to the pose's locus: cached properties live in its __dict__
+    single.__dict__.update(arc_step_mm=locus.arc_step_mm,
+                           track_width_mm=pick(locus.track_width_mm),
+                           sqrt_curvature_a=locus.sqrt_curvature_a)
+    return single
