@@ -18,6 +18,9 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
    falling weight, and with
    method "auto" a pose still unsettled after 10 rounds finishes with the coarse BEM for
    every patch, since a patch at the Hertz criterion's threshold can flip between the two).
+   The poses advance round by round together, each pose's rounds exactly as if alone: the
+   normal problem pose by pose, steps 3-4 of every pose still iterating in one batched
+   call per round (``_tangential``; the creepages and FASTSIM are per patch).
 
 Signs of the results (per wheel, in that wheel's local frame; the right wheel's frame is the
 mirror image of the left one so that both wheels are described alike): y_wheel and delta as
