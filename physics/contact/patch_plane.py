@@ -20,6 +20,7 @@ Units: mm, MPa, N.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,11 +89,10 @@ def plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: f
                    ) -> PlaneSamples:
     m = locus.gap_mm.shape[1]
     step = locus.arc_step_mm
-    n_ext = int(np.ceil(extend_mm / step)) + 2
+    n_ext = math.ceil(extend_mm / step) + 2
     lo = max(int(region.samples.min()) - n_ext, 0)
     hi = min(int(region.samples.max()) + n_ext + 1, m)
-    idx = np.arange(lo, hi)
-    idx = idx[locus.valid[row, idx]]
+    idx = lo + np.flatnonzero(locus.valid[row, lo:hi])
     dr = region.contact_angle_rad
     sign = locus.sign
     dy = locus.y_track_mm[row, idx] - region.y_track_mm
