@@ -33,6 +33,7 @@ direction, ``benchmarks/bench_normal_bem.py``); a start pressure from a nearby s
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from functools import lru_cache
@@ -95,10 +96,22 @@ def _offsets(dx_mm: float, dy_mm: float, e_star_mpa: float) -> _FloatArray:
     return c
 
 
-#: Dense influence matrices kept (``_dense``): 16 coarse grids of up to 26 x 26 elements,
-#: ~60 MB.
+#: Dense influence matrices kept per thread (``_dense``): 16 coarse grids of up to 26 x 26
+#: elements, ~60 MB.
 _DENSE_CACHE_SIZE = 16
-_dense_cache: OrderedDict[tuple[int, int, float, float, float], _FloatArray] = OrderedDict()
+
+
+class _DenseCache(threading.local):
+    """The dense matrices of ``_dense``, one LRU per thread: a buffer is recycled only by the
+    thread that solves with it (the service's job threads must not overwrite a matrix
+    another thread is about to use)."""
+
+    def __init__(self) -> None:
+        self.entries: OrderedDict[tuple[int, int, float, float, float], _FloatArray] = (
+            OrderedDict())
+
+
+_dense_cache = _DenseCache()
 
 
 def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _FloatArray:
@@ -107,9 +120,10 @@ def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _
     reuse their grids); a new matrix is written into the buffer of the one it evicts when
     that is large enough (a fresh 3 MB array costs more in page faults than filling it)."""
     key = (nx, ny, dx_mm, dy_mm, e_star_mpa)
-    hit = _dense_cache.get(key)
+    cache = _dense_cache.entries
+    hit = cache.get(key)
     if hit is not None:
-        _dense_cache.move_to_end(key)
+        cache.move_to_end(key)
         return hit
     if max(nx, ny) <= _KERNEL_HALF_WIDTH:
         centre = _KERNEL_HALF_WIDTH - 1
@@ -119,8 +133,8 @@ def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _
         kernel = influence_coefficients(nx, ny, dx_mm, dy_mm, e_star_mpa)
     n = nx * ny
     buffer = None
-    if len(_dense_cache) >= _DENSE_CACHE_SIZE:
-        _, old = _dense_cache.popitem(last=False)
+    if len(cache) >= _DENSE_CACHE_SIZE:
+        _, old = cache.popitem(last=False)
         base = old.base if isinstance(old.base, np.ndarray) else old
         if base.size >= n * n:
             buffer = base
@@ -129,7 +143,7 @@ def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _
     d = buffer[:n * n].reshape(n, n)
     dense_influence_into(kernel, ny, nx, d)
     d.setflags(write=False)
-    _dense_cache[key] = d
+    cache[key] = d
     return d
 
 

@@ -83,3 +83,25 @@ def test_cached_dense_matrix_is_the_grids_own(nx, ny, dx, dy):
 
     expected = dense_influence(influence_coefficients(nx, ny, dx, dy, 1.15e5), ny, nx)
     np.testing.assert_array_equal(_dense(nx, ny, dx, dy, 1.15e5), expected)
+
+
+def test_dense_matrices_are_kept_per_thread():
+    """A recycled buffer must never be one another thread is solving with: each thread keeps
+    its own matrices."""
+    import threading
+
+    from wearcast.physics.contact import normal_bem
+
+    mine = normal_bem._dense(6, 5, 0.3, 0.2, 1.15e5)
+    seen = {}
+
+    def other():
+        seen["empty"] = len(normal_bem._dense_cache.entries) == 0
+        seen["matrix"] = normal_bem._dense(6, 5, 0.3, 0.2, 1.15e5)
+
+    worker = threading.Thread(target=other)
+    worker.start()
+    worker.join()
+    assert seen["empty"]
+    assert seen["matrix"] is not mine
+    np.testing.assert_array_equal(seen["matrix"], mine)
