@@ -36,7 +36,7 @@ frame, i.e. our right wheel with y_wheel, delta, eta, phi and F_s negated
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -107,33 +107,43 @@ class LoadedWheel:
         return max(self.patches, key=lambda p: p.normal_force_n)
 
 
-def _tangential(rows: list[tuple[WheelLocus, int, list[NormalPatch], float, float, float]],
-                speed_m_s: float, nominal_radius_mm: float, mu: float,
+class _PoseRound(NamedTuple):
+    """One pose's input to a round's tangential step (``_tangential``)."""
+
+    locus: WheelLocus
+    row: int
+    patches: list[NormalPatch]
+    approach_mm: float
+    omega_rad_s: float
+    curvature_per_m: float
+
+
+def _tangential(rows: list[_PoseRound], speed_m_s: float, nominal_radius_mm: float, mu: float,
                 shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound
                 ) -> list[list[LoadedPatch]]:
     """Creepages and FASTSIM forces of the patches of several poses in one batch: per pose
-    (locus, row, patches, approach d [mm], axle angular velocity [rad/s], track curvature
-    [1/m]) the patches' ``LoadedPatch``; every quantity is per patch (elementwise), so the
-    batch gives each pose the numbers it would get alone, with the numpy and FASTSIM call
-    overhead paid once per round of the coupling instead of once per pose."""
+    (``_PoseRound``: locus and row, patches, approach d [mm], axle angular velocity [rad/s],
+    track curvature [1/m]) the patches' ``LoadedPatch``; every quantity is per patch
+    (elementwise), so the batch gives each pose the numbers it would get alone, with the numpy
+    and FASTSIM call overhead paid once per round of the coupling instead of once per pose."""
     owner: list[int] = []
     flat: list[NormalPatch] = []
-    for k, (_, _, patches, _, _, _) in enumerate(rows):
-        owner.extend([k] * len(patches))
-        flat.extend(patches)
+    for k, r in enumerate(rows):
+        owner.extend([k] * len(r.patches))
+        flat.extend(r.patches)
     out: list[list[LoadedPatch]] = [[] for _ in rows]
     if not flat:
         return out
-    pose = np.array([[rows[k][0].shift_mm[rows[k][1]], rows[k][0].yaw_rad[rows[k][1]],
-                      rows[k][0].roll_rad[rows[k][1]],
-                      rows[k][0].height_mm[rows[k][1]] - rows[k][3], rows[k][4], rows[k][5],
-                      rows[k][3]] for k in owner])
+    # per patch: shift, yaw, roll, height - d, omega, kappa, d of its pose
+    pose = np.array([[r.locus.shift_mm[r.row], r.locus.yaw_rad[r.row], r.locus.roll_rad[r.row],
+                      r.locus.height_mm[r.row] - r.approach_mm, r.omega_rad_s,
+                      r.curvature_per_m, r.approach_mm] for r in (rows[k] for k in owner)])
     point = np.array([[p.region.x_track_mm for p in flat],
                       [p.region.y_track_mm for p in flat],
                       [p.region.z_track_mm for p in flat]])
     point[2] -= pose[:, 6]
     delta = np.array([p.contact_angle_rad for p in flat])
-    xi, eta, phi = rigid_creepages(rows[0][0].side, speed_m_s, pose[:, 4], pose[:, 0],
+    xi, eta, phi = rigid_creepages(rows[0].locus.side, speed_m_s, pose[:, 4], pose[:, 0],
                                    pose[:, 1], pose[:, 2], pose[:, 3], nominal_radius_mm,
                                    point, delta, pose[:, 5])
     fn = np.array([p.normal_force_n for p in flat])
@@ -216,8 +226,9 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                                              else [st.normal.patches])[0]
             st.guess = st.normal.approach_mm
         solved = [_solved(states[row]) for row in active]
-        batch = _tangential([(states[row].locus, 0, normal.patches, normal.approach_mm,
-                              float(omegas[row]), float(kappas[row]))
+        batch = _tangential([_PoseRound(states[row].locus, 0, normal.patches,
+                                        normal.approach_mm, float(omegas[row]),
+                                        float(kappas[row]))
                              for row, normal in zip(active, solved, strict=True)],
                             speed_m_s, nominal_radius_mm, mu, shear_modulus_mpa, poisson,
                             n_grid, bound)
