@@ -10,6 +10,7 @@ treats the wheels of its wheel-rail cases one at a time).  Frames and signs: ``g
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -72,6 +73,24 @@ class WheelLocus:
     def sign(self) -> float:
         """+1 for the left wheel, -1 for the right one (track y of the wheel's field side)."""
         return 1.0 if self.side == "left" else -1.0
+
+    # Derived arrays the patch search and the planar patch problem read at every approach of
+    # every round (``patches``, ``patch_plane``), computed once per locus.
+    @cached_property
+    def arc_step_mm(self) -> float:
+        """Median spacing of the wheel samples along the wheel arc [mm]."""
+        return float(np.median(np.diff(self.arc_length_mm)))
+
+    @cached_property
+    def track_width_mm(self) -> _FloatArray:
+        """|d y_track / d sample| (N, M) [mm]: the lateral track width of each sample
+        (``np.gradient`` along the samples)."""
+        return np.abs(np.gradient(self.y_track_mm, axis=1))
+
+    @cached_property
+    def sqrt_curvature_a(self) -> _FloatArray:
+        """sqrt(A) (M,) [mm^-1/2] of the rolling curvature ``curvature_a_per_mm``."""
+        return np.sqrt(self.curvature_a_per_mm)
 
 
 class NoContactError(ValueError):

@@ -33,6 +33,8 @@ direction, ``benchmarks/bench_normal_bem.py``); a start pressure from a nearby s
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -42,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 from wearcast.physics.contact.hertz import STEEL_POISSON, STEEL_YOUNG_MPA, effective_modulus_mpa
 from wearcast.physics.contact.normal_bem_kernel import (
     DIRECT_MAX_ELEMENTS,
-    dense_influence,
+    dense_influence_into,
     polonsky_keer,
 )
 
@@ -75,12 +77,73 @@ def influence_coefficients(nx: int, ny: int, dx_mm: float, dy_mm: float,
     return value / (np.pi * e_star_mpa)
 
 
-@lru_cache(maxsize=16)
+#: Half-width (elements) of the offset kernels cached per element size (``_offsets``): the
+#: kernel of any grid up to this many elements per direction is a window of it (the coarse
+#: grids have at most ``normal_contact.COARSE_ELEMENTS`` + 2 per direction).
+_KERNEL_HALF_WIDTH = 28
+
+
+@lru_cache(maxsize=256)
+def _offsets(dx_mm: float, dy_mm: float, e_star_mpa: float) -> _FloatArray:
+    """``influence_coefficients`` of a ``_KERNEL_HALF_WIDTH``-square grid of dx x dy elements,
+    cached per element size: the coefficient at an offset does not depend on the grid, so
+    a smaller grid's kernel is the centred window of this one (the same numbers; the coarse
+    grids' element sizes come from a short ladder, ``patch_plane.patch_grid``, while their
+    element counts vary from grid to grid)."""
+    c = influence_coefficients(_KERNEL_HALF_WIDTH, _KERNEL_HALF_WIDTH, dx_mm, dy_mm,
+                               e_star_mpa)
+    c.setflags(write=False)
+    return c
+
+
+#: Dense influence matrices kept per thread (``_dense``): 16 coarse grids of up to 26 x 26
+#: elements, ~60 MB.
+_DENSE_CACHE_SIZE = 16
+
+
+class _DenseCache(threading.local):
+    """The dense matrices of ``_dense``, one LRU per thread: a buffer is recycled only by the
+    thread that solves with it (the service's job threads must not overwrite a matrix
+    another thread is about to use)."""
+
+    def __init__(self) -> None:
+        self.entries: OrderedDict[tuple[int, int, float, float, float], _FloatArray] = (
+            OrderedDict())
+
+
+_dense_cache = _DenseCache()
+
+
 def _dense(nx: int, ny: int, dx_mm: float, dy_mm: float, e_star_mpa: float) -> _FloatArray:
-    """The dense influence matrix (``normal_bem_kernel.dense_influence``) of a grid, cached
-    (the rounds of one wheel's normal / tangential coupling reuse their grids)."""
-    d = dense_influence(influence_coefficients(nx, ny, dx_mm, dy_mm, e_star_mpa), ny, nx)
+    """The dense influence matrix (``normal_bem_kernel.dense_influence``) of a grid, cached,
+    least recently used first out (the rounds of one wheel's normal / tangential coupling
+    reuse their grids); a new matrix is written into the buffer of the one it evicts when
+    that is large enough (a fresh 3 MB array costs more in page faults than filling it)."""
+    key = (nx, ny, dx_mm, dy_mm, e_star_mpa)
+    cache = _dense_cache.entries
+    hit = cache.get(key)
+    if hit is not None:
+        cache.move_to_end(key)
+        return hit
+    if max(nx, ny) <= _KERNEL_HALF_WIDTH:
+        centre = _KERNEL_HALF_WIDTH - 1
+        kernel = np.ascontiguousarray(_offsets(dx_mm, dy_mm, e_star_mpa)[
+            centre - ny + 1:centre + ny, centre - nx + 1:centre + nx])
+    else:
+        kernel = influence_coefficients(nx, ny, dx_mm, dy_mm, e_star_mpa)
+    n = nx * ny
+    buffer = None
+    if len(cache) >= _DENSE_CACHE_SIZE:
+        _, old = cache.popitem(last=False)
+        base = old.base if isinstance(old.base, np.ndarray) else old
+        if base.size >= n * n:
+            buffer = base
+    if buffer is None:
+        buffer = np.empty(n * n)
+    d = buffer[:n * n].reshape(n, n)
+    dense_influence_into(kernel, ny, nx, d)
     d.setflags(write=False)
+    cache[key] = d
     return d
 
 
@@ -233,7 +296,7 @@ def _solve(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike, normal_force_n: 
 
     warm = None
     if initial_pressure_mpa is not None:
-        warm = np.clip(np.asarray(initial_pressure_mpa, dtype=float), 0.0, None)
+        warm = np.maximum(np.asarray(initial_pressure_mpa, dtype=float), 0.0)
         if warm.shape != h.shape:
             raise ValueError("initial_pressure_mpa must have the shape of gap_mm")
         if not warm.sum() > 0:
@@ -245,9 +308,9 @@ def _solve(gap_mm: ArrayLike, x_mm: ArrayLike, y_mm: ArrayLike, normal_force_n: 
     else:
         # start: pressure where the rigid interpenetration is positive, shaped like sqrt(pen)
         if force_mode:
-            pen = np.clip(np.quantile(h, 0.02) - h + 1e-12, 0.0, None)
+            pen = np.maximum(np.quantile(h, 0.02) - h + 1e-12, 0.0)
         else:
-            pen = np.clip(delta - h, 0.0, None)
+            pen = np.maximum(delta - h, 0.0)
         p = np.sqrt(pen)
         if force_mode:
             p *= load / (area * p.sum())

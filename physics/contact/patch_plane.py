@@ -20,6 +20,7 @@ Units: mm, MPa, N.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,12 +88,11 @@ def gradient(f: _FloatArray, s: _FloatArray) -> _FloatArray:
 def plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: float
                    ) -> PlaneSamples:
     m = locus.gap_mm.shape[1]
-    step = float(np.median(np.diff(locus.arc_length_mm)))
-    n_ext = int(np.ceil(extend_mm / step)) + 2
+    step = locus.arc_step_mm
+    n_ext = math.ceil(extend_mm / step) + 2
     lo = max(int(region.samples.min()) - n_ext, 0)
     hi = min(int(region.samples.max()) + n_ext + 1, m)
-    idx = np.arange(lo, hi)
-    idx = idx[locus.valid[row, idx]]
+    idx = lo + np.flatnonzero(locus.valid[row, lo:hi])
     dr = region.contact_angle_rad
     sign = locus.sign
     dy = locus.y_track_mm[row, idx] - region.y_track_mm
@@ -104,7 +104,7 @@ def plane_samples(locus: WheelLocus, row: int, region: PatchRegion, extend_mm: f
     inc = np.diff(s) > 0
     # the monotone run through the deepest sample of the patch (always interpenetrating)
     deepest = int(region.samples[np.argmin(locus.gap_mm[row, region.samples])])
-    centre = int(np.clip(np.searchsorted(idx, deepest), 0, s.size - 1))
+    centre = min(max(int(np.searchsorted(idx, deepest)), 0), s.size - 1)
     # the run of equal directions around it: from after the last change below the centre
     # to the first change at or above it
     other = inc != inc[min(centre, inc.size - 1)]
@@ -149,7 +149,7 @@ def patch_grid(ps: PlaneSamples, approach_mm: float, element_mm: float, margin_m
     inside = pen > 0
     if not np.any(inside):
         raise ValueError("no interpenetration at this approach")
-    half = np.sqrt(np.clip(pen, 0.0, None) / ps.a)
+    half = np.sqrt(np.maximum(pen, 0.0) / ps.a)
     s_lo = ps.s[inside].min() - margin_mm
     s_hi = ps.s[inside].max() + margin_mm
     x_lo = np.min((ps.x - half)[inside]) - margin_mm

@@ -78,39 +78,49 @@ def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
 def sample_weights(locus: WheelLocus, row: int, approach_mm: float) -> _FloatArray:
     """Interpenetration weight per locus sample (M,) at vertical approach d [mm] (module
     docstring, step 2): (16/15) pen^(5/2) / sqrt(A) |dy_track|, 0 where pen <= 0."""
-    pen = np.where(locus.valid[row], approach_mm - locus.gap_mm[row], 0.0)
-    pen = np.clip(pen, 0.0, None)
-    width = np.abs(np.gradient(locus.y_track_mm[row]))
-    return (16.0 / 15.0) * pen**2.5 / np.sqrt(locus.curvature_a_per_mm) * width
+    pen = approach_mm - locus.gap_mm[row]
+    inside = np.flatnonzero(locus.valid[row] & (pen > 0.0))
+    out = np.zeros(pen.shape)
+    out[inside] = ((16.0 / 15.0) * pen[inside]**2.5 / locus.sqrt_curvature_a[inside]
+                   * locus.track_width_mm[row, inside])
+    return out
 
 
 def _region(locus: WheelLocus, row: int, samples: NDArray[np.intp], weights: _FloatArray,
             approach_mm: float, n_regions: int) -> PatchRegion:
-    w = weights[samples]
+    # a run of consecutive samples (every region before merging) is gathered by a slice:
+    # the same numbers as the index array, without its copies
+    pick: slice | NDArray[np.intp] = (
+        slice(int(samples[0]), int(samples[-1]) + 1)
+        if samples.size and int(samples[-1]) - int(samples[0]) + 1 == samples.size
+        else samples)
+    w = weights[pick]
     total = float(w.sum())
+    gaps = locus.gap_mm[row, pick]
     if total <= 0:  # pen barely positive: use the deepest sample
         w = np.zeros_like(w)
-        w[np.argmin(locus.gap_mm[row, samples])] = 1.0
+        w[np.argmin(gaps)] = 1.0
         total_w = 1.0
     else:
         total_w = total
 
     def mean(values: _FloatArray) -> float:
-        return float(np.sum(values[samples] * w) / total_w)
+        return float(np.sum(values[pick] * w) / total_w)
 
-    y_ref = mean(locus.y_track_mm[row])
+    y_track = locus.y_track_mm[row]
+    y_ref = mean(y_track)
     # the wheel position and radius at the reference: interpolated along the locus
-    ys = locus.y_track_mm[row, samples]
+    ys = y_track[pick]
     order = np.argsort(ys)
-    y_wheel = float(np.interp(y_ref, ys[order], locus.y_wheel_mm[samples][order]))
-    radius = float(np.interp(y_ref, ys[order], locus.rolling_radius_mm[samples][order]))
+    y_wheel = float(np.interp(y_ref, ys[order], locus.y_wheel_mm[pick][order]))
+    radius = float(np.interp(y_ref, ys[order], locus.rolling_radius_mm[pick][order]))
     return PatchRegion(
         samples=samples, weight=total, x_track_mm=mean(locus.x_track_mm[row]),
         y_track_mm=y_ref, z_rail_mm=mean(locus.z_rail_mm[row]),
         z_track_mm=mean(locus.z_track_mm[row]),
         contact_angle_rad=mean(locus.contact_angle_rad[row]), y_wheel_mm=y_wheel,
         rolling_radius_mm=radius,
-        max_penetration_mm=float(approach_mm - np.min(locus.gap_mm[row, samples])),
+        max_penetration_mm=float(approach_mm - np.min(gaps)),
         n_regions=n_regions,
     )
 

@@ -18,6 +18,9 @@ The pipeline of CONTACT's wheel-rail module for one wheel at a time, pose by pos
    falling weight, and with
    method "auto" a pose still unsettled after 10 rounds finishes with the coarse BEM for
    every patch, since a patch at the Hertz criterion's threshold can flip between the two).
+   The poses advance round by round together, each pose's rounds exactly as if alone: the
+   normal problem pose by pose, steps 3-4 of every pose still iterating in one batched
+   call per round (``_tangential``; the creepages and FASTSIM are per patch).
 
 Signs of the results (per wheel, in that wheel's local frame; the right wheel's frame is the
 mirror image of the left one so that both wheels are described alike): y_wheel and delta as
@@ -32,8 +35,8 @@ frame, i.e. our right wheel with y_wheel, delta, eta, phi and F_s negated
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -104,32 +107,71 @@ class LoadedWheel:
         return max(self.patches, key=lambda p: p.normal_force_n)
 
 
-def _tangential(locus: WheelLocus, row: int, patches: list[NormalPatch], approach: float,
-                speed_m_s: float, omega: float, nominal_radius_mm: float, mu: float,
-                shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound,
-                curvature_per_m: float = 0.0) -> list[LoadedPatch]:
-    if not patches:
-        return []
-    point = np.array([[p.region.x_track_mm for p in patches],
-                      [p.region.y_track_mm for p in patches],
-                      [p.region.z_track_mm - approach for p in patches]])
-    delta = np.array([p.contact_angle_rad for p in patches])
-    xi, eta, phi = rigid_creepages(locus.side, speed_m_s, omega, locus.shift_mm[row],
-                                   locus.yaw_rad[row], locus.roll_rad[row],
-                                   locus.height_mm[row] - approach, nominal_radius_mm, point,
-                                   delta, curvature_per_m)
-    fn = np.array([p.normal_force_n for p in patches])
+class _PoseRound(NamedTuple):
+    """One pose's input to a round's tangential step (``_tangential``)."""
+
+    locus: WheelLocus
+    row: int
+    patches: list[NormalPatch]
+    approach_mm: float
+    omega_rad_s: float
+    curvature_per_m: float
+
+
+def _tangential(rows: list[_PoseRound], speed_m_s: float, nominal_radius_mm: float, mu: float,
+                shear_modulus_mpa: float, poisson: float, n_grid: int, bound: Bound
+                ) -> list[list[LoadedPatch]]:
+    """Creepages and FASTSIM forces of the patches of several poses in one batch: per pose
+    (``_PoseRound``: locus and row, patches, approach d [mm], axle angular velocity [rad/s],
+    track curvature [1/m]) the patches' ``LoadedPatch``; every quantity is per patch
+    (elementwise), so the batch gives each pose the numbers it would get alone, with the numpy
+    and FASTSIM call overhead paid once per round of the coupling instead of once per pose."""
+    owner: list[int] = []
+    flat: list[NormalPatch] = []
+    for k, r in enumerate(rows):
+        owner.extend([k] * len(r.patches))
+        flat.extend(r.patches)
+    out: list[list[LoadedPatch]] = [[] for _ in rows]
+    if not flat:
+        return out
+    # per patch: shift, yaw, roll, height - d, omega, kappa, d of its pose
+    pose = np.array([[r.locus.shift_mm[r.row], r.locus.yaw_rad[r.row], r.locus.roll_rad[r.row],
+                      r.locus.height_mm[r.row] - r.approach_mm, r.omega_rad_s,
+                      r.curvature_per_m, r.approach_mm] for r in (rows[k] for k in owner)])
+    point = np.array([[p.region.x_track_mm for p in flat],
+                      [p.region.y_track_mm for p in flat],
+                      [p.region.z_track_mm for p in flat]])
+    point[2] -= pose[:, 6]
+    delta = np.array([p.contact_angle_rad for p in flat])
+    xi, eta, phi = rigid_creepages(rows[0].locus.side, speed_m_s, pose[:, 4], pose[:, 0],
+                                   pose[:, 1], pose[:, 2], pose[:, 3], nominal_radius_mm,
+                                   point, delta, pose[:, 5])
+    fn = np.array([p.normal_force_n for p in flat])
     loaded = fn > 0
-    a = np.where(loaded, [p.a_mm for p in patches], 1.0)
-    b = np.where(loaded, [p.b_mm for p in patches], 1.0)
+    a = np.where(loaded, [p.a_mm for p in flat], 1.0)
+    b = np.where(loaded, [p.b_mm for p in flat], 1.0)
     # the totals only (the compiled march; ``fastsim``'s numbers without its fields)
     res = fastsim_forces(xi, eta, phi, a, b, fn, mu, shear_modulus_mpa=shear_modulus_mpa,
                          poisson=poisson, n_x=n_grid, n_y=n_grid, bound=bound)
-    return [LoadedPatch(p, float(xi[k]), float(eta[k]), float(phi[k]),
-                        float(res.fx_n[k]) if loaded[k] else 0.0,
-                        float(res.fy_n[k]) if loaded[k] else 0.0,
-                        float(res.mz_nmm[k]) if loaded[k] else 0.0)
-            for k, p in enumerate(patches)]
+    for k, p in enumerate(flat):
+        out[owner[k]].append(LoadedPatch(p, float(xi[k]), float(eta[k]), float(phi[k]),
+                                         float(res.fx_n[k]) if loaded[k] else 0.0,
+                                         float(res.fy_n[k]) if loaded[k] else 0.0,
+                                         float(res.mz_nmm[k]) if loaded[k] else 0.0))
+    return out
+
+
+@dataclass
+class _Coupling:
+    """State of one pose's normal / tangential coupling (``loaded_wheel_contact``)."""
+
+    locus: WheelLocus
+    ratios: list[list[float]] | None = None
+    previous: list[float] = field(default_factory=list)
+    guess: float | None = None
+    rounds: int = 0
+    chosen: str = "auto"
+    normal: WheelNormalContact | None = None
 
 
 def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
@@ -164,31 +206,37 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
         omegas = np.broadcast_to(np.asarray(angular_velocity_rad_s, dtype=float), (n,))
     kappas = np.broadcast_to(np.asarray(track_curvature_per_m, dtype=float), (n,))
     young = 2.0 * shear_modulus_mpa * (1.0 + poisson)
-    out = []
-    for row in range(n):
-        single = _row_locus(locus, row)
-        ratios: list[list[float]] | None = None
-        previous: list[float] = []
-        guess = None
-        rounds = 0
-        chosen = method
-        normal: WheelNormalContact | None = None
-        while True:
-            rounds += 1
-            if method == "auto" and rounds > 10:
+    # all poses advance round by round together: the normal problem pose by pose, the
+    # creepages and FASTSIM of every pose still iterating in one batch (``_tangential``)
+    states = [_Coupling(_row_locus(locus, row), chosen=method) for row in range(n)]
+    out: list[LoadedWheel | None] = [None] * n
+    active = list(range(n))
+    while active:
+        for row in active:
+            st = states[row]
+            st.rounds += 1
+            if method == "auto" and st.rounds > 10:
                 # a patch at the Hertz criterion's threshold can flip between Hertz and the
                 # coarse BEM from round to round; settle it with the coarse BEM
-                chosen = "bem-coarse"
-            normal = wheel_normal_contact(single, float(loads[row]), method=chosen,
-                                          lateral_ratio=ratios, young_mpa=young,
-                                          poisson=poisson, approach_guess_mm=guess,
-                                          patch_guess=None if normal is None
-                                          else [normal.patches])[0]
-            guess = normal.approach_mm
-            loaded = _tangential(single, 0, normal.patches, normal.approach_mm,
-                                 speed_m_s, float(omegas[row]), nominal_radius_mm, mu,
-                                 shear_modulus_mpa, poisson, n_grid, bound,
-                                 float(kappas[row]))
+                st.chosen = "bem-coarse"
+            st.normal = wheel_normal_contact(st.locus, float(loads[row]), method=st.chosen,
+                                             lateral_ratio=st.ratios, young_mpa=young,
+                                             poisson=poisson, approach_guess_mm=st.guess,
+                                             patch_guess=None if st.normal is None
+                                             else [st.normal.patches])[0]
+            st.guess = st.normal.approach_mm
+        solved = [_solved(states[row]) for row in active]
+        batch = _tangential([_PoseRound(states[row].locus, 0, normal.patches,
+                                        normal.approach_mm, float(omegas[row]),
+                                        float(kappas[row]))
+                             for row, normal in zip(active, solved, strict=True)],
+                            speed_m_s, nominal_radius_mm, mu, shear_modulus_mpa, poisson,
+                            n_grid, bound)
+        still = []
+        for row, normal, loaded in zip(active, solved, batch, strict=True):
+            st = states[row]
+            rounds = st.rounds
+            ratios = st.ratios
             forces = [p.normal_force_n for p in loaded]
             new = [p.fs_n / p.normal_force_n if p.normal_force_n > 0 else 0.0 for p in loaded]
             if ratios is not None and rounds > 3 and len(ratios[0]) == len(new):
@@ -200,22 +248,31 @@ def loaded_wheel_contact(locus: WheelLocus, nominal_radius_mm: float,
                 new = [a + step * (b - a) for a, b in zip(ratios[0], new, strict=True)]
             ratio_change = (np.inf if ratios is None or len(ratios[0]) != len(new) else
                             float(np.max(np.abs(np.subtract(new, ratios[0])), initial=0.0)))
-            ratios = [new]
+            st.ratios = [new]
             # settled when no patch's normal force changes by more than rtol of the larger of
             # the wheel load and the largest patch force (a 70 deg flange patch carries several
             # times the vertical load), or when the ratios F_s/F_n, the coupling's unknowns,
             # no longer move (to rtol; the normal solution of a flange patch can then still
             # alternate by the grid's resolution, ~5e-4 of its force)
             scale = max(float(loads[row]), max(forces, default=0.0))
-            if len(forces) == len(previous) and (np.max(
-                    np.abs(np.subtract(forces, previous)), initial=0.0) < rtol * scale
+            if len(forces) == len(st.previous) and (np.max(
+                    np.abs(np.subtract(forces, st.previous)), initial=0.0) < rtol * scale
                     or ratio_change < rtol):
-                break
+                out[row] = LoadedWheel(normal.approach_mm, loaded, rounds)
+                continue
             if rounds >= max_rounds:
                 raise RuntimeError(f"normal/tangential coupling did not converge at pose {row}")
-            previous = forces
-        out.append(LoadedWheel(normal.approach_mm, loaded, rounds))
-    return out
+            st.previous = forces
+            still.append(row)
+        active = still
+    return [w for w in out if w is not None]
+
+
+def _solved(state: _Coupling) -> WheelNormalContact:
+    """The normal solution of a pose's current round (set before its tangential step)."""
+    if state.normal is None:
+        raise RuntimeError("normal contact not solved")  # pragma: no cover - by construction
+    return state.normal
 
 
 def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
@@ -223,7 +280,7 @@ def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
     def pick(a: np.ndarray) -> Any:
         return a[row:row + 1]
 
-    return WheelLocus(
+    single = WheelLocus(
         side=locus.side, shift_mm=pick(locus.shift_mm), yaw_rad=pick(locus.yaw_rad),
         roll_rad=pick(locus.roll_rad), height_mm=pick(locus.height_mm),
         gap_mm=pick(locus.gap_mm), y_wheel_mm=locus.y_wheel_mm, z_wheel_mm=locus.z_wheel_mm,
@@ -233,3 +290,9 @@ def _row_locus(locus: WheelLocus, row: int) -> WheelLocus:
         rolling_radius_mm=locus.rolling_radius_mm,
         curvature_a_per_mm=locus.curvature_a_per_mm, arc_length_mm=locus.arc_length_mm,
         valid=pick(locus.valid))
+    # the derived arrays of the whole locus (computed once for all poses, row by row the
+    # same numbers) handed to the pose's locus: cached properties live in its __dict__
+    single.__dict__.update(arc_step_mm=locus.arc_step_mm,
+                           track_width_mm=pick(locus.track_width_mm),
+                           sqrt_curvature_a=locus.sqrt_curvature_a)
+    return single

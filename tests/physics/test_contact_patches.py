@@ -134,3 +134,22 @@ def test_production_method_on_a_measured_wheel(reference_dir):
     assert np.all(table.d_pos_mm.abs() < 0.5)
     assert np.all(table.d_fn_rel.abs() < 0.05)
     assert np.all(table.d_pmax_rel.abs() < 0.10)
+
+
+def test_pose_locus_inherits_the_derived_arrays_of_its_rows(wheelset):
+    """The coupling's one-pose loci take the arc step, track widths and sqrt(A) from the whole
+    locus; they must be what the pose's own locus computes, and the patches the same."""
+    from wearcast.physics.contact.locus import WheelLocus
+    from wearcast.physics.contact.wheel_rail import _row_locus
+
+    locus = wheel_locus(wheelset, [-3.0, 2.0, 7.5], "left", yaw_rad=0.004)
+    for row in range(3):
+        handed = _row_locus(locus, row)
+        fresh = WheelLocus(**{f: getattr(handed, f) for f in WheelLocus.__dataclass_fields__})
+        assert handed.arc_step_mm == fresh.arc_step_mm
+        np.testing.assert_array_equal(handed.track_width_mm, fresh.track_width_mm)
+        np.testing.assert_array_equal(handed.sqrt_curvature_a, fresh.sqrt_curvature_a)
+        for approach in (0.01, 0.08):
+            a, b = patch_regions(handed, 0, approach), patch_regions(locus, row, approach)
+            assert [r.y_track_mm for r in a] == [r.y_track_mm for r in b]
+            assert [r.weight for r in a] == [r.weight for r in b]

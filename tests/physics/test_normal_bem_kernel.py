@@ -72,3 +72,36 @@ def test_warm_start_converges_to_the_same_solution(compiled):
     assert warm.iterations < cold.iterations
     with pytest.raises(ValueError, match="shape"):
         solve_normal_bem(gap, x, y, normal_force_n=1.0, initial_pressure_mpa=np.ones((2, 2)))
+
+
+@pytest.mark.parametrize(("nx", "ny", "dx", "dy"), [(20, 26, 0.2378, 0.2828), (1, 3, 0.2, 0.2),
+                                                    (28, 30, 0.3, 0.2), (29, 5, 0.2, 0.2)])
+def test_cached_dense_matrix_is_the_grids_own(nx, ny, dx, dy):
+    """The dense matrix built from a window of the kernel cached per element size (or, past
+    its width, from the grid's own kernel) is the one of the grid's own kernel exactly."""
+    from wearcast.physics.contact.normal_bem import _dense
+
+    expected = dense_influence(influence_coefficients(nx, ny, dx, dy, 1.15e5), ny, nx)
+    np.testing.assert_array_equal(_dense(nx, ny, dx, dy, 1.15e5), expected)
+
+
+def test_dense_matrices_are_kept_per_thread():
+    """A recycled buffer must never be one another thread is solving with: each thread keeps
+    its own matrices."""
+    import threading
+
+    from wearcast.physics.contact import normal_bem
+
+    mine = normal_bem._dense(6, 5, 0.3, 0.2, 1.15e5)
+    seen = {}
+
+    def other():
+        seen["empty"] = len(normal_bem._dense_cache.entries) == 0
+        seen["matrix"] = normal_bem._dense(6, 5, 0.3, 0.2, 1.15e5)
+
+    worker = threading.Thread(target=other)
+    worker.start()
+    worker.join()
+    assert seen["empty"]
+    assert seen["matrix"] is not mine
+    np.testing.assert_array_equal(seen["matrix"], mine)
