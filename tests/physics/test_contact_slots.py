@@ -13,6 +13,9 @@ minima, the candidates' normal forces and the bogie residual are continuous in t
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -26,23 +29,14 @@ from wearcast.physics.curving_table import (
     SHARE_GAP_MM,
     SLOT_FADE_MM,
 )
-from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import vehicle_preset
 
-
-def _rippled(amplitude_mm: float, wavelength_mm: float, lo_mm: float, hi_mm: float):
-    """S1002 with a cosine ripple on wheel y lo..hi [mm] (3 mm ramps at both ends): after the
-    table's 2 mm smoothing, a tread with several gap minima, like a loop-worn one."""
-    def height(y):
-        y = np.asarray(y, dtype=float)
-        window = np.clip((y - lo_mm) / 3.0, 0.0, 1.0) * np.clip((hi_mm - y) / 3.0, 0.0, 1.0)
-        return s1002_height_mm(y) + amplitude_mm * window * np.cos(
-            2.0 * np.pi * (y - lo_mm) / wavelength_mm)
-    return height
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from residual_continuity import RIPPLED, largest_jump, rippled  # noqa: E402
 
 #: Four gap minima at most (a worn tread's count) and seven (more than the slots).
-PROFILES = {"four_minima": (0.1, 7.0, 0.0, 40.0), "seven_minima": (0.3, 6.0, -20.0, 40.0)}
+PROFILES = {"four_minima": RIPPLED["rippled, 4 minima"],
+            "seven_minima": RIPPLED["rippled, 7 minima"]}
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +46,7 @@ def trailer():
 
 @pytest.fixture(scope="module")
 def tables(trailer):
-    return {name: cv.build_contact_table(_rippled(*p), trailer.rail_profile,
+    return {name: cv.build_contact_table(rippled(*p), trailer.rail_profile,
                                          trailer.rail_inclination, trailer.wheel_radius_m)
             for name, p in PROFILES.items()}
 
@@ -108,31 +102,6 @@ def test_no_minimum_is_dropped_or_faded_when_they_fit_the_slots(tables):
     assert np.all(free["weight"][:, N_SLOTS:] == 0.0)
 
 
-def _largest_jump(f, x0: float, x1: float, n: int = 4001, candidates: int = 40
-                  ) -> tuple[float, float]:
-    """The largest increment of f (vector valued) left after bisecting the sweep's steepest and
-    most isolated steps down to 1e-12 mm, and where: a discontinuity keeps its size, a
-    continuous function's increment vanishes."""
-    x = np.linspace(x0, x1, n)
-    v = f(x)
-    inc = np.max(np.abs(np.diff(v, axis=0)), axis=1)
-    neighbours = np.array([np.median(inc[max(0, k - 5):k + 6]) for k in range(inc.size)])
-    picks = set(np.argsort(inc)[-candidates:]) | set(
-        np.argsort(inc / (neighbours + 1e-300))[-candidates:])
-    worst = (0.0, float("nan"))
-    for k in picks:
-        a, b, va, vb = x[k], x[k + 1], v[k], v[k + 1]
-        while b - a > 1e-12:
-            m = 0.5 * (a + b)
-            vm = f(np.array([m]))[0]
-            if np.max(np.abs(vm - va)) > np.max(np.abs(vb - vm)):
-                b, vb = m, vm
-            else:
-                a, va = m, vm
-        worst = max(worst, (float(np.max(np.abs(vb - va))), float(a)))
-    return worst
-
-
 @pytest.mark.parametrize("n_slots", [2, 3, N_SLOTS])
 @pytest.mark.parametrize("name", sorted(PROFILES))
 def test_candidate_normal_forces_are_continuous_whatever_the_number_of_minima(tables, name,
@@ -150,7 +119,7 @@ def test_candidate_normal_forces_are_continuous_whatever_the_number_of_minima(ta
                               / c["approach1_mm"] ** 1.5, axis=-1))
         return np.stack(out, axis=-1) / 1e5  # about wheel loads
 
-    jump, where = _largest_jump(forces, -15.0, 15.0)
+    jump, where, _ = largest_jump(forces, -15.0, 15.0)
     assert jump < 1e-6, (jump, where)
 
 
@@ -170,7 +139,7 @@ def test_bogie_residual_is_continuous_where_a_fourth_minimum_is_loaded(trailer, 
             q[:, 3] += d
             return compiled_residual(q, trailer, table, 0.0, 0.0, 0.0)
 
-        jump, where = _largest_jump(residual, 3.0, 6.8)
+        jump, where, _ = largest_jump(residual, 3.0, 6.8)
         assert jump < 1e-6, (d, jump, where)
         ys = np.linspace(3.0, 6.8, 381)
         q = np.repeat(q0[None], ys.size, axis=0)
@@ -180,3 +149,37 @@ def test_bogie_residual_is_continuous_where_a_fourth_minimum_is_loaded(trailer, 
         most_loaded = max(most_loaded, int(np.max(np.sum(c.normal_force_n[:, 0, 0] > 0,
                                                          axis=-1))))
     assert most_loaded == 4
+
+
+@pytest.mark.slow
+def test_every_gap_minimum_of_loop_worn_wheels_has_a_slot():
+    # the Minuetto's wheels worn by the whole-vehicle loop, every trip forward on the example
+    # fleet's Aosta route to 8,000 km (the catalogue run of README stop 25): four or five gap
+    # minima in one row, every one kept with the weight of an uncapped selection
+    import json
+
+    from wearcast.physics.vehicle_wear_simulation import (
+        VehicleWearOptions,
+        simulate_vehicle_wear,
+    )
+
+    root = Path(__file__).resolve().parents[2]
+    routes = json.loads((root / "service" / "example_fleet" / "routes.json").read_text())
+    classes = next(r for r in routes if r["name"] == "aosta")["classes"]
+    sim = simulate_vehicle_wear("minuetto", classes, mileage_km=8000.0, depth_per_step_mm=0.8,
+                                options=VehicleWearOptions(forward_share=1.0))
+    shifts = np.linspace(-15.0, 15.0, 1501)
+    most = 0
+    for b, label in enumerate(sim.wheels[::4]):
+        vehicle = vehicle_preset("minuetto", "motor" if label.startswith("motor") else "trailer")
+        z = sim.profiles_mm[4 * b:4 * b + 4].mean(axis=0)
+        table = cv.build_contact_table(lambda y, z=z: np.interp(y, sim.y_mm, z),
+                                       vehicle.rail_profile, vehicle.rail_inclination,
+                                       vehicle.wheel_radius_m)
+        capped = table.candidates(shifts)
+        free = table.candidates(shifts, N_SLOTS + 5)
+        for name in ("wheel_y_mm", "gap_mm", "weight"):
+            assert np.array_equal(capped[name], free[name][:, :N_SLOTS]), (label, name)
+        assert np.all(free["weight"][:, N_SLOTS:] == 0.0)
+        most = max(most, int(_minima_per_row(table, shifts).max()))
+    assert 4 <= most <= N_SLOTS
