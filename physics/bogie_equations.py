@@ -57,6 +57,7 @@ from wearcast.physics.contact.creep import creep_forces
 from wearcast.physics.contact.fastsim import SPIN_OFFSET_FRACTION, fastsim_forces
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.kalker import KALKER_ROW_SHAPE, KALKER_TABLE
+from wearcast.physics.contact_candidates_kernel import N_SLOTS
 from wearcast.physics.curving_table import (
     _NO_CONTACT_GAP_MM,
     MAX_CURVATURE_B_PER_MM,
@@ -64,6 +65,7 @@ from wearcast.physics.curving_table import (
     PROMINENCE_MM,
     SEPARATION_MM,
     SHARE_GAP_MM,
+    SLOT_FADE_MM,
     TAPE_CIRCLE_HALF_SPACING_MM,
     ContactTable,
 )
@@ -83,7 +85,7 @@ N_STATE = 12
 
 @dataclass(frozen=True)
 class BogieContacts:
-    """Per-contact quantities, shape (..., 2 wheelsets, 2 sides, 3 patch slots)."""
+    """Per-contact quantities, shape (..., 2 wheelsets, 2 sides, ``N_SLOTS`` patch slots)."""
 
     normal_force_n: NDArray
     contact_angle_rad: NDArray
@@ -256,7 +258,7 @@ class CompiledBogie:
             GRAVITY_M_S2, vehicle.cog_height_m, TAPE_CIRCLE_HALF_SPACING_MM,
             MIN_CURVATURE_B_PER_MM, MAX_CURVATURE_B_PER_MM, PROMINENCE_MM, SEPARATION_MM,
             SHARE_GAP_MM, _NO_CONTACT_GAP_MM, SPIN_OFFSET_FRACTION, float(table.shift_mm[0]),
-            float(table.shift_mm[1] - table.shift_mm[0])])
+            float(table.shift_mm[1] - table.shift_mm[0]), SLOT_FADE_MM, float(N_SLOTS)])
         assert self.consts.size == N_CONSTS
         self.creep_grid = 0 if creep_grid is None else int(creep_grid)
         if self.creep_grid < 0:

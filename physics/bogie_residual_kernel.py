@@ -36,8 +36,6 @@ from wearcast.physics.contact.kalker_kernel import saturated_creep_one
 from wearcast.physics.contact.min_gap_kernel import interp_on_interval
 from wearcast.physics.contact_candidates_kernel import slot_workspace, slots_one
 
-#: Patch slots per wheel (``ContactTable.candidates``' default).
-N_SLOTS = 3
 #: Distinct shifts whose candidates are remembered while a batch is evaluated (the
 #: forward-difference Jacobian perturbs the other unknowns at unchanged shifts).
 _SHIFT_MEMORY = 16
@@ -95,20 +93,25 @@ def _candidate_columns(shift: float, yc: float, slot_gap: float, g2: float,
 
 
 #: Indices of the constants array (``bogie_equations.compiled_residual`` builds it).
+#: SLOTS holds the patch slot count per wheel (``contact_candidates_kernel.N_SLOTS``), read
+#: at run time rather than compiled in as a global, so a changed slot count never meets a
+#: kernel cached with the old one.
 (R0, MU, SHEAR, NU, Q_WHEEL, SEMI_WHEELBASE, K_PY, K_PSI, M_WHEELSET, M_REST, K_SECONDARY,
  CENTRES, GRAVITY, COG_HEIGHT, HALF_SPACING, MIN_B, MAX_B, PROMINENCE, SEPARATION, SHARE,
- NO_CONTACT, SPIN_OFFSET, GRID0, GRID_STEP) = range(24)
-N_CONSTS = 24
+ NO_CONTACT, SPIN_OFFSET, GRID0, GRID_STEP, SLOT_FADE, SLOTS) = range(26)
+N_CONSTS = 26
 
 
 @njit(cache=True)
-def _new_memory() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
-                           NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+def _new_memory(n_slots: int) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                       NDArray[np.float64], NDArray[np.int64],
+                                       NDArray[np.float64], NDArray[np.float64]]:
     """Remembered shifts, their slot columns (gap, angle, lateral, radius, approach1, a1, b1),
-    weights, the next slot to overwrite; work space of ``slots_one`` and for its outputs."""
-    return (np.full(_SHIFT_MEMORY, np.nan), np.empty((_SHIFT_MEMORY, N_SLOTS, 7)),
-            np.empty((_SHIFT_MEMORY, N_SLOTS)), np.zeros(1, dtype=np.int64),
-            slot_workspace(N_SLOTS), np.empty((4, N_SLOTS)))
+    weights, the next slot to overwrite; work space of ``slots_one`` and for its outputs;
+    for n_slots patch slots per wheel."""
+    return (np.full(_SHIFT_MEMORY, np.nan), np.empty((_SHIFT_MEMORY, n_slots, 7)),
+            np.empty((_SHIFT_MEMORY, n_slots)), np.zeros(1, dtype=np.int64),
+            slot_workspace(n_slots), np.empty((4, n_slots)))
 
 
 @njit(cache=True)
@@ -124,13 +127,14 @@ def _slot_columns(shift, tab, consts, memory, g_row):
     s_gap = slots[1]
     s_g2 = slots[2]
     s_w = slots[3]
-    slots_one(gap, gap2, smoothing, consts[GRID0], consts[GRID_STEP], wheel_y, shift, N_SLOTS,
-              consts[PROMINENCE], consts[SEPARATION], consts[SHARE], consts[NO_CONTACT], g_row,
-              work, s_y, s_gap, s_g2, s_w)
+    n_slots = s_w.shape[0]
+    slots_one(gap, gap2, smoothing, consts[GRID0], consts[GRID_STEP], wheel_y, shift, n_slots,
+              consts[PROMINENCE], consts[SEPARATION], consts[SHARE], consts[NO_CONTACT],
+              consts[SLOT_FADE], g_row, work, s_y, s_gap, s_g2, s_w)
     hit = mem_next[0]
     mem_next[0] = (hit + 1) % _SHIFT_MEMORY
     mem_shift[hit] = shift
-    for t in range(N_SLOTS):
+    for t in range(n_slots):
         if s_w[t] == 0.0:
             # a slot without weight (a missing candidate, or one not yet or no longer mature)
             # carries no normal force, so no creep force: every load it adds is an exact zero
@@ -170,7 +174,7 @@ def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
         hit = _slot_columns(sgn * y, tab, consts, memory, g_row)
         d = qrow[5 * w + 3 + side]
         vert = 0.0
-        for t in range(N_SLOTS):
+        for t in range(mem_w.shape[1]):
             cols = mem_cols[hit, t]
             angle = cols[1]
             lateral = cols[2]
@@ -268,7 +272,7 @@ def bogie_residual_flat(q, params, tab, consts, creep_grid):
     non-finite entry gets a NaN residual."""
     n = q.shape[0]
     out = np.empty((n, 12))
-    memory = _new_memory()
+    memory = _new_memory(int(consts[SLOTS]))
     g_row = np.empty(tab[0].shape[1])
     sums = np.empty((2, 5))
     for i in range(n):
@@ -293,7 +297,7 @@ def bogie_jacobian_flat(q, steps, params, tab, consts, creep_grid):
     n = q.shape[0]
     r0 = np.empty((n, 12))
     jac = np.empty((n, 12, 12))
-    memory = _new_memory()
+    memory = _new_memory(int(consts[SLOTS]))
     g_row = np.empty(tab[0].shape[1])
     base = np.empty((2, 5))
     sums = np.empty((2, 5))

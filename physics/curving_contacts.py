@@ -36,13 +36,12 @@ from numpy.typing import NDArray
 from wearcast.physics.bogie_equations import BogieContacts
 from wearcast.physics.contact.geometry import WheelsetTrack
 from wearcast.physics.contact.pose_contact import Pose, PoseContact, contact_at_poses
+from wearcast.physics.contact_candidates_kernel import N_SLOTS
 from wearcast.physics.vocabulary import SIDES
 
 #: Fields of :class:`PipelineContacts`, each (cases, 2 wheelsets, 2 sides, slots): the bogie
 #: equations' per-contact quantities (``BogieContacts``) and the peak pressure.
 PATCH_FIELDS = (*(f.name for f in fields(BogieContacts)), "peak_pressure_mpa")
-#: Patch slots per wheel (field side first), as the curving table's candidates.
-N_SLOTS = 3
 
 
 class PipelineContactError(RuntimeError):

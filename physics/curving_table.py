@@ -22,7 +22,7 @@ from scipy.ndimage import gaussian_filter1d
 from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
-from wearcast.physics.contact_candidates_kernel import candidate_slots
+from wearcast.physics.contact_candidates_kernel import N_SLOTS, candidate_slots
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -42,8 +42,13 @@ SEPARATION_MM = 0.1
 PROMINENCE_MM = 0.005
 #: Gap scale of the soft minimum that shares a merged patch between two minima [mm].
 SHARE_GAP_MM = 0.01
-#: Gap assigned to a slot without a contact candidate [mm].
+#: Gap assigned to a slot without a contact candidate [mm]; also the rank penalty of an
+#: immature minimum when a gap row has more minima than slots (``contact_candidates_kernel``).
 _NO_CONTACT_GAP_MM = 50.0
+#: Key difference over which a kept minimum fades out as the best minimum left without a slot
+#: approaches its rank [mm] (``contact_candidates_kernel``: the residual stays continuous when
+#: a gap row has more minima than ``N_SLOTS``); the scale of the soft sharing, SHARE_GAP_MM.
+SLOT_FADE_MM = 0.01
 
 #: Wheel y [mm] below which the gap is smoothed at the flange scale, and above which at the
 #: tread scale (``build_contact_table``), blended linearly between.
@@ -103,17 +108,18 @@ class ContactTable:
         """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
         return np.interp(np.asarray(shift_mm, dtype=float), self.shift_mm, self.rigid_rise_mm)
 
-    def candidates(self, shift_mm: ArrayLike, n_slots: int = 3) -> dict[str, NDArray]:
+    def candidates(self, shift_mm: ArrayLike, n_slots: int = N_SLOTS) -> dict[str, NDArray]:
         """Up to ``n_slots`` contact candidates per wheel at arbitrary shifts.
 
         Returns arrays of shape shift.shape + (n_slots,), slot 0 the field-most candidate:
-        ``gap_mm`` above the best candidate (a missing candidate gets a large gap),
+        ``gap_mm`` above the deepest minimum (a missing candidate gets a large gap),
         ``weight`` in [0, 1] (1 for a separate patch, see ``_candidate_slots_numpy``),
         ``angle_rad`` contact angle (> 0 pushes the wheel towards the track centre),
         ``wheel_y_mm``, ``rail_y_mm``, ``lateral_mm`` (distance from the track centre line),
         ``radius_m`` rolling radius, ``curv_a``, ``curv_b`` [1/mm], ``approach1_mm``,
         ``a1_mm``, ``b1_mm`` Hertz constants under 1 N. The slots come from the compiled kernel
-        (``contact_candidates_kernel``); ``_candidate_slots_numpy`` is its reference.
+        (``contact_candidates_kernel``, whose docstring states which minima get a slot when
+        there are more than ``n_slots``); ``_candidate_slots_numpy`` is its reference.
         """
         s = np.asarray(shift_mm, dtype=float)
         flat = np.ascontiguousarray(s.reshape(-1))
@@ -121,14 +127,15 @@ class ContactTable:
                                 float(self.shift_mm[0]),
                                 float(self.shift_mm[1] - self.shift_mm[0]), self.wheel_y_mm,
                                 flat, n_slots, PROMINENCE_MM, SEPARATION_MM, SHARE_GAP_MM,
-                                _NO_CONTACT_GAP_MM)
+                                _NO_CONTACT_GAP_MM, SLOT_FADE_MM)
         yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
         return self._candidate_columns(s, yc, gap, g2, weight)
 
-    def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = 3
+    def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = N_SLOTS
                                ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Reference implementation of the candidate slots (wheel y, gap, g'', weight), each
-        shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel``."""
+        shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel`` (its
+        docstring states the selection rule)."""
         s = np.asarray(shift_mm, dtype=float)
         grid = self.shift_mm
         step = grid[1] - grid[0]
@@ -136,46 +143,41 @@ class ContactTable:
         k = np.floor(pos).astype(int)
         w = (pos - k)[..., None]
         g = (1.0 - w) * self.gap_mm[k] + w * self.gap_mm[k + 1]  # (..., n_y)
-        inner = g[..., 1:-1]
-        is_min = (inner < g[..., :-2]) & (inner <= g[..., 2:])
-        score = np.where(is_min, inner, np.inf)
-        picks = []
-        for _ in range(n_slots):  # best minima, by repeated argmin
-            j = np.argmin(score, axis=-1)[..., None]
-            picks.append(j)
-            np.put_along_axis(score, j, np.inf, axis=-1)
-        idx = np.concatenate(picks, axis=-1)
-        score = np.where(is_min, inner, np.inf)
-        found = np.isfinite(np.take_along_axis(score, idx, axis=-1))
-        i = idx + 1
-        gm = np.take_along_axis(g, i - 1, axis=-1)
-        g0 = np.take_along_axis(g, i, axis=-1)
-        gp = np.take_along_axis(g, i + 1, axis=-1)
-        den = gm - 2.0 * g0 + gp
-        frac = np.clip(np.where(den > 0, 0.5 * (gm - gp) / np.where(den > 0, den, 1.0), 0.0),
-                       -0.5, 0.5)
-        dy = self.wheel_y_mm[1] - self.wheel_y_mm[0]
-        yc = self.wheel_y_mm[i] + frac * dy
-        # second derivative at the refined position (linear in y between grid points)
-        j = np.where(frac >= 0.0, i + 1, i - 1)
-        f = np.abs(frac)
-        g2_rows = (1.0 - w) * self.gap2_per_mm[k] + w * self.gap2_per_mm[k + 1]
-        g2 = ((1.0 - f) * np.take_along_axis(g2_rows, i, axis=-1)
-              + f * np.take_along_axis(g2_rows, j, axis=-1))
-        gc = g0 - 0.25 * (gm - gp) * frac - 0.5 * g2 * self.smoothing_mm[i] ** 2
-        gc = np.where(found, gc, np.inf)
-        best = np.min(gc, axis=-1, keepdims=True)
-        gap = np.where(found, gc - best, _NO_CONTACT_GAP_MM)
-        # weights (continuity of the forces when minima are born, die or exchange their order on
-        # a flat gap): each candidate k has a maturity m_k = ramp(prominence_k / PROMINENCE_MM),
-        # its rise above the lower of its two adjacent maxima of the gap (0 at birth and death);
-        # candidates j whose gap between them rises less than SEPARATION_MM above the shallower
-        # one belong to one conformal patch (c_kj -> 1) and share it by a soft minimum of their
-        # gaps (temperature SHARE_GAP_MM):
-        #     w_k = m_k / (eps + m_k + sum_j c_kj m_j exp(-(g_j - g_k) / SHARE_GAP_MM)).
-        # An isolated mature candidate has weight 1.
         n_y = g.shape[-1]
         cols = np.arange(n_y)
+        inner = g[..., 1:-1]
+        is_min = (inner < g[..., :-2]) & (inner <= g[..., 2:])
+        dy = self.wheel_y_mm[1] - self.wheel_y_mm[0]
+        g2_rows = (1.0 - w) * self.gap2_per_mm[k] + w * self.gap2_per_mm[k + 1]
+
+        # second differences of the row (the ends take their neighbour's)
+        second = np.empty_like(g)
+        second[..., 1:-1] = g[..., :-2] - 2.0 * inner + g[..., 2:]
+
+        def refine(i: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+            """Parabola refinement at interior indices i: wheel y, g'', corrected gap, g
+            (``contact_candidates_kernel._refine``: the curvature of the vertex's gap
+            interpolated like g'', so the gap stays continuous where the grid minimum moves)."""
+            gm = np.take_along_axis(g, i - 1, axis=-1)
+            g0 = np.take_along_axis(g, i, axis=-1)
+            gp = np.take_along_axis(g, i + 1, axis=-1)
+            den = gm - 2.0 * g0 + gp
+            frac = np.clip(np.where(den > 0, 0.5 * (gm - gp) / np.where(den > 0, den, 1.0),
+                                    0.0), -0.5, 0.5)
+            yc = self.wheel_y_mm[i] + frac * dy
+            # second derivative at the refined position (linear in y between grid points)
+            j = np.where(frac >= 0.0, i + 1, i - 1)
+            f = np.abs(frac)
+            g2 = ((1.0 - f) * np.take_along_axis(g2_rows, i, axis=-1)
+                  + f * np.take_along_axis(g2_rows, j, axis=-1))
+            den_j = np.where((j > 0) & (j < n_y - 1),
+                             np.take_along_axis(second, np.clip(j, 1, n_y - 2), axis=-1), den)
+            den_eff = (1.0 - f) * den + f * den_j
+            gc = g0 - 0.5 * den_eff * frac * frac - 0.5 * g2 * self.smoothing_mm[i] ** 2
+            return yc, g2, gc, g0
+
+        # maturity of every point as a minimum: m = ramp(prominence / PROMINENCE_MM), its rise
+        # above the lower of its two adjacent maxima of the gap (0 at birth and death)
         is_max = np.zeros(g.shape, dtype=bool)
         is_max[..., 1:-1] = (inner >= g[..., :-2]) & (inner > g[..., 2:])
         is_max[..., 0] = True
@@ -183,31 +185,66 @@ class ContactTable:
         left_max = np.maximum.accumulate(np.where(is_max, cols, 0), axis=-1)
         right_max = np.flip(np.minimum.accumulate(np.flip(np.where(is_max, cols, n_y - 1),
                                                           axis=-1), axis=-1), axis=-1)
-        g_left = np.take_along_axis(g, np.take_along_axis(left_max, i, axis=-1), axis=-1)
-        g_right = np.take_along_axis(g, np.take_along_axis(right_max, i, axis=-1), axis=-1)
-        prominence = np.minimum(g_left, g_right) - g0
-        maturity = np.where(found, _smoothstep(prominence / PROMINENCE_MM), 0.0)
+        rise = (np.minimum(np.take_along_axis(g, left_max, axis=-1),
+                           np.take_along_axis(g, right_max, axis=-1)) - g)[..., 1:-1]
+        maturity_all = _smoothstep(rise / PROMINENCE_MM)
+        # the gaps' origin: the deepest refined minimum of the whole row
+        interior = np.broadcast_to(cols[1:-1], inner.shape)
+        gc_all = refine(interior)[2]
+        best = np.min(np.where(is_min, gc_all, np.inf), axis=-1, keepdims=True)
+        # the n_slots + 1 lowest keys g + (1 - maturity) no-contact gap, ties to the lower
+        # index (repeated argmin); the last is the best minimum left without a slot
+        key_all = np.where(is_min, inner + (1.0 - maturity_all) * _NO_CONTACT_GAP_MM, np.inf)
+        score = key_all.copy()
+        picks, keys = [], []
+        for _ in range(n_slots + 1):
+            j = np.argmin(score, axis=-1)[..., None]
+            picks.append(j)
+            keys.append(np.take_along_axis(score, j, axis=-1))  # inf once the minima run out
+            np.put_along_axis(score, j, np.inf, axis=-1)
+        idx = np.concatenate(picks[:n_slots], axis=-1)
+        key = np.concatenate(keys[:n_slots], axis=-1)
+        key_excl = keys[n_slots]
+        found = np.isfinite(key)
+        # a missing candidate takes the first interior point's columns (finite, unused)
+        i = np.where(found, idx + 1, 1)
+        yc, g2, gc, g0 = refine(i)
+        gap = np.where(found, gc - best, _NO_CONTACT_GAP_MM)
+        # weights (continuity of the forces when minima are born, die or exchange their order on
+        # a flat gap): each candidate k has a maturity m_k (above), faded by its rank
+        # f_k = ramp((key_excl - key_k) / SLOT_FADE_MM) (1 when every minimum has a slot;
+        # 0 where k and the best excluded minimum exchange their slot); candidates j whose gap
+        # between them rises less than SEPARATION_MM above the shallower one belong to one
+        # conformal patch (c_kj -> 1) and share it by a soft minimum of their gaps
+        # (temperature SHARE_GAP_MM):
+        #     w_k = m_k f_k / (eps + m_k f_k + sum_j c_kj m_j f_j exp(-(g_j - g_k) / SHARE_GAP_MM)).
+        # An isolated mature candidate with its slot secure has weight 1.
+        fade = np.where(np.isfinite(key_excl),
+                        _smoothstep((key_excl - np.where(found, key, 0.0)) / SLOT_FADE_MM), 1.0)
+        maturity = np.where(found, np.take_along_axis(maturity_all, np.where(found, idx, 0),
+                                                      axis=-1) * fade, 0.0)
         pairs = [(p, q) for p in range(n_slots) for q in range(p + 1, n_slots)]
-        ip = i[..., [p for p, _ in pairs]]
-        iq = i[..., [q for _, q in pairs]]
-        lo = np.minimum(ip, iq)
-        hi = np.maximum(ip, iq)
-        between = (cols >= lo[..., None]) & (cols <= hi[..., None])  # (..., pairs, n_y)
-        barrier_pairs = np.max(np.where(between, g[..., None, :], -np.inf), axis=-1)
-        g0p = g0[..., [p for p, _ in pairs]]
-        g0q = g0[..., [q for _, q in pairs]]
-        merged_pairs = 1.0 - _smoothstep((barrier_pairs - np.maximum(g0p, g0q)) / SEPARATION_MM)
         merged = np.zeros(g.shape[:-1] + (n_slots, n_slots))
-        for m, (p, q) in enumerate(pairs):
-            merged[..., p, q] = merged_pairs[..., m]
-            merged[..., q, p] = merged_pairs[..., m]
-        gap_f = np.where(found, gap, _NO_CONTACT_GAP_MM)
-        rel = np.exp(-np.clip(gap_f[..., None, :] - gap_f[..., :, None], -50 * SHARE_GAP_MM,
+        if pairs:
+            ip = i[..., [p for p, _ in pairs]]
+            iq = i[..., [q for _, q in pairs]]
+            lo = np.minimum(ip, iq)
+            hi = np.maximum(ip, iq)
+            between = (cols >= lo[..., None]) & (cols <= hi[..., None])  # (..., pairs, n_y)
+            barrier_pairs = np.max(np.where(between, g[..., None, :], -np.inf), axis=-1)
+            g0p = g0[..., [p for p, _ in pairs]]
+            g0q = g0[..., [q for _, q in pairs]]
+            merged_pairs = 1.0 - _smoothstep((barrier_pairs - np.maximum(g0p, g0q))
+                                             / SEPARATION_MM)
+            for m, (p, q) in enumerate(pairs):
+                merged[..., p, q] = merged_pairs[..., m]
+                merged[..., q, p] = merged_pairs[..., m]
+        rel = np.exp(-np.clip(gap[..., None, :] - gap[..., :, None], -50 * SHARE_GAP_MM,
                               None) / SHARE_GAP_MM)  # [k, j]: exp(-(g_j - g_k)/tau)
         others = np.sum(merged * maturity[..., None, :] * rel, axis=-1)
         weight = np.where(found, maturity / (1e-9 + maturity + others), 0.0)
         # order slots field side first
-        order = np.argsort(-np.where(found, yc, -np.inf), axis=-1)
+        order = np.argsort(-np.where(found, yc, -np.inf), axis=-1, kind="stable")
         yc = np.take_along_axis(yc, order, axis=-1)
         gap = np.take_along_axis(gap, order, axis=-1)
         g2 = np.take_along_axis(g2, order, axis=-1)

@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from wearcast.physics import wear_tables as wt
+from wearcast.physics.contact_candidates_kernel import N_SLOTS
 from wearcast.physics.vehicles import vehicle_preset
 
 RADII = [None, 150.0, 250.0, 400.0, 600.0, 900.0, 1500.0, 3000.0]
@@ -38,8 +39,8 @@ def test_table_has_the_design_format(manchester_table):
     # 2 bogies x 2 wheelsets x (7 curves x 2 rails + tangent) x 2 regions x 2 measures
     assert len(table) == 2 * 2 * (7 * 2 + 1) * 2 * 2
     assert (table["value"] >= 0).all()
-    # the raw frame: one row per bogie, class, axle, side and patch slot (3 slots)
-    assert len(contacts) == 2 * len(RADII) * 2 * 2 * 3
+    # the raw frame: one row per bogie, class, axle, side and patch slot (N_SLOTS per wheel)
+    assert len(contacts) == 2 * len(RADII) * 2 * 2 * N_SLOTS
     for col in ("normal_force_n", "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "p0_mpa",
                 "tau_max_mpa", "t_gamma_n", "t_gamma_per_area_n_per_mm2", "archard_regime",
                 "krause_poll_regime"):

@@ -18,6 +18,7 @@ import pandas as pd
 import pytest
 from fastapi.testclient import TestClient
 
+from wearcast.physics.contact_candidates_kernel import N_SLOTS
 from wearcast.service import wear_table_store
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
@@ -211,7 +212,8 @@ def test_compute_with_the_contact_pipelines_wear_measures(tmp_path: Path) -> Non
     assert not np.allclose(a["value"], b["value"])
     assert piped.json()["sha256"] != default.json()["sha256"]
     contacts = client.get(f"/v1/wear-tables/{piped.json()['id']}/contacts").json()
-    assert contacts["n_contacts"] == 2 * 2 * 2 * 2 * 3  # bogies, classes, axles, sides, slots
+    # bogies, classes, axles, sides, patch slots per wheel
+    assert contacts["n_contacts"] == 2 * 2 * 2 * 2 * N_SLOTS
     r = client.post("/v1/wear-tables/compute", json={**body, "contact_model": "bem"})
     assert r.status_code == 422 and r.json()["errors"][0]["field"] == "contact_model"
 
