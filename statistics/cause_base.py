@@ -104,7 +104,9 @@ class FinderData:
         if NOISE_WEIGHTING != "none":
             w = w * float(np.mean(s ** 2)) / s ** 2
         self.cache["weights"] = w
-        for key in ("re_shrink", "re_loading"):   # the GLS transform depends on the weights
+        from wearcast.statistics.finder_random_effects import _CACHE_KEYS
+
+        for key in _CACHE_KEYS:   # the GLS transform depends on the weights
             self.cache.pop(key, None)
 
     def season(self) -> Array | None:
@@ -233,7 +235,7 @@ def cluster_covariance(data: FinderData, residual: Array, features: Array,
 
         mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
         lmap = fre.two_stage_map(x, fre.quasi_demean(data, x), mask,
-                                 lambda v: fre.quasi_demean(data, v))
+                                 lambda v: fre.quasi_demean_transpose(data, v))
         scores = np.zeros((g, p))
         np.add.at(scores, codes, lmap.T * u[:, None])
         return np.asarray(corr * scores.T @ scores)

@@ -285,6 +285,17 @@ def diagnose(
     def loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.asarray(np.sum(data.weights * residual ** 2, axis=1))
 
+    score_transform: Any = {"gls": lambda v: fre.quasi_demean(data, v),
+                            "gls_vehicle": lambda v: fre.vehicle_demean(data, v)
+                            }.get(fs.SCORE_METRIC)
+
+    def test_loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Held-out error per row in the tests' metric (``finder_scoring.SCORE_METRIC``)."""
+        if score_transform is not None:
+            z = score_transform((sw * residual).reshape(-1)).reshape(data.n, 2)
+            return np.asarray(np.sum(z ** 2, axis=1))
+        return loss(residual)
+
     chosen = cz.CATALOGUE if causes is None else tuple(cz.cause_by_code(c) for c in causes)
     rng = np.random.default_rng(seed + 1)
     skipped: dict[str, str] = {}
@@ -341,11 +352,13 @@ def diagnose(
     step = 0
     while remaining and len(selected) < max_causes:
         base: cz.Cause = cz.Composite(tuple(selected)) if selected else cz.NullArea()
-        before = loss(fs.held_out(data, base, folds))
-        rows = {}
+        held = fs.held_out(data, base, folds)
+        before, before_t = loss(held), test_loss(held)
+        rows, rows_t = {}, {}
         for c in remaining:
             est: cz.Cause = cz.Composite((*selected, c)) if selected else c
-            rows[c.code] = loss(fs.held_out(data, est, folds))
+            held = fs.held_out(data, est, folds)
+            rows[c.code], rows_t[c.code] = loss(held), test_loss(held)
         full = base.fit(data, everything)
         residual = data.e - data.phi * (full.log_scale_[None, :]
                                         + full.log_factor(data, full.theta_))
@@ -366,8 +379,9 @@ def diagnose(
             alt.append(fs.area_design(data, np.concatenate(
                 [base_x, prepared.features(data, prepared.start())], axis=2)))
             alt_re.append(np.concatenate([base_re, prepared.re_columns()]))
-        re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re)
-        observed = np.array([_relative(before, rows[c.code]) for c in remaining])
+        re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re,
+                                     score=score_transform)
+        observed = np.array([_relative(before_t, rows_t[c.code]) for c in remaining])
         # the nuisance is taken from the residuals of the baseline plus the leading
         # candidate (its effect must not be resampled as nuisance), widened for the
         # degrees of freedom that fit used
@@ -387,9 +401,11 @@ def diagnose(
         p_raw, p_adj = fs.min_p(observed, boot)
         for i, code in enumerate(codes):
             if code in rows:
+                # the gain (materiality, the verdict's order) in the rows' own metric, the
+                # p-values from the tests' (``SCORE_METRIC``)
                 scored[code] = Scored(next(c for c in remaining if c.code == code), before,
-                                       rows[code], float(observed[i]), float(p_raw[i]),
-                                       float(p_adj[i]), step)
+                                       rows[code], _relative(before, rows[code]),
+                                       float(p_raw[i]), float(p_adj[i]), step)
             else:
                 s = scored[code]
                 s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
@@ -402,11 +418,13 @@ def diagnose(
         if others:
             runner = max(others, key=lambda c: scored[c.code].gain)
 
-            step_ctx = fs.MarginTest(data, rows, before, best.code, dict(
+            by_test = fs.MARGIN_METRIC == "test"
+            step_ctx = fs.MarginTest(data, rows_t if by_test else rows,
+                                     before_t if by_test else before, best.code, dict(
                 zip([c.code for c in remaining], alt, strict=True)),
                 fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng,
                 re_fit.transform, dict(zip([c.code for c in remaining], alt_re, strict=True)),
-                base_re)
+                base_re, score=re_fit.score if by_test else None)
             p_m = step_ctx.p_value(runner.code)
             m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
                                                                              1e-300))
