@@ -186,7 +186,7 @@ def solve(data: FinderData, target: Array, features: Array, rows: Mask,
     if use_re:
         from wearcast.statistics import finder_random_effects as fre
 
-        xq = fre.quasi_demean(data, x_all)[flat_rows]
+        xq = fre.cached_quasi_demean(data, x_all)[flat_rows]
         yq = fre.quasi_demean(data, y_all)[flat_rows]
         mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
         coef = fre.two_stage(x[keep], y[keep], xq[keep], yq[keep], mask)

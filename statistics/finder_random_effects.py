@@ -73,7 +73,7 @@ Mask = NDArray[np.bool_]
 # (vehicle, region) and one per (wheel, region) within it, nested: ``quasi_demean``) or
 # "wheel" (one per (wheel, region), the vehicle's share in it: the transform before stop 26)
 LEVELS = "vehicle_wheel"
-_CACHE_KEYS = ("re_shrink", "re_loading", "re_nested", "re_vehicle")
+_CACHE_KEYS = ("re_shrink", "re_loading", "re_nested", "re_vehicle", "re_designs")
 
 
 def _group_codes(data: FinderData, column: str = "wheel_id") -> NDArray[np.int64]:
@@ -269,6 +269,22 @@ def quasi_demean(data: FinderData, values: Array) -> Array:
     if LEVELS == "wheel":
         return _wheel_transform(data, values)
     return _vehicle_transform(data, _wheel_transform(data, values))
+
+
+def cached_quasi_demean(data: FinderData, design: Array) -> Array:
+    """``quasi_demean`` of a (2n, k) design, kept per design (by a digest of its bytes): a
+    cause's cross-validation folds and resampled datasets refit the same design again and
+    again (the rows they use differ, not the design)."""
+    import hashlib
+
+    key = hashlib.blake2b(np.ascontiguousarray(design).tobytes(), digest_size=16).digest() \
+        + str(design.shape).encode()
+    store = data.cache.setdefault("re_designs", {})
+    if key not in store:
+        if len(store) >= 64:
+            store.clear()
+        store[key] = quasi_demean(data, design)
+    return np.asarray(store[key])
 
 
 def quasi_demean_transpose(data: FinderData, values: Array) -> Array:
