@@ -82,11 +82,12 @@ def test_depot_null_gives_none():
 
 @pytest.mark.parametrize("seed", [106, 111, 113])
 def test_weak_depot_traction_is_named_and_its_null_gives_none(seed):
-    # traction 1.1 (each car's own multiplier jittered by 0.03) on campaigns the finder before
-    # stop 26 missed (verdict none at adjusted p 0.075-0.18): the tests now score the held-out error after the vehicles' random log-scale
-    # (``finder_scoring.SCORE_METRIC``), so the contrast of a car's motor and trailer bogies
-    # is no longer drowned by the cars' own rate factors; effect-free data of the same seeds
-    # still give ``none``
+    # traction 1.1 (each car's own multiplier jittered by 0.03) on campaigns the finder
+    # before stop 26 missed (verdict none at adjusted p 0.075-0.18): the tests now score
+    # the held-out error after the vehicles' random log-scale (``finder_scoring.
+    # SCORE_METRIC``), so the contrast of a car's motor and trailer bogies is no longer
+    # drowned by the cars' own rate factors; effect-free data of the same seeds still give
+    # ``none``
     for effects, expected in ((dp.DepotEffects(traction=1.1), "traction"),
                               (dp.DepotEffects(), "none")):
         args, kwargs = scenarios.depot_scenario(effects, seed).finder_arguments()
