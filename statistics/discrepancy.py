@@ -12,18 +12,23 @@ scores it out of sample and names a cause only when it is specific:
    scale refitted) are fitted on K-1 folds and their squared working residuals computed on
    the held-out fold; the relative gain is 1 - after / before, with a 95 % interval from a
    bootstrap over the groups. Causes whose contrast lies within the wheels (the calendar
-   season) take their parameters from a random-effects GLS fit (a random log-scale per wheel
-   and region, ``finder_random_effects``), so the wheels' own scatter neither drowns nor
-   fakes them; the region scales are refitted by least squares, and the resampled datasets
+   season) or within the cars (traction: a car's motor against its trailer bogie) take their
+   parameters from a random-effects GLS fit (random log-scales per vehicle and per wheel
+   within it, ``finder_random_effects``), so the wheels' and cars' own scatter neither
+   drowns nor fakes them; the region scales are refitted by least squares, and the resampled datasets
    are fitted by the same estimator;
 3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
    per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
    (wild cluster bootstrap: every effect and residual kept at its rows with a random sign,
    so heteroscedastic noise keeps its place) carry the baseline's nuisance variation and no
    effect; every cause is fitted and
-   scored on them exactly as on the data. A cause's p-value is the share of resampled
-   gains at least as large as its observed gain, adjusted across the catalogue by the
-   Westfall-Young max-T method (gains standardised by their own null distribution) on the
+   scored on them exactly as on the data. The tests score the held-out error after a
+   random log-scale per vehicle (``finder_scoring.SCORE_METRIC``,
+   ``finder_random_effects.vehicle_demean``: a vehicle's own rate factor, which no cause
+   explains, no longer dominates the error every cause is scored on); the reported gains
+   and their materiality are in the rows' own metric. A cause's p-value is the share of
+   resampled gains at least as large as its observed gain, adjusted across the catalogue by
+   the Westfall-Young max-T method (gains standardised by their own null distribution) on the
    same resamples (no asymptotic test, no assumed noise distribution). The nuisance is
    taken from the residuals of the baseline plus the leading candidate (so a real effect is
    not resampled as nuisance), widened for the degrees of freedom that fit used; the
