@@ -15,8 +15,8 @@ scores it out of sample and names a cause only when it is specific:
    season) or within the cars (traction: a car's motor against its trailer bogie) take their
    parameters from a random-effects GLS fit (random log-scales per vehicle and per wheel
    within it, ``finder_random_effects``), so the wheels' and cars' own scatter neither
-   drowns nor fakes them; the region scales are refitted by least squares, and the resampled datasets
-   are fitted by the same estimator;
+   drowns nor fakes them; the region scales are refitted by least squares, and the
+   resampled datasets are fitted by the same estimator;
 3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
    per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
    (wild cluster bootstrap: every effect and residual kept at its rows with a random sign,
