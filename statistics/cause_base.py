@@ -266,6 +266,12 @@ class Cause:
     # theta from the random-effects GLS fit (``finder_random_effects``): a cause whose
     # contrast lies within the wheels (the season), not between them
     random_effects: ClassVar[bool] = False
+    # the tests score this cause's held-out error after a random log-scale per vehicle
+    # (``finder_scoring.SCORE_METRIC``): a cause whose contrast lies within the cars
+    # (traction: a car's motor against its trailer bogie), which the cars' own rate factors
+    # would otherwise drown; a contrast between the cars (a greased route) keeps the rows'
+    # own metric, which the vehicle transform would take most of it from
+    within_vehicle: ClassVar[bool] = False
 
     theta_: Array
     log_scale_: Array

@@ -80,6 +80,7 @@ class Traction(Cause):
     # and calendar, so the contrast within the cars counts and the cars' own rate factors
     # (between the cars) count with the weight their scatter leaves them
     random_effects = True
+    within_vehicle = True
 
     def skip_reason(self, data: FinderData) -> str | None:
         levels = _levels(data.frame["bogie_type"].to_numpy())

@@ -38,11 +38,12 @@ cause's contrast lies between the wheels but within the cars (a car's motor bogi
 its trailer bogie: same load, route and calendar), so its multiplier comes from this fit:
 the cars' own rate factors count with the weight their scatter leaves them.
 
-The tests' metric (``finder_scoring.SCORE_METRIC = "gls_vehicle"``): the held-out
-residuals are scored after ``vehicle_demean``, the transform of one random log-scale per
-(vehicle, region) alone, so the held-out error of a vehicle is mostly its contrast within
-the vehicle: a vehicle's own rate factor, which every candidate leaves unexplained, no
-longer makes the larger part of the error every candidate is scored on (the held-out
+The tests' metric of a cause whose contrast lies within the vehicles (traction,
+``cause_base.Cause.within_vehicle``; ``finder_scoring.SCORE_METRIC = "gls_vehicle"``): its
+held-out residuals are scored after ``vehicle_demean``, the transform of one random
+log-scale per (vehicle, region) alone, so the held-out error of a vehicle is mostly its
+contrast within the vehicle: the vehicles' own rate factors, which every candidate leaves
+unexplained, no longer make most of the error the cause is scored on (the held-out
 Gaussian log-likelihood of the vehicle's rows under a random vehicle intercept, up to
 constants). The reported gains stay in the rows' own metric.
 

@@ -54,15 +54,18 @@ RUNNER_GAIN_FLOOR: float | None = 0.0
 # test of the verdict's margin over the runner-up: "combined" (Bonferroni of the two below),
 # "bootstrap" (``margin_p``) or "sign_flip" (``sign_flip_p`` over the groups)
 MARGIN_TEST = "combined"
-# metric of the held-out error in the tests (the resampled nulls, max-T and the margin; the
-# reported gains and their materiality stay in the rows' own metric): "gls_vehicle" (the
-# held-out residuals after ``finder_random_effects.vehicle_demean``, a random log-scale per
-# vehicle: the vehicle's own rate factor, which no candidate explains, no longer dominates
-# the error every candidate is scored on; depot traction 1.1: 13 -> 16 of 20), "gls" (after
-# the nested vehicle and wheel transform ``quasi_demean``: the most powerful main test, but
-# a contrast between wheels is then scored on the share 1 - c_j of it the wheel transform
-# keeps: traction 1.1 on the twin lost its margin over the runner-up on 5 of 20 seeds) or
-# "ols" (the rows' weighted squared residuals, the finder before stop 26)
+# metric of the held-out error in the tests of a cause whose contrast lies within the
+# vehicles (``cause_base.Cause.within_vehicle``: traction) -- its resampled null, max-T
+# statistic and margin; the reported gains, their materiality and the other causes' tests
+# stay in the rows' own metric: "gls_vehicle" (the held-out residuals after
+# ``finder_random_effects.vehicle_demean``, a random log-scale per vehicle: the vehicles'
+# own rate factors, which no candidate explains, no longer make most of the error; depot
+# traction 1.1: 13 -> 16 of 20; applied to every cause, depot flange lubrication, a contrast
+# between the cars, fell to 3 of 5 at 0.8 and 4 of 5 at 0.6), "gls" (after the nested
+# vehicle and wheel transform ``quasi_demean``: a contrast between wheels is then scored on
+# the share 1 - c_j of it the wheel transform keeps; with it for every cause traction 1.1 on
+# the twin lost its margin over the runner-up on 5 of 20 seeds) or "ols" (the rows' weighted
+# squared residuals, the finder before stop 26)
 SCORE_METRIC = "gls_vehicle"
 # metric of the margin test over the runner-up: "test" (``SCORE_METRIC``) or "ols" (the rows'
 # weighted squared residuals, the metric of the reported gains)
@@ -277,7 +280,8 @@ class RandomEffectsFit:
     transform: Any                         # Callable[[Array], Array]
     null_columns: Array | None             # (p0,) bool of the null design, or None
     alt_columns: Sequence[Array | None]    # per alternative design
-    score: Any = None                      # held-out rows scored after this transform
+    score: Any = None                      # transform of the scored held-out rows
+    scored: Sequence[bool] | None = None   # per alternative: scored after ``score``
 
 
 def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Array,
@@ -286,7 +290,10 @@ def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Arr
     """(n_alt, B) held-out relative gains 1 - SSE_alt / SSE_null on resampled datasets.
 
     ``re``: designs with columns fitted by random-effects GLS (the same estimator as
-    ``cause_base.solve`` applies to the data); the draws are transformed once.
+    ``cause_base.solve`` applies to the data); the draws are transformed once. The
+    alternatives ``re.scored`` marks are scored (and so is their baseline) on the held-out
+    rows after ``re.score`` (the tests' metric of a cause whose contrast lies within the
+    vehicles, ``cause_base.Cause.within_vehicle``).
     """
     order = np.argsort(folds_flat, kind="stable")
     f_sorted = folds_flat[order]
@@ -305,7 +312,7 @@ def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Arr
         y_q = re.transform(draws)[order]
         ys_q = [y_q[sl] for sl in slices]
     score_y = None
-    if re is not None and re.score is not None:
+    if re is not None and re.score is not None and re.scored is not None and any(re.scored):
         y_s = re.score(draws)[order]
         ys_s = [y_s[sl] for sl in slices]
         score_y = (ys_s, [np.sum(b * b, axis=0) for b in ys_s])
@@ -321,14 +328,19 @@ def bootstrap_gains(null_design: Array, alt_designs: Sequence[Array], draws: Arr
             return None
         return re.transform(design)[order], ys_q, np.asarray(columns, dtype=bool)
 
-    before = _fold_sse(null_design[order], ys, yty, slices,
-                       spec(null_design, None if re is None else re.null_columns),
-                       scoring(null_design))
+    null_spec = spec(null_design, None if re is None else re.null_columns)
+    before = _fold_sse(null_design[order], ys, yty, slices, null_spec)
+    before_s = None if score_y is None else _fold_sse(null_design[order], ys, yty, slices,
+                                                      null_spec, scoring(null_design))
     out = np.empty((len(alt_designs), draws.shape[1]))
     for i, d in enumerate(alt_designs):
         cols = None if re is None else re.alt_columns[i]
-        out[i] = 1.0 - _fold_sse(d[order], ys, yty, slices, spec(d, cols), scoring(d)) \
-            / np.maximum(before, 1e-300)
+        by_score = before_s is not None and re is not None and re.scored is not None \
+            and bool(re.scored[i])
+        base = before_s if by_score else before
+        assert base is not None
+        out[i] = 1.0 - _fold_sse(d[order], ys, yty, slices, spec(d, cols),
+                                 scoring(d) if by_score else None) / np.maximum(base, 1e-300)
     return out
 
 
@@ -446,7 +458,7 @@ class MarginTest:
     re_transform: Any = None
     re_columns: dict[str, Array] | None = None
     re_base: Array | None = None
-    score: Any = None                         # held-out rows scored after this transform
+    score: Any = None                         # transform of the scored rows, or None
 
     def p_value(self, other: str) -> float:
         """p of "``other`` explains the data as well as the best cause"."""
@@ -483,7 +495,7 @@ class MarginTest:
             return None
         return RandomEffectsFit(self.re_transform, self.re_base,
                                 [self.re_columns[self.best], self.re_columns[other]],
-                                score=self.score)
+                                score=self.score, scored=[self.score is not None] * 2)
 
 
 def separated(p_margin: float, alpha: float) -> bool:

@@ -179,7 +179,7 @@ def test_resampled_gains_score_in_the_tests_metric_as_the_data():
     design = fs.area_design(data, traction.features(data, traction.start()))
     re = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), None,
                              [np.array([False, False, True])],
-                             score=lambda v: fre.vehicle_demean(data, v))
+                             score=lambda v: fre.vehicle_demean(data, v), scored=[True])
     linearised = fs.bootstrap_gains(null_design, [design], y, np.repeat(folds, 2), re)
     assert linearised[0, 0] == pytest.approx(gain, abs=1e-10)
 
