@@ -60,12 +60,12 @@ MARGIN_TEST = "combined"
 # stay in the rows' own metric: "gls_vehicle" (the held-out residuals after
 # ``finder_random_effects.vehicle_demean``, a random log-scale per vehicle: the vehicles'
 # own rate factors, which no candidate explains, no longer make most of the error; depot
-# traction 1.1: 13 -> 16 of 20; applied to every cause, depot flange lubrication, a contrast
-# between the cars, fell to 3 of 5 at 0.8 and 4 of 5 at 0.6), "gls" (after the nested
-# vehicle and wheel transform ``quasi_demean``: a contrast between wheels is then scored on
-# the share 1 - c_j of it the wheel transform keeps; with it for every cause traction 1.1 on
-# the twin lost its margin over the runner-up on 5 of 20 seeds) or "ols" (the rows' weighted
-# squared residuals, the finder before stop 26)
+# traction 1.1: 13 -> 15 of 20; applied to every cause (16 of 20), depot flange lubrication,
+# a contrast between the cars, fell to 3 of 5 at 0.8 and 4 of 5 at 0.6), "gls" (after the
+# nested vehicle and wheel transform ``quasi_demean``: a contrast between wheels is then
+# scored on the share 1 - c_j of it the wheel transform keeps; with it for every cause
+# traction 1.1 on the twin lost its margin over the runner-up on 5 of 20 seeds) or "ols"
+# (the rows' weighted squared residuals, the finder before stop 26)
 SCORE_METRIC = "gls_vehicle"
 # metric of the margin test over the runner-up: "test" (``SCORE_METRIC``) or "ols" (the rows'
 # weighted squared residuals, the metric of the reported gains)
