@@ -2,11 +2,13 @@
 
 Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--generators twin,alt,depot,loop] [--causes traction,seasonal_friction,...]
-         [--strengths all|moderate] [--no-null] [--verbose] [--loop-cache FILE]
+         [--strengths all|moderate|S1,S2] [--no-null] [--verbose] [--loop-cache FILE]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
-         [--shape-weighting area|none]
+         [--shape-weighting area|none] [--score-metric ols|gls|gls_vehicle]
+         [--margin-metric ols|test]
+         [--random-effects-levels vehicle_wheel|wheel] [--traction-fit gls|ols]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
 eight wear-loop runs take about 5 minutes once per process, or once at all with
 --loop-cache; ``--causes _`` runs only the effect-free datasets).
@@ -49,6 +51,8 @@ import numpy as np
 import pandas as pd
 
 from wearcast.statistics import cause_base as cb
+from wearcast.statistics import causes as cz
+from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics import hybrid
@@ -263,7 +267,9 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--generators", default="twin,alt,depot")
     ap.add_argument("--causes", default="")
-    ap.add_argument("--strengths", default="all", choices=("all", "moderate"))
+    ap.add_argument("--strengths", default="all",
+                    help="all, moderate (the last of each sweep) or a comma-separated list of "
+                         "strengths to run (e.g. 1.1,0.1)")
     ap.add_argument("--first-seed", type=int, default=100)
     ap.add_argument("--no-null", action="store_true", help="skip the effect-free datasets")
     ap.add_argument("--verbose", action="store_true",
@@ -288,6 +294,21 @@ def main() -> None:
                     help="precision weights of the wear-curve (instrument) cause's rows: a "
                          "variance function of the predicted worn area, or none "
                          "(finder_shape_weights.SHAPE_WEIGHTING)")
+    ap.add_argument("--score-metric", default=fs.SCORE_METRIC,
+                    choices=("ols", "gls", "gls_vehicle"),
+                    help="held-out error of the finder's tests: weighted squared residuals, "
+                         "or after the nested vehicle/wheel random-effects transform, or "
+                         "after a random log-scale per vehicle (finder_scoring.SCORE_METRIC)")
+    ap.add_argument("--margin-metric", default=fs.MARGIN_METRIC, choices=("ols", "test"),
+                    help="metric of the margin test: the reported gains' or the tests' "
+                         "(finder_scoring.MARGIN_METRIC)")
+    ap.add_argument("--random-effects-levels", default=fre.LEVELS,
+                    choices=("vehicle_wheel", "wheel"),
+                    help="random effects of the GLS fits: nested vehicle and wheel, or wheel "
+                         "only (finder_random_effects.LEVELS)")
+    ap.add_argument("--traction-fit", default="gls", choices=("gls", "ols"),
+                    help="traction multiplier from the random-effects GLS fit or by least "
+                         "squares (causes.Traction.random_effects)")
     ap.add_argument("--loop-null", default="simulated", choices=("simulated", "linear"),
                     help="loop generator: baseline grows as the loop runs say or linearly")
     ap.add_argument("--progression-stretch", type=float, default=1.0,
@@ -301,6 +322,10 @@ def main() -> None:
     fs.NUISANCE_OF_MARGIN = args.margin_nuisance
     cb.NOISE_WEIGHTING = args.noise_weighting
     fsw.SHAPE_WEIGHTING = args.shape_weighting
+    fs.SCORE_METRIC = args.score_metric
+    fs.MARGIN_METRIC = args.margin_metric
+    fre.LEVELS = args.random_effects_levels
+    cz.Traction.random_effects = args.traction_fit == "gls"
     LOOP_NULL[0] = args.loop_null
     LOOP_PROGRESSION_STRETCH[0] = args.progression_stretch
     if args.loop_cache and os.path.exists(args.loop_cache):
@@ -339,6 +364,8 @@ def main() -> None:
                 continue
             if args.strengths == "moderate":
                 runs = runs[-1:]
+            elif args.strengths != "all":
+                runs = [r for r in runs if str(r[0]) in args.strengths.split(",")]
             for strength, effect in runs:
                 vs = verdicts(run, effect, f"{gen} {cause} {strength}")
                 rate = sum(v == cause for v in vs) / len(vs)

@@ -104,7 +104,9 @@ class FinderData:
         if NOISE_WEIGHTING != "none":
             w = w * float(np.mean(s ** 2)) / s ** 2
         self.cache["weights"] = w
-        for key in ("re_shrink", "re_loading"):   # the GLS transform depends on the weights
+        from wearcast.statistics.finder_random_effects import _CACHE_KEYS
+
+        for key in _CACHE_KEYS:   # the GLS transform depends on the weights
             self.cache.pop(key, None)
 
     def season(self) -> Array | None:
@@ -184,7 +186,7 @@ def solve(data: FinderData, target: Array, features: Array, rows: Mask,
     if use_re:
         from wearcast.statistics import finder_random_effects as fre
 
-        xq = fre.quasi_demean(data, x_all)[flat_rows]
+        xq = fre.cached_quasi_demean(data, x_all)[flat_rows]
         yq = fre.quasi_demean(data, y_all)[flat_rows]
         mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
         coef = fre.two_stage(x[keep], y[keep], xq[keep], yq[keep], mask)
@@ -233,7 +235,7 @@ def cluster_covariance(data: FinderData, residual: Array, features: Array,
 
         mask = np.concatenate([[False, False], np.asarray(re_columns, dtype=bool)])
         lmap = fre.two_stage_map(x, fre.quasi_demean(data, x), mask,
-                                 lambda v: fre.quasi_demean(data, v))
+                                 lambda v: fre.quasi_demean_transpose(data, v))
         scores = np.zeros((g, p))
         np.add.at(scores, codes, lmap.T * u[:, None])
         return np.asarray(corr * scores.T @ scores)
@@ -264,6 +266,12 @@ class Cause:
     # theta from the random-effects GLS fit (``finder_random_effects``): a cause whose
     # contrast lies within the wheels (the season), not between them
     random_effects: ClassVar[bool] = False
+    # the tests score this cause's held-out error after a random log-scale per vehicle
+    # (``finder_scoring.SCORE_METRIC``): a cause whose contrast lies within the cars
+    # (traction: a car's motor against its trailer bogie), which the cars' own rate factors
+    # would otherwise drown; a contrast between the cars (a greased route) keeps the rows'
+    # own metric, which the vehicle transform would take most of it from
+    within_vehicle: ClassVar[bool] = False
 
     theta_: Array
     log_scale_: Array

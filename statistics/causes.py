@@ -75,6 +75,12 @@ class Traction(Cause):
     covariate_name = "bogie_type"
     explanation = ("Powered (and braked) bogies wear their treads faster than the curve-radius "
                    "table says: traction and braking creep add tread wear (seed 001 §5).")
+    # the multiplier from the random-effects GLS fit with nested vehicle and wheel effects
+    # (``finder_random_effects``): a car's motor and trailer bogies share its load, route
+    # and calendar, so the contrast within the cars counts and the cars' own rate factors
+    # (between the cars) count with the weight their scatter leaves them
+    random_effects = True
+    within_vehicle = True
 
     def skip_reason(self, data: FinderData) -> str | None:
         levels = _levels(data.frame["bogie_type"].to_numpy())

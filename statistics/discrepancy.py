@@ -12,26 +12,32 @@ scores it out of sample and names a cause only when it is specific:
    scale refitted) are fitted on K-1 folds and their squared working residuals computed on
    the held-out fold; the relative gain is 1 - after / before, with a 95 % interval from a
    bootstrap over the groups. Causes whose contrast lies within the wheels (the calendar
-   season) take their parameters from a random-effects GLS fit (a random log-scale per wheel
-   and region, ``finder_random_effects``), so the wheels' own scatter neither drowns nor
-   fakes them; the region scales are refitted by least squares, and the resampled datasets
-   are fitted by the same estimator;
+   season) or within the cars (traction: a car's motor against its trailer bogie) take their
+   parameters from a random-effects GLS fit (random log-scales per vehicle and per wheel
+   within it, ``finder_random_effects``), so the wheels' and cars' own scatter neither
+   drowns nor fakes them; the region scales are refitted by least squares, and the
+   resampled datasets are fitted by the same estimator;
 3. the nuisance model: the baseline's per-vehicle and per-wheel log-scale effects and its
    per-measurement residuals (``finder_scoring.NuisanceModel``). Datasets resampled from it
    (wild cluster bootstrap: every effect and residual kept at its rows with a random sign,
    so heteroscedastic noise keeps its place) carry the baseline's nuisance variation and no
-   effect; every cause is fitted and
-   scored on them exactly as on the data. A cause's p-value is the share of resampled
-   gains at least as large as its observed gain, adjusted across the catalogue by the
-   Westfall-Young max-T method (gains standardised by their own null distribution) on the
-   same resamples (no asymptotic test, no assumed noise distribution). The nuisance is
-   taken from the residuals of the baseline plus the leading candidate (so a real effect is
-   not resampled as nuisance), widened for the degrees of freedom that fit used; the
-   wear-curve shape cause is tested the same way on its coefficients, in the metric of
-   their wheel-to-wheel nuisance covariance (``_noise_whitened``; its gain is reported in
-   curve space), every measurement weighted by the inverse of the shape nuisance's
-   variance at its predicted worn area (``finder_shape_weights``: the late, worn rows no
-   longer drown a signature that is the same at every mileage);
+   effect; every cause is fitted and scored on them exactly as on the data. A cause whose
+   contrast lies within the vehicles (traction, ``Cause.within_vehicle``) is tested on the
+   held-out error after a random log-scale per vehicle (``finder_scoring.SCORE_METRIC``,
+   ``finder_random_effects.vehicle_demean``: the vehicles' own rate factors, which no cause
+   explains, no longer make most of the error it is scored on), its margin over the
+   runner-up too; the reported gains and their materiality are in the rows' own metric. A
+   cause's p-value is the share of resampled gains at least as large as its observed gain,
+   adjusted across the catalogue by the Westfall-Young max-T method (gains standardised by
+   their own null distribution) on the same resamples (no asymptotic test, no assumed noise
+   distribution). The nuisance is taken from the residuals of the baseline plus the leading
+   candidate (so a real effect is not resampled as nuisance), widened for the degrees of
+   freedom that fit used; the wear-curve shape cause is tested the same way on its
+   coefficients, in the metric of their wheel-to-wheel nuisance covariance
+   (``_noise_whitened``; its gain is reported in curve space), every measurement weighted by
+   the inverse of the shape nuisance's variance at its predicted worn area
+   (``finder_shape_weights``: the late, worn rows no longer drown a signature that is the
+   same at every mileage);
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a parametric
@@ -285,6 +291,17 @@ def diagnose(
     def loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.asarray(np.sum(data.weights * residual ** 2, axis=1))
 
+    score_transform: Any = {"gls": lambda v: fre.quasi_demean(data, v),
+                            "gls_vehicle": lambda v: fre.vehicle_demean(data, v)
+                            }.get(fs.SCORE_METRIC)
+
+    def test_loss(residual: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Held-out error per row in the vehicle metric (``finder_scoring.SCORE_METRIC``)."""
+        if score_transform is not None:
+            z = score_transform((sw * residual).reshape(-1)).reshape(data.n, 2)
+            return np.asarray(np.sum(z ** 2, axis=1))
+        return loss(residual)
+
     chosen = cz.CATALOGUE if causes is None else tuple(cz.cause_by_code(c) for c in causes)
     rng = np.random.default_rng(seed + 1)
     skipped: dict[str, str] = {}
@@ -341,11 +358,13 @@ def diagnose(
     step = 0
     while remaining and len(selected) < max_causes:
         base: cz.Cause = cz.Composite(tuple(selected)) if selected else cz.NullArea()
-        before = loss(fs.held_out(data, base, folds))
-        rows = {}
+        held = fs.held_out(data, base, folds)
+        before, before_t = loss(held), test_loss(held)
+        rows, rows_t = {}, {}
         for c in remaining:
             est: cz.Cause = cz.Composite((*selected, c)) if selected else c
-            rows[c.code] = loss(fs.held_out(data, est, folds))
+            held = fs.held_out(data, est, folds)
+            rows[c.code], rows_t[c.code] = loss(held), test_loss(held)
         full = base.fit(data, everything)
         residual = data.e - data.phi * (full.log_scale_[None, :]
                                         + full.log_factor(data, full.theta_))
@@ -366,12 +385,21 @@ def diagnose(
             alt.append(fs.area_design(data, np.concatenate(
                 [base_x, prepared.features(data, prepared.start())], axis=2)))
             alt_re.append(np.concatenate([base_re, prepared.re_columns()]))
-        re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re)
-        observed = np.array([_relative(before, rows[c.code]) for c in remaining])
+        # a cause whose contrast lies within the vehicles is tested in the vehicle metric
+        # (``Cause.within_vehicle``, ``finder_scoring.SCORE_METRIC``), the others in the rows'
+        # own metric
+        by_vehicle = [bool(c.within_vehicle) and score_transform is not None
+                      for c in remaining]
+        re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re,
+                                     score=score_transform, scored=by_vehicle)
+        plain = np.array([_relative(before, rows[c.code]) for c in remaining])
+        observed = np.array([_relative(before_t, rows_t[c.code]) if v else plain[i]
+                             for i, (c, v) in enumerate(zip(remaining, by_vehicle,
+                                                            strict=True))])
         # the nuisance is taken from the residuals of the baseline plus the leading
         # candidate (its effect must not be resampled as nuisance), widened for the
         # degrees of freedom that fit used
-        lead = remaining[int(np.argmax(observed))]
+        lead = remaining[int(np.argmax(plain))]
         lead_fit = (cz.Composite((*selected, lead)) if selected else lead).fit(data, everything)
         lead_res = data.e - data.phi * (lead_fit.log_scale_[None, :]
                                         + lead_fit.log_factor(data, lead_fit.theta_))
@@ -387,9 +415,11 @@ def diagnose(
         p_raw, p_adj = fs.min_p(observed, boot)
         for i, code in enumerate(codes):
             if code in rows:
+                # the gain (materiality, the verdict's order) in the rows' own metric, the
+                # p-values from the cause's test metric
                 scored[code] = Scored(next(c for c in remaining if c.code == code), before,
-                                       rows[code], float(observed[i]), float(p_raw[i]),
-                                       float(p_adj[i]), step)
+                                       rows[code], _relative(before, rows[code]),
+                                       float(p_raw[i]), float(p_adj[i]), step)
             else:
                 s = scored[code]
                 s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
@@ -402,11 +432,15 @@ def diagnose(
         if others:
             runner = max(others, key=lambda c: scored[c.code].gain)
 
-            step_ctx = fs.MarginTest(data, rows, before, best.code, dict(
+            # the margin in the best cause's test metric
+            by_test = fs.MARGIN_METRIC == "test" and bool(best.within_vehicle) \
+                and score_transform is not None
+            step_ctx = fs.MarginTest(data, rows_t if by_test else rows,
+                                     before_t if by_test else before, best.code, dict(
                 zip([c.code for c in remaining], alt, strict=True)),
                 fs.area_design(data, base_x), vehicle, wheel, groups, folds, n_null, rng,
                 re_fit.transform, dict(zip([c.code for c in remaining], alt_re, strict=True)),
-                base_re)
+                base_re, score=re_fit.score if by_test else None)
             p_m = step_ctx.p_value(runner.code)
             m = float((rows[runner.code].sum() - rows[best.code].sum()) / max(before.sum(),
                                                                              1e-300))

@@ -80,6 +80,35 @@ def test_depot_null_gives_none():
                                  for f in d.findings]
 
 
+@pytest.mark.parametrize("seed", [106, 111, 119])
+def test_weak_depot_traction_is_named_and_its_null_gives_none(seed):
+    # traction 1.1 (each car's own multiplier jittered by 0.03) on campaigns the finder
+    # before stop 26 missed (106, 111: none at adjusted p 0.18, 0.075; 119: ambiguous with
+    # wear_measure, margin p 0.05): traction is now tested on the held-out error after the
+    # vehicles' random log-scale (``finder_scoring.SCORE_METRIC``), so the contrast of a
+    # car's motor and trailer bogies is no longer drowned by the cars' own rate factors;
+    # effect-free data of the same seeds still give ``none``
+    for effects, expected in ((dp.DepotEffects(traction=1.1), "traction"),
+                              (dp.DepotEffects(), "none")):
+        args, kwargs = scenarios.depot_scenario(effects, seed).finder_arguments()
+        d = diagnose(*args, **kwargs, n_boot=300)
+        assert d.verdict == expected, (expected, d.runner_up, d.margin, d.candidates,
+                                       [(f.cause, round(f.gain.relative, 3),
+                                         f.evidence["p_value"]) for f in d.findings])
+
+
+@pytest.mark.slow
+def test_weak_depot_traction_detection_over_twenty_campaigns():
+    # the benchmark's cell (seeds 100-119): at least 15 of 20 named (measured 15 of 20;
+    # 13 of 20 before stop 26)
+    named = 0
+    for seed in range(100, 120):
+        args, kwargs = scenarios.depot_scenario(dp.DepotEffects(traction=1.1),
+                                                seed).finder_arguments()
+        named += diagnose(*args, **kwargs, n_boot=300).verdict == "traction"
+    assert named >= 15
+
+
 def test_depot_effect_size_interval_covers_the_injected_multiplier():
     d = diagnosed("traction")
     ci = d.finding("traction").extension["intervals"]["tread_multiplier_motor"]

@@ -54,26 +54,134 @@ def alt_data(amplitude: float, seed: int):
     return data
 
 
-def test_transform_is_the_inverse_square_root_of_the_random_intercept_covariance():
-    data = alt_data(0.2, 113)
-    codes = fre._group_codes(data)
+def _baseline_residual(data):
     sw = np.sqrt(data.weights)
-    w = (sw * data.phi).reshape(-1)
-    y = (sw * data.e).reshape(-1)
-    b = np.sum((sw * data.phi) * (sw * data.e), axis=0) \
-        / np.sum((sw * data.phi) ** 2, axis=0)
-    s_u2, s_e2 = fre.variance_components((sw * data.e) - (sw * data.phi) * b, sw * data.phi,
-                                         codes)
-    assert np.all(s_u2 > 0) and np.all(s_e2 > 0)
-    qy = fre.quasi_demean(data, y)
-    for g in np.unique(codes)[:12]:   # (Q y)'(Q y) = s_e^2 y' V^-1 y per (wheel, region)
-        sel = codes == g
-        r = g % 2
-        v = s_e2[r] * np.eye(sel.sum()) + s_u2[r] * np.outer(w[sel], w[sel])
-        assert qy[sel] @ qy[sel] == pytest.approx(s_e2[r] * y[sel] @ np.linalg.solve(v, y[sel]),
-                                                  rel=1e-9)
-    c = fre.shrinkage(data)
-    assert np.all((c >= 0.0) & (c < 1.0)) and np.ptp(c) > 0.0
+    w = sw * data.phi
+    b = np.sum(w * (sw * data.e), axis=0) / np.sum(w * w, axis=0)
+    return sw * data.e - w * b, w
+
+
+def test_wheel_transform_is_the_inverse_square_root_of_the_random_intercept_covariance(
+        monkeypatch):
+    data = alt_data(0.2, 113)
+    monkeypatch.setattr(fre, "LEVELS", "wheel")
+    for key in fre._CACHE_KEYS:
+        data.cache.pop(key, None)
+    try:
+        codes = fre._group_codes(data)
+        r, loading = _baseline_residual(data)
+        w = loading.reshape(-1)
+        y = (np.sqrt(data.weights) * data.e).reshape(-1)
+        s_u2, s_e2 = fre.variance_components(r, loading, codes)
+        assert np.all(s_u2 > 0) and np.all(s_e2 > 0)
+        qy = fre.quasi_demean(data, y)
+        for g in np.unique(codes)[:12]:   # (Q y)'(Q y) = s_e^2 y' V^-1 y per (wheel, region)
+            sel = codes == g
+            k = g % 2
+            v = s_e2[k] * np.eye(sel.sum()) + s_u2[k] * np.outer(w[sel], w[sel])
+            assert qy[sel] @ qy[sel] == pytest.approx(
+                s_e2[k] * y[sel] @ np.linalg.solve(v, y[sel]), rel=1e-9)
+        c = fre.shrinkage(data)
+        assert np.all((c >= 0.0) & (c < 1.0)) and np.ptp(c) > 0.0
+    finally:
+        for key in fre._CACHE_KEYS:
+            data.cache.pop(key, None)
+
+
+def test_nested_components_recover_the_simulated_ones():
+    rng = np.random.default_rng(5)
+    vehicles, wheels, per = 150, 8, 6
+    s_v, s_u, s_e = np.array([0.15, 0.1]), np.array([0.1, 0.2]), np.array([0.05, 0.04])
+    n = vehicles * wheels * per
+    veh = np.repeat(np.arange(vehicles), wheels * per)
+    whl = np.repeat(np.arange(vehicles * wheels), per)
+    w = rng.uniform(0.5, 1.0, (n, 2))
+    y = w * (rng.normal(size=(vehicles, 2))[veh] * s_v + rng.normal(size=(vehicles * wheels,
+                                                                           2))[whl] * s_u) \
+        + rng.normal(size=(n, 2)) * s_e
+    region = np.tile(np.arange(2), n)
+    s_v2, s_u2, s_e2 = fre.nested_components(y, w, np.repeat(whl, 2) * 2 + region,
+                                             np.repeat(veh, 2) * 2 + region)
+    np.testing.assert_allclose(np.sqrt(s_v2), s_v, rtol=0.15)
+    np.testing.assert_allclose(np.sqrt(s_u2), s_u, rtol=0.12)
+    np.testing.assert_allclose(np.sqrt(s_e2), s_e, rtol=0.05)
+
+
+def test_nested_transform_is_the_inverse_square_root_of_the_vehicle_and_wheel_covariance():
+    # T = Q_v Q_w: (T y)'(T y) = s_e^2 y' V^-1 y per (vehicle, region) block with
+    # V = s_e^2 I + s_u^2 sum_j w_j w_j' + s_v^2 w w' (wheels j of the vehicle), and T' is
+    # the transpose of T
+    data = alt_data(0.2, 113)
+    assert fre.LEVELS == "vehicle_wheel"
+    wheel = fre._group_codes(data)
+    vehicle = fre._group_codes(data, "vehicle_id")
+    r, loading = _baseline_residual(data)
+    s_v2, s_u2, s_e2 = fre.nested_components(r, loading, wheel, vehicle)
+    assert np.all(s_v2 > 0) and np.all(s_u2 > 0)
+    w = loading.reshape(-1)
+    y = (np.sqrt(data.weights) * data.e).reshape(-1)
+    ty = fre.quasi_demean(data, y)
+    for g in np.unique(vehicle)[:6]:
+        sel = vehicle == g
+        k = g % 2
+        v = s_e2[k] * np.eye(sel.sum()) + s_v2[k] * np.outer(w[sel], w[sel])
+        for j in np.unique(wheel[sel]):
+            wj = np.where(wheel[sel] == j, w[sel], 0.0)
+            v += s_u2[k] * np.outer(wj, wj)
+        assert ty[sel] @ ty[sel] == pytest.approx(
+            s_e2[k] * y[sel] @ np.linalg.solve(v, y[sel]), rel=1e-8)
+    x = np.random.default_rng(0).normal(size=(y.size, 2))
+    assert fre.quasi_demean_transpose(data, x).T @ x[:, ::-1] == pytest.approx(
+        x.T @ fre.quasi_demean(data, x[:, ::-1]), rel=1e-9)
+
+
+def test_vehicle_transform_is_the_inverse_square_root_of_the_vehicle_covariance():
+    # Q_v (the tests' metric, ``finder_scoring.SCORE_METRIC = "gls_vehicle"``): one random
+    # log-scale per (vehicle, region), the wheels' scatter counted as the measurements'
+    data = alt_data(0.2, 113)
+    vehicle = fre._group_codes(data, "vehicle_id")
+    r, loading = _baseline_residual(data)
+    s_v2, s_e2 = fre.variance_components(r, loading, vehicle)
+    assert np.all(s_v2 > 0)
+    w = loading.reshape(-1)
+    y = (np.sqrt(data.weights) * data.e).reshape(-1)
+    qy = fre.vehicle_demean(data, y)
+    for g in np.unique(vehicle):
+        sel = vehicle == g
+        k = g % 2
+        v = s_e2[k] * np.eye(sel.sum()) + s_v2[k] * np.outer(w[sel], w[sel])
+        assert qy[sel] @ qy[sel] == pytest.approx(
+            s_e2[k] * y[sel] @ np.linalg.solve(v, y[sel]), rel=1e-8)
+    # a vehicle's level is (mostly) gone, a contrast within the vehicle is kept whole
+    x = np.where(vehicle == vehicle[0], w, 0.0)
+    contrast = x * np.where(np.arange(x.size) % 4 < 2, 1.0, -1.0)
+    contrast -= x * (x @ contrast) / (x @ x)
+    assert np.linalg.norm(fre.vehicle_demean(data, x)) < 0.5 * np.linalg.norm(x)
+    np.testing.assert_allclose(fre.vehicle_demean(data, contrast), contrast, atol=1e-12)
+
+
+def test_resampled_gains_score_in_the_tests_metric_as_the_data():
+    # traction (GLS fit, nested effects) scored held out after the vehicle transform: the
+    # linearised gain of the resampling test equals the gain computed on the data
+    data = alt_data(0.2, 113)
+    folds = _folds(data.frame["vehicle_id"].astype(str).to_numpy(), 5, 0)
+    traction = cz.cause_by_code("traction")
+    sw = np.sqrt(data.weights)
+
+    def loss(residual):
+        z = fre.vehicle_demean(data, (sw * residual).reshape(-1))
+        return np.sum(z ** 2)
+
+    gain = 1.0 - loss(fs.held_out(data, traction, folds)) \
+        / loss(fs.held_out(data, cz.NullArea(), folds))
+    y = (sw * data.e).reshape(-1, 1)
+    null_design = fs.area_design(data, np.zeros((data.n, 2, 0)))
+    design = fs.area_design(data, traction.features(data, traction.start()))
+    re = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), None,
+                             [np.array([False, False, True])],
+                             score=lambda v: fre.vehicle_demean(data, v), scored=[True])
+    linearised = fs.bootstrap_gains(null_design, [design], y, np.repeat(folds, 2), re)
+    assert linearised[0, 0] == pytest.approx(gain, abs=1e-10)
 
 
 def test_resampled_gains_use_the_estimator_of_the_data():
@@ -108,7 +216,7 @@ def test_two_stage_map_gives_the_coefficients_and_the_interval_covers_the_season
     coef = fre.two_stage(design, y, fre.quasi_demean(data, design), fre.quasi_demean(data, y),
                          mask)
     lmap = fre.two_stage_map(design, fre.quasi_demean(data, design), mask,
-                             lambda v: fre.quasi_demean(data, v))
+                             lambda v: fre.quasi_demean_transpose(data, v))
     np.testing.assert_allclose(lmap @ y, coef, atol=1e-10)
     everything = np.ones(data.n, dtype=bool)
     vehicle = data.frame["vehicle_id"].astype(str).to_numpy()
