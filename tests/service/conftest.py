@@ -19,12 +19,44 @@ from typing import Any
 
 import httpx
 import pytest
+from fastapi.testclient import TestClient
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
+from wearcast.service.app import create_app
 from wearcast.service.db import scratch_database
+from wearcast.service.settings import Settings
 
 DEFAULT_POSTGRES_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+
+
+def sqlite_settings(tmp_path: Path) -> Settings:
+    """A service on ``tmp_path`` with its SQLite database in the file ``w.db`` there."""
+    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
+
+
+def sqlite_client(tmp_path: Path) -> TestClient:
+    """An in-process client of the app on ``sqlite_settings(tmp_path)``."""
+    return TestClient(create_app(sqlite_settings(tmp_path)))
+
+
+def wait_for_job(client: TestClient, url: str, timeout_s: float = 60.0,
+                 until: tuple[str, ...] = ("done", "failed", "cancelled")) -> dict[str, Any]:
+    """GET ``url`` (a job, simulation or fit) every 50 ms until its ``status`` is in
+    ``until``: the last answer, with ``_seen_progress`` the ``progress`` of every answer
+    (None where it has none); an AssertionError after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    seen = []
+    while time.monotonic() < deadline:
+        r = client.get(url)
+        assert r.status_code == 200, r.text
+        body: dict[str, Any] = r.json()
+        seen.append(body.get("progress"))
+        if body["status"] in until:
+            body["_seen_progress"] = seen
+            return body
+        time.sleep(0.05)
+    raise AssertionError(f"{url} did not end in {timeout_s} s")
 
 
 def postgres_admin_url() -> str:

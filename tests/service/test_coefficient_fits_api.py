@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
-
 import pytest
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.vocabulary import CurveClass
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 from wearcast.statistics.coefficient_fit_twin import make_twin
 
 CLASSES = [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
@@ -28,8 +24,6 @@ def twin():
     return make_twin("metro_b", classes, (TRUE_K1, 35e-4, 5e-4, 350e-4), 200.0, 400.0, 100.0)
 
 
-def _settings(tmp_path: Path) -> Settings:
-    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
 
 
 def _body(twin, **change):
@@ -44,28 +38,17 @@ def _body(twin, **change):
 
 
 def _wait(client: TestClient, job_id: int, timeout_s: float = 60.0) -> dict:
-    deadline = time.monotonic() + timeout_s
-    seen = []
-    while time.monotonic() < deadline:
-        r = client.get(f"/v1/coefficient-fits/{job_id}")
-        assert r.status_code == 200, r.text
-        body = r.json()
-        seen.append(body["progress"])
-        if body["status"] in ("done", "failed"):
-            body["_seen"] = seen
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"fit {job_id} did not finish in {timeout_s} s")
+    return wait_for_job(client, f"/v1/coefficient-fits/{job_id}", timeout_s)
 
 
 def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin))
     assert r.status_code == 202, r.text
     assert r.json()["status"] == "queued"
     body = _wait(client, r.json()["id"])
     assert body["status"] == "done", body
-    assert body["_seen"] == sorted(body["_seen"])  # progress never goes back
+    assert body["_seen_progress"] == sorted(body["_seen_progress"])  # progress never goes back
     res = body["result"]
     # noise-free twin: the exact method returns the true k1 (zone 1 is the only zone met)
     assert res["coefficients"]["exact"][0] == pytest.approx(TRUE_K1, rel=1e-3)
@@ -94,7 +77,7 @@ def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin)
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
 ])
 def test_bad_fit_requests_are_refused_before_queuing(tmp_path, twin, change, status, field):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin, **change))
     assert r.status_code == status, r.text
     assert r.json()["errors"][0]["field"] == field
@@ -148,7 +131,7 @@ def _tau_body(twin, **change):
 
 
 def test_tau_max_fit_recovers_c_tau_and_names_the_law(tmp_path, tau_twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin))
     assert r.status_code == 202, r.text
     spec = r.json()["spec"]
@@ -173,7 +156,7 @@ def test_tau_max_fit_recovers_c_tau_and_names_the_law(tmp_path, tau_twin):
 
 
 def test_archard_fit_result_names_its_law(tmp_path, twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin, methods=["exact"], predict=None))
     assert r.status_code == 202, r.text
     assert "tau_threshold_mpa" not in r.json()["spec"]
@@ -198,7 +181,7 @@ def test_archard_fit_result_names_its_law(tmp_path, twin):
      "tau_max only"),
 ])
 def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, reason):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin, **change))
     assert r.status_code == 422, r.text
     detail = r.json()["errors"][0]
