@@ -143,27 +143,40 @@ def real_server(tmp_path: Path) -> Iterator[RealServer]:
         server.stop()
 
 
-def _calibrated_model(client: Any) -> dict[str, Any]:
-    """Import a small fleet-twin unit, store the metro route and a synthetic curve-radius
-    table, and calibrate a tau_max model on it through ``client``; the table's answer."""
-    from wearcast.statistics.generators import fleet_twin as ft
+def calibrate_on_metro(client: Any, profiles: Any, name: str,
+                       calibration_filter: dict[str, Any]) -> dict[str, Any]:
+    """Through ``client``: import ``profiles`` (a fleet-twin profiles frame), store the metro
+    route and the synthetic curve-radius table, and calibrate the tau_max lead-mode model
+    ``name`` on the metro route's measurements that ``calibration_filter`` selects; the
+    route's, the table's and the model's answers."""
     from wearcast.statistics.generators import twin_routes, twin_wear_table
+
+    imported = client.post("/v1/measurements/import", files={"file": (
+        "fleet.csv", profiles.to_csv(index=False).encode(), "text/csv")})
+    assert imported.status_code == 200, imported.text
+    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json())
+    assert route.status_code == 201, route.text
+    table = client.post("/v1/wear-tables", files={"file": (
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
+    model = client.post("/v1/models", json={
+        "name": name, "measure": "tau_max", "running_mode": "lead",
+        "wear_table_id": table["id"],
+        "calibration": {"route_id": "metro", "filter": calibration_filter}})
+    assert model.status_code == 201, model.text
+    return {"route": route.json(), "table": table, "model": model.json()}
+
+
+def _calibrated_model(client: Any) -> dict[str, Any]:
+    """A small fleet-twin unit and a tau_max model calibrated on it (``calibrate_on_metro``)."""
+    from wearcast.statistics.generators import fleet_twin as ft
+    from wearcast.statistics.generators import twin_routes
 
     fleet = ft.generate_fleet(ft.FleetConfig(
         units=(ft.UnitConfig("P", twin_routes.metro_route(), running_mode="lead"),),
         mileages_km=(40_000, 90_000, 140_000), mileage_jitter_km=0.0, rate_scatter=0.0,
         area_scatter=0.0, points_per_profile=120, seed=3))
-    client.post("/v1/measurements/import", files={"file": (
-        "p.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
-    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json()).json()
-    table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
-        "text/csv")}).json()
-    model = client.post("/v1/models", json={
-        "name": "m", "measure": "tau_max", "running_mode": "lead",
-        "wear_table_id": table["id"], "calibration": {"route_id": "metro", "filter": {}}})
-    assert model.status_code == 201, model.text
-    return {"route": route, "table": table, "model": model.json()}
+    return calibrate_on_metro(client, fleet.profiles, "m", {})
 
 
 @pytest.fixture
