@@ -59,6 +59,14 @@ def wait_for_job(client: TestClient, url: str, timeout_s: float = 60.0,
     raise AssertionError(f"{url} did not end in {timeout_s} s")
 
 
+def import_miniprof(client: Any, reference_dir: Path, name: str, manifest: str) -> Any:
+    """``POST /v1/measurements/import`` of the reference MiniProf file ``name`` with the
+    manifest CSV text ``manifest``: the response."""
+    return client.post("/v1/measurements/import", files={
+        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
+        "manifest": ("manifest.csv", manifest.encode())})
+
+
 def postgres_admin_url() -> str:
     url = os.environ.get("WEARCAST_TEST_POSTGRES_URL", DEFAULT_POSTGRES_URL)
     if url.startswith("postgresql://"):
