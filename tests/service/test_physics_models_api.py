@@ -11,14 +11,13 @@ on a null and a hidden friction level in the slow tests).
 
 from __future__ import annotations
 
-import time
 from functools import lru_cache
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.service.conftest import sqlite_client
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.vocabulary import CurveClass
 from wearcast.statistics.generators.scenarios import cached_vehicle_simulator
 
@@ -212,12 +211,7 @@ def test_a_physics_build_answers_202_with_its_job_when_asked_not_to_wait(tmp_pat
     assert r.status_code == 202, r.text
     job = r.json()
     assert job["kind"] == "physics_model" and r.headers["location"] == f"/v1/jobs/{job['id']}"
-    deadline = time.monotonic() + 120.0
-    while time.monotonic() < deadline:
-        job = client.get(f"/v1/jobs/{job['id']}").json()
-        if job["status"] not in ("queued", "running"):
-            break
-        time.sleep(0.2)
+    job = wait_for_job(client, f"/v1/jobs/{job['id']}", 120.0)
     assert job["status"] == "done", job
     model = client.get(f"/v1/models/{job['result']['model_id']}").json()
     assert model["kind"] == "physics" and model["n_calibration_measurements"] == 80

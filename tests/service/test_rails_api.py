@@ -4,14 +4,13 @@ the nominal one in curve-radius tables and simulations (issue 10 item 5)."""
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.service.conftest import sqlite_client
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.profiles.rails import rail_profile
 
 
@@ -175,12 +174,7 @@ def test_measured_rail_in_a_wear_table_and_a_simulation(tmp_path: Path,
     for label, extra in (("nominal", {}), ("measured", {"rail_id": rail_id})):
         r = client.post("/v1/simulations", json={**tiny, **extra})
         assert r.status_code == 202, r.text
-        deadline = time.monotonic() + 120
-        while True:
-            body = client.get(f"/v1/simulations/{r.json()['id']}").json()
-            if body["status"] in ("done", "failed") or time.monotonic() > deadline:
-                break
-            time.sleep(0.1)
+        body = wait_for_job(client, f"/v1/simulations/{r.json()['id']}", 120.0)
         assert body["status"] == "done", body
         results[label] = body
     assert results["measured"]["spec"]["resolved_rail"]["rail_id"] == rail_id
