@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
@@ -84,14 +86,21 @@ def test_bad_fit_requests_are_refused_before_queuing(tmp_path, twin, change, sta
     assert client.get("/v1/coefficient-fits").json() == []
 
 
-def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
-    from wearcast.service.cli import app
-
+def _cli_wear_csv(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, twin) -> Path:
+    """The CLI's database and data folder in ``tmp_path``; the twin's fitted wear curve
+    written there as a ``y_mm,wear_mm`` CSV (its path)."""
     monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
     monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
     csv = tmp_path / "wear.csv"
     csv.write_text("y_mm,wear_mm\n" + "\n".join(
         f"{y},{w}" for y, w in zip(twin.y_mm, twin.wear_fit_mm, strict=True)))
+    return csv
+
+
+def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
+    from wearcast.service.cli import app
+
+    csv = _cli_wear_csv(tmp_path, monkeypatch, twin)
     result = CliRunner().invoke(app, [
         "fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
         "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
@@ -192,11 +201,7 @@ def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, rea
 def test_cli_fit_tau_max(tmp_path, tau_twin, monkeypatch):
     from wearcast.service.cli import app
 
-    monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
-    monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
-    csv = tmp_path / "wear.csv"
-    csv.write_text("y_mm,wear_mm\n" + "\n".join(
-        f"{y},{w}" for y, w in zip(tau_twin.y_mm, tau_twin.wear_fit_mm, strict=True)))
+    csv = _cli_wear_csv(tmp_path, monkeypatch, tau_twin)
     common = ["fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
               "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
               "--step-km", "100", "--law", "tau_max"]
