@@ -15,6 +15,7 @@ Run: ``.venv/bin/python benchmarks/plot_wear_measures.py``
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import matplotlib.ticker
@@ -28,6 +29,15 @@ from wearcast.physics.vehicles import vehicle_preset  # noqa: E402
 from wearcast.physics.wear_tables import wear_table_for_route  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "img"
+
+
+def _save(fig: Any, name: str) -> Path:
+    """Lay out, write ``OUT / name`` (120 dpi) and close the figure; the file's path."""
+    fig.tight_layout()
+    path = OUT / name
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def plot_curving() -> Path:
@@ -54,11 +64,7 @@ def plot_curving() -> Path:
     axes[0].legend(fontsize=8)
     fig.suptitle("Quasi-static curving, Manchester vehicle (trailer bogie), S1002/60E1 1:40, "
                  "cant 100 mm, a_nc 0.58 m/s²", fontsize=9)
-    fig.tight_layout()
-    path = OUT / "curving_wheelsets.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, "curving_wheelsets.png")
 
 
 def plot_fig10() -> Path:
@@ -87,11 +93,7 @@ def plot_fig10() -> Path:
     fig.suptitle("Leading wheelset wear measures over curvature (cf. seed 001 Fig. 10): "
                  "flange measures vanish on tangent track and grow as the radius falls",
                  fontsize=9)
-    fig.tight_layout()
-    path = OUT / "wear_measures_seed001_fig10.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, "wear_measures_seed001_fig10.png")
 
 
 def plot_fig6() -> Path:
@@ -123,11 +125,7 @@ def plot_fig6() -> Path:
             ax.legend(fontsize=8)
     fig.suptitle("Wear rate and regime over the radius, speeds from a_nc = 0.8 m/s², cant "
                  "150 mm, max 200 km/h (cf. seed 004 Fig. 6)", fontsize=9)
-    fig.tight_layout()
-    path = OUT / "wear_measures_seed004_fig6.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, "wear_measures_seed004_fig6.png")
 
 
 def main() -> None:

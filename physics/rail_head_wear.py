@@ -33,7 +33,6 @@ table like a rail name and is measured here against the head it was worn from.
 
 from __future__ import annotations
 
-import hashlib
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
@@ -41,6 +40,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.profiles.measured import ContentIdentity
 from wearcast.physics.profiles.measured_rail import (
     GAUGE_POINT_DEPTH_MM,
     crossings_at_height,
@@ -355,7 +355,7 @@ def rail_head_wear(y_mm: ArrayLike, z_mm: ArrayLike, reference: RailReference | 
 # --------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True, eq=False)
-class WornRail:
+class WornRail(ContentIdentity):
     """A rail head worn by the wear loop, as points [mm] in the UPRIGHT rail frame of
     ``profiles.rails`` (gauge side at y < 0, the new head's top at (0, 0)), ordered from the
     gauge side.
@@ -387,20 +387,9 @@ class WornRail:
         object.__setattr__(self, "y_mm", y)
         object.__setattr__(self, "z_mm", z)
 
-    @property
-    def digest(self) -> str:
-        """SHA-256 of the points and the base head (content identity)."""
-        h = hashlib.sha256()
-        h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
-        h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
-        h.update(self.base.encode())
-        return h.hexdigest()
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, WornRail) and other.digest == self.digest
-
-    def __hash__(self) -> int:
-        return hash(self.digest)
+    def identity_text(self) -> str:
+        """The base head (hashed into ``digest`` after the points)."""
+        return self.base
 
     def __str__(self) -> str:
         return f"worn rail {self.name} ({self.base})"

@@ -13,6 +13,7 @@ import csv
 import datetime as dt
 import io
 import math
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -223,19 +224,26 @@ STATE_CSV_COLUMNS = ["wheel_id", "vehicle_id", "bogie_type", "axle", "side", "mi
                      "governing_limit", "date_p10", "urgency"]
 
 
-def state_csv(payload: dict[str, Any]) -> str:
+def _csv_text(columns: list[str], rows: Iterable[list[Any]]) -> str:
+    """CSV text (``\\n`` line ends) of a header row and the rows."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(STATE_CSV_COLUMNS)
-    for w in payload["wheels"]:
-        gov = w["first_limit"]["governing_p10"]
-        date = w["dates"][gov]["p10"] if gov else None
-        writer.writerow([w["wheel_id"], w["vehicle_id"], w["bogie_type"], w["axle"],
-                         w["side"], w["mileage_km"], w["measured_on"], w["sd_mm"], w["sh_mm"],
-                         w["qr_mm"], w["diameter_mm"], w["first_limit"]["p10"],
-                         w["first_limit"]["p50"], w["first_limit"]["p90"], gov, date,
-                         w["urgency"]])
+    writer.writerow(columns)
+    writer.writerows(rows)
     return buffer.getvalue()
+
+
+def state_csv(payload: dict[str, Any]) -> str:
+    def rows() -> Iterator[list[Any]]:
+        for w in payload["wheels"]:
+            gov = w["first_limit"]["governing_p10"]
+            date = w["dates"][gov]["p10"] if gov else None
+            yield [w["wheel_id"], w["vehicle_id"], w["bogie_type"], w["axle"], w["side"],
+                   w["mileage_km"], w["measured_on"], w["sd_mm"], w["sh_mm"], w["qr_mm"],
+                   w["diameter_mm"], w["first_limit"]["p10"], w["first_limit"]["p50"],
+                   w["first_limit"]["p90"], gov, date, w["urgency"]]
+
+    return _csv_text(STATE_CSV_COLUMNS, rows())
 
 
 # --------------------------------------------------------------------------- one wheel
@@ -424,16 +432,15 @@ PLAN_CSV_COLUMNS = ["week", "turn_date", "wheelset", "wheel_id", "action", "targ
 
 def plan_csv(plan: dict[str, Any]) -> str:
     """One row per wheel of every wheelset in the plan (turned or at risk)."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(PLAN_CSV_COLUMNS)
-    for ws in plan["wheelsets"]:
-        if ws["week"] is None and not ws["at_risk"]:
-            continue
-        for wid in ws["wheel_ids"]:
-            cut = ws["cuts"].get(wid, {})
-            writer.writerow([ws["week"], ws["turn_date"], ws["wheelset"], wid, ws["action"],
-                             cut.get("target"), cut.get("diameter_loss_mm"),
-                             cut.get("matching_loss_mm"), ws["final_diameter_mm"],
-                             ws["deadline"], ws["in_time"], ws["at_risk"], ws["reason"]])
-    return buffer.getvalue()
+    def rows() -> Iterator[list[Any]]:
+        for ws in plan["wheelsets"]:
+            if ws["week"] is None and not ws["at_risk"]:
+                continue
+            for wid in ws["wheel_ids"]:
+                cut = ws["cuts"].get(wid, {})
+                yield [ws["week"], ws["turn_date"], ws["wheelset"], wid, ws["action"],
+                       cut.get("target"), cut.get("diameter_loss_mm"),
+                       cut.get("matching_loss_mm"), ws["final_diameter_mm"], ws["deadline"],
+                       ws["in_time"], ws["at_risk"], ws["reason"]]
+
+    return _csv_text(PLAN_CSV_COLUMNS, rows())

@@ -45,6 +45,11 @@ FIT_WINDOWS_MM: tuple[tuple[float, float], tuple[float, float]] = ((-69.0, -58.0
 MIN_WINDOW_POINTS = 8
 #: Largest |dz/dy| of the reference used in a residual; steeper points are left out.
 _MAX_SLOPE = 8.0
+#: Huber tuning constant [robust sigma] and the median-to-sigma factor of the fit's weights.
+HUBER_C = 1.345
+MAD_TO_SIGMA = 1.4826
+#: Smallest robust scale [mm] behind the Huber cutoff.
+MIN_SCALE_MM = 1e-3
 _TABLE_Y_MIN_MM = -80.0
 _TABLE_Y_MAX_MM = 80.0
 _TABLE_STEP_MM = 0.01
@@ -122,6 +127,26 @@ def _fit_mask(y: NDArray, table: ReferenceTable, windows) -> tuple[NDArray, bool
     return inside, False
 
 
+def _fit_points(y_mm: ArrayLike, z_mm: ArrayLike, reference_height: ReferenceHeight,
+                windows_mm: tuple[tuple[float, float], ...]
+                ) -> tuple[NDArray, NDArray, ReferenceTable, NDArray, bool]:
+    """The profile as float arrays, its reference's table, the fit points (``_fit_mask``)
+    and whether the unworn windows were used."""
+    y = np.asarray(y_mm, dtype=float)
+    z = np.asarray(z_mm, dtype=float)
+    table = reference_table(reference_height)
+    mask, used_windows = _fit_mask(y, table, windows_mm)
+    return y, z, table, mask, used_windows
+
+
+def huber_weights(abs_residual_mm: NDArray) -> NDArray:
+    """Huber IRLS weights min(1, c / |r|) of absolute residuals [mm]: c = 1.345 sigma, sigma
+    1.4826 times their (upper) median, at least ``MIN_SCALE_MM``."""
+    half = abs_residual_mm.size // 2
+    scale = max(MAD_TO_SIGMA * float(np.partition(abs_residual_mm, half)[half]), MIN_SCALE_MM)
+    return np.minimum(1.0, HUBER_C * scale / np.maximum(abs_residual_mm, 1e-300))
+
+
 def _solve3(a: NDArray, b: NDArray) -> tuple[float, float, float]:
     """Solve the 3x3 system a x = b by Cramer's rule (cheaper than LAPACK at this size)."""
     (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a.tolist()
@@ -166,16 +191,12 @@ def align_to_reference(
 
     Seed 000 §IV.A eq. (2) (objective), solved by Gauss–Newton/IRLS instead of pattern search.
     """
-    y = np.asarray(y_mm, dtype=float)
-    z = np.asarray(z_mm, dtype=float)
-    table = reference_table(reference_height)
-    mask, used_windows = _fit_mask(y, table, windows_mm)
+    y, z, table, mask, used_windows = _fit_points(y_mm, z_mm, reference_height, windows_mm)
     yf, zf = y[mask], z[mask]
     if yf.size < 3:
         raise ValueError("profile does not overlap its reference profile; cannot align")
 
     dy = dz = theta = 0.0
-    cutoff = np.inf
     ty, tz, ts = table.y_mm, table.z_mm, table.slope
     y_lo, y_hi = float(ty[0]), float(ty[-1])
     check_points = True
@@ -201,10 +222,7 @@ def align_to_reference(
         # rows: d(residual)/d(dy, dz, theta); d(z' - f(y'))/dtheta = yr + f' zr
         if robust and iteration >= 1:
             # Huber weights, scale from the MAD of the current residuals
-            abs_r = np.abs(residual)
-            half = abs_r.size // 2
-            cutoff = 1.345 * max(1.4826 * float(np.partition(abs_r, half)[half]), 1e-3)
-            jw = jac * np.minimum(1.0, cutoff / np.maximum(abs_r, 1e-300))
+            jw = jac * huber_weights(np.abs(residual))
         else:
             jw = jac
         step = _solve3(jw @ jac.T, -(jw @ residual))
@@ -269,10 +287,7 @@ def align_vertically(
     -------
     AlignedProfile with ``lateral_shift_mm = rotation_rad = 0``.
     """
-    y = np.asarray(y_mm, dtype=float)
-    z = np.asarray(z_mm, dtype=float)
-    table = reference_table(reference_height)
-    mask, used_windows = _fit_mask(y, table, windows_mm)
+    y, z, table, mask, used_windows = _fit_points(y_mm, z_mm, reference_height, windows_mm)
     slope = np.interp(y, table.y_mm, table.slope)
     mask &= np.abs(slope) < _MAX_SLOPE
     if int(mask.sum()) < 3:
@@ -286,9 +301,7 @@ def align_vertically(
     for _ in range(max_iterations):
         new = float(np.sum(weights * norm2 * gap) / np.sum(weights * norm2))
         residual = np.abs(zf + new - z_ref) * np.sqrt(norm2)
-        half = residual.size // 2
-        cutoff = 1.345 * max(1.4826 * float(np.partition(residual, half)[half]), 1e-3)
-        weights = np.minimum(1.0, cutoff / np.maximum(residual, 1e-300))
+        weights = huber_weights(residual)
         done = abs(new - dz) < tolerance_mm
         dz = new
         if done:

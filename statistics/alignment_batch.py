@@ -22,6 +22,9 @@ from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import (
     _MAX_SLOPE,
     FIT_WINDOWS_MM,
+    HUBER_C,
+    MAD_TO_SIGMA,
+    MIN_SCALE_MM,
     MIN_WINDOW_POINTS,
     AlignedProfile,
     ReferenceHeight,
@@ -132,7 +135,7 @@ def align_to_reference_batch(
         j0, j1, j2 = -slope * norm, norm, (yr + slope * zr) * norm
         if robust and iteration >= 1:
             abs_r = np.abs(residual)
-            cutoff = 1.345 * np.maximum(1.4826 * upper_median(abs_r, v), 1e-3)
+            cutoff = HUBER_C * np.maximum(MAD_TO_SIGMA * upper_median(abs_r, v), MIN_SCALE_MM)
             w = np.where(v, np.minimum(1.0, cutoff[:, None] / np.maximum(abs_r, 1e-300)), 0.0)
         else:
             w = v.astype(float)

@@ -7,8 +7,8 @@ Part of the discrepancy finder's catalogue (:mod:`wearcast.statistics.causes`).
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,14 +20,65 @@ from wearcast.statistics.route_measure import weighted_measure
 Array = NDArray[np.float64]
 
 
-class RunningDirection(Cause):
+def _log_ratio(new: Array, nominal: Array) -> Array:
+    """log(new / nominal) where both measures are positive, else 0 (no factor)."""
+    return np.asarray(np.where((new > 0) & (nominal > 0),
+                               np.log(np.maximum(new, 1e-300) / np.maximum(nominal, 1e-300)),
+                               0.0))
+
+
+def _relative(change: Array, measure: Array) -> Array:
+    """change / measure where the measure is positive, else 0."""
+    return np.asarray(np.where(measure > 0,
+                               change / np.where(measure > 0, measure, 1.0), 0.0))
+
+
+class _ShareByLevel(Cause):
+    """A cause with one share in [0, 1] per level of a covariate (a running mode, a route):
+    the parameters are named ``prefix`` + level, the levels set in ``prepare``."""
+
+    prefix: ClassVar[str] = ""
+    levels: tuple[str, ...] = ()
+
+    def level_sentence(self, level: str, share: float) -> str:
+        raise NotImplementedError
+
+    def param_names(self) -> list[str]:
+        return [f"{self.prefix}{level}" for level in self.levels]
+
+    def clip(self, theta: Array) -> Array:
+        return np.clip(theta, 0.0, 1.0)
+
+    def per_level(self, data: FinderData, level_of_row: NDArray[Any],
+                  value: Callable[[Mask], Array]) -> Array:
+        """(n, 2, k) features: column j holds ``value(rows)`` on the rows of level j."""
+        x = np.zeros((data.n, 2, len(self.levels)))
+        for j, level in enumerate(self.levels):
+            sel = np.asarray(level_of_row == level)
+            x[sel, :, j] = value(sel)
+        return x
+
+    def from_params(self, params: Mapping[str, Any]) -> Cause:
+        est = copy.copy(self)
+        est.levels = tuple(k[len(self.prefix):] for k in params if k.startswith(self.prefix))
+        est.theta_ = np.array([float(params[self.prefix + level]) for level in est.levels])
+        return est
+
+    def describe(self) -> str:
+        return "; ".join(self.level_sentence(level, float(share))
+                         for level, share in zip(self.levels, self.theta_, strict=True))
+
+
+class RunningDirection(_ShareByLevel):
+    """One share per running mode (the levels)."""
+
     code = "running_direction"
     needs = ("axle", "running_mode")
     covariate_name = "axle"
     linear = False
     explanation = ("The real leading/trailing mix differs from the model's: axle 1 leads a "
                    "share p of the distance, P = p P_lead + (1 - p) P_trail (seed 001 §4).")
-    modes: tuple[str, ...] = ()
+    prefix = "axle1_leading_share_"
 
     def skip_reason(self, data: FinderData) -> str | None:
         axles = set(data.frame["axle"].astype(int))
@@ -36,16 +87,13 @@ class RunningDirection(Cause):
         return None
 
     def prepare(self, data: FinderData, rows: Mask) -> None:
-        self.modes = tuple(sorted({str(m) for m in data.mode}))
-
-    def param_names(self) -> list[str]:
-        return [f"axle1_leading_share_{m}" for m in self.modes]
+        self.levels = tuple(sorted({str(m) for m in data.mode}))
 
     def start(self) -> Array:
-        return np.array([1.0 if m == "lead" else 0.5 for m in self.modes])
+        return np.array([1.0 if m == "lead" else 0.5 for m in self.levels])
 
-    def clip(self, theta: Array) -> Array:
-        return np.clip(theta, 0.0, 1.0)
+    def level_sentence(self, level: str, share: float) -> str:
+        return f"in {level} mode axle 1 leads {100 * share:.0f} % of the distance"
 
     def _per_wheelset(self, data: FinderData) -> tuple[Array, Array]:
         block = data.parts[:, data.measure_index].sum(axis=3)   # (n, region, wheelset)
@@ -54,7 +102,7 @@ class RunningDirection(Cause):
     def _lead(self, data: FinderData, theta: Array) -> Array:
         axle = data.frame["axle"].to_numpy()
         lead = data.lead_share.copy()
-        for m, p in zip(self.modes, theta, strict=True):
+        for m, p in zip(self.levels, theta, strict=True):
             sel = np.asarray(data.mode == m)
             lead[sel] = np.where(axle[sel] == 1, p, 1.0 - p)
         return lead
@@ -64,9 +112,7 @@ class RunningDirection(Cause):
         lead = self._lead(data, theta)[:, None]
         new = lp * lead + tp * (1.0 - lead)
         nominal = lp * data.lead_share[:, None] + tp * (1.0 - data.lead_share[:, None])
-        return np.asarray(np.where((new > 0) & (nominal > 0),
-                                   np.log(np.maximum(new, 1e-300) / np.maximum(nominal, 1e-300)),
-                                   0.0))
+        return _log_ratio(new, nominal)
 
     def features(self, data: FinderData, theta: Array) -> Array:
         lp, tp = self._per_wheelset(data)
@@ -74,33 +120,20 @@ class RunningDirection(Cause):
         p_now = lp * lead + tp * (1.0 - lead)
         axle = data.frame["axle"].to_numpy()
         sign = np.where(axle == 1, 1.0, -1.0)[:, None]
-        d = np.where(p_now > 0, sign * (lp - tp) / np.where(p_now > 0, p_now, 1.0), 0.0)
-        x = np.zeros((data.n, 2, len(self.modes)))
-        for j, m in enumerate(self.modes):
-            sel = np.asarray(data.mode == m)
-            x[sel, :, j] = d[sel]
-        return x
-
-    def from_params(self, params: Mapping[str, Any]) -> Cause:
-        est = copy.copy(self)
-        pre = "axle1_leading_share_"
-        est.modes = tuple(k[len(pre):] for k in params if k.startswith(pre))
-        est.theta_ = np.array([float(params[pre + m]) for m in est.modes])
-        return est
-
-    def describe(self) -> str:
-        return "; ".join(f"in {m} mode axle 1 leads {100 * p:.0f} % of the distance"
-                         for m, p in zip(self.modes, self.theta_, strict=True))
+        d = _relative(sign * (lp - tp), p_now)
+        return self.per_level(data, data.mode, lambda sel: d[sel])
 
 
-class CurveAsymmetry(Cause):
+class CurveAsymmetry(_ShareByLevel):
+    """One left-curve share per route (the levels)."""
+
     code = "curve_asymmetry"
     needs = ("side", "route with left and right curves")
     covariate_name = "side"
     linear = False
     explanation = ("Left and right wheels see a different mix of curve directions than the "
                    "route description says: a share q of the curved length bends left.")
-    routes: tuple[str, ...] = ()
+    prefix = "left_curve_share_"
     nominal: tuple[float, ...] = ()
 
     def _eligible(self, data: FinderData) -> list[str]:
@@ -115,19 +148,16 @@ class CurveAsymmetry(Cause):
         return None
 
     def prepare(self, data: FinderData, rows: Mask) -> None:
-        self.routes = tuple(self._eligible(data))
+        self.levels = tuple(self._eligible(data))
         lr = data.left_right
         self.nominal = tuple(float((lr[:, 0] / (lr[:, 0] + lr[:, 1]))[data.route == r][0])
-                             for r in self.routes)
-
-    def param_names(self) -> list[str]:
-        return [f"left_curve_share_{r}" for r in self.routes]
+                             for r in self.levels)
 
     def start(self) -> Array:
         return np.array(self.nominal, dtype=float)
 
-    def clip(self, theta: Array) -> Array:
-        return np.clip(theta, 0.0, 1.0)
+    def level_sentence(self, level: str, share: float) -> str:
+        return f"on {level} {100 * share:.0f} % of the curved length bends left"
 
     def _p(self, data: FinderData, lr: Array) -> Array:
         return weighted_measure(data.parts, data.lead_share, data.measure_index, lr)
@@ -136,7 +166,7 @@ class CurveAsymmetry(Cause):
         lr = np.ones((data.n, 2))
         left, right = data.left_right[:, 0], data.left_right[:, 1]
         total = left + right
-        for name, q in zip(self.routes, theta, strict=True):
+        for name, q in zip(self.levels, theta, strict=True):
             sel = np.asarray(data.route == name)
             lr[sel, 0] = q * total[sel] / left[sel]
             lr[sel, 1] = (1.0 - q) * total[sel] / right[sel]
@@ -146,10 +176,7 @@ class CurveAsymmetry(Cause):
         new = self._p(data, self._weights(data, theta))
         if "curve_nominal_measure" not in data.cache:   # theta-independent
             data.cache["curve_nominal_measure"] = self._p(data, np.ones((data.n, 2)))
-        nominal = data.cache["curve_nominal_measure"]
-        return np.asarray(np.where((new > 0) & (nominal > 0),
-                                   np.log(np.maximum(new, 1e-300) / np.maximum(nominal, 1e-300)),
-                                   0.0))
+        return _log_ratio(new, data.cache["curve_nominal_measure"])
 
     @staticmethod
     def _side_parts(data: FinderData) -> tuple[Array, Array]:
@@ -171,26 +198,14 @@ class CurveAsymmetry(Cause):
         p_now = self._p(data, self._weights(data, theta))
         left, right = data.left_right[:, 0], data.left_right[:, 1]
         total = left + right
-        x = np.zeros((data.n, 2, len(self.routes)))
         lpart, rpart = self._side_parts(data)
-        for j, name in enumerate(self.routes):
-            sel = np.asarray(data.route == name)
+
+        def route_features(sel: Mask) -> Array:
             dp = (total[sel] / left[sel])[:, None] * lpart[sel] \
                 - (total[sel] / right[sel])[:, None] * rpart[sel]
-            x[sel, :, j] = np.where(p_now[sel] > 0, dp / np.where(p_now[sel] > 0,
-                                                                   p_now[sel], 1.0), 0.0)
-        return x
+            return _relative(dp, p_now[sel])
 
-    def from_params(self, params: Mapping[str, Any]) -> Cause:
-        est = copy.copy(self)
-        pre = "left_curve_share_"
-        est.routes = tuple(k[len(pre):] for k in params if k.startswith(pre))
-        est.theta_ = np.array([float(params[pre + r]) for r in est.routes])
-        return est
-
-    def describe(self) -> str:
-        return "; ".join(f"on {r} {100 * v:.0f} % of the curved length bends left"
-                         for r, v in zip(self.routes, self.theta_, strict=True))
+        return self.per_level(data, data.route, route_features)
 
 
 class WearMeasure(Cause):

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import (
     FIT_WINDOWS_MM,
+    AlignedProfile,
     ReferenceHeight,
     align_to_reference,
     align_vertically,
@@ -54,10 +55,9 @@ class ProcessedProfile:
     Attributes
     ----------
     cleaned : the cleaned profile before alignment (``CleanedProfile``)
-    y_aligned_mm, z_aligned_mm : the aligned profile [mm]
-    lateral_shift_mm, vertical_shift_mm, rotation_rad : alignment applied [mm, mm, rad]
-    rms_residual_mm : RMS normal distance to the reference over the fitted points [mm]
-    n_used : points used by the alignment fit
+    aligned : the aligned profile and the alignment applied (``AlignedProfile``; its fields
+        also read as ``y_aligned_mm``, ``z_aligned_mm``, ``lateral_shift_mm``,
+        ``vertical_shift_mm``, ``rotation_rad``, ``rms_residual_mm`` and ``n_used``)
     grid_y_mm : lateral grid of the wear curve [mm]
     wear_mm : wear curve w = z_ref - z_worn on the grid [mm], NaN where no data
     areas : flange/tread wear areas [mm²]
@@ -70,13 +70,7 @@ class ProcessedProfile:
     """
 
     cleaned: CleanedProfile
-    y_aligned_mm: NDArray[np.float64]
-    z_aligned_mm: NDArray[np.float64]
-    lateral_shift_mm: float
-    vertical_shift_mm: float
-    rotation_rad: float
-    rms_residual_mm: float
-    n_used: int
+    aligned: AlignedProfile
     grid_y_mm: NDArray[np.float64]
     wear_mm: NDArray[np.float64]
     areas: WearAreas
@@ -84,6 +78,36 @@ class ProcessedProfile:
     alignment: str = "free"
     datum: DatumPlacement | None = None
     reference_check: ReferenceCheck | None = None
+
+    @property
+    def y_aligned_mm(self) -> NDArray[np.float64]:
+        """Aligned profile y [mm]."""
+        return self.aligned.y_mm
+
+    @property
+    def z_aligned_mm(self) -> NDArray[np.float64]:
+        """Aligned profile z [mm]."""
+        return self.aligned.z_mm
+
+    @property
+    def lateral_shift_mm(self) -> float:
+        return self.aligned.lateral_shift_mm
+
+    @property
+    def vertical_shift_mm(self) -> float:
+        return self.aligned.vertical_shift_mm
+
+    @property
+    def rotation_rad(self) -> float:
+        return self.aligned.rotation_rad
+
+    @property
+    def rms_residual_mm(self) -> float:
+        return self.aligned.rms_residual_mm
+
+    @property
+    def n_used(self) -> int:
+        return self.aligned.n_used
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -137,13 +161,7 @@ def process_profile(
     areas = wear_areas_mm2(grid, wear, split_y_mm)
     return ProcessedProfile(
         cleaned=cleaned,
-        y_aligned_mm=aligned.y_mm,
-        z_aligned_mm=aligned.z_mm,
-        lateral_shift_mm=aligned.lateral_shift_mm,
-        vertical_shift_mm=aligned.vertical_shift_mm,
-        rotation_rad=aligned.rotation_rad,
-        rms_residual_mm=aligned.rms_residual_mm,
-        n_used=aligned.n_used,
+        aligned=aligned,
         grid_y_mm=grid,
         wear_mm=wear,
         areas=areas,

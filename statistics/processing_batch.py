@@ -159,10 +159,7 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
         areas = WearAreas(flange_mm2=float(flange[row]), tread_mm2=float(tread[row]))
         w = wear[row]
         out[where[k]] = ProcessedProfile(
-            cleaned=c, y_aligned_mm=a.y_mm, z_aligned_mm=a.z_mm,
-            lateral_shift_mm=a.lateral_shift_mm, vertical_shift_mm=a.vertical_shift_mm,
-            rotation_rad=a.rotation_rad, rms_residual_mm=a.rms_residual_mm,
-            n_used=a.n_used, grid_y_mm=grid, wear_mm=w, areas=areas,
+            cleaned=c, aligned=a, grid_y_mm=grid, wear_mm=w, areas=areas,
             parameters=parameters[row], alignment="free", datum=None,
             reference_check=check_reference(
                 parameters[row], areas, reference_height, float(np.interp(0.0, grid, w)),

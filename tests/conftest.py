@@ -51,6 +51,19 @@ def _send_test_key_by_default() -> None:
 _send_test_key_by_default()
 
 
+def flange_face_worn_s1002(y_mm: Any, lateral_mm: float) -> Any:
+    """S1002 heights z [mm] at ``y_mm`` with the flange face (field-side flank,
+    -55 < y < -30 mm) moved towards the flange by ``lateral_mm``; tip, flange back and tread
+    untouched."""
+    import numpy as np
+
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+
+    z = s1002_height_mm(y_mm)
+    flank = (y_mm > -55.0) & (y_mm < -30.0)
+    return np.where(flank, np.minimum(z, s1002_height_mm(y_mm + lateral_mm)), z)
+
+
 @pytest.fixture
 def reference_dir() -> Path:
     """``../shared/reference``; the test is skipped, saying so, when it is absent."""

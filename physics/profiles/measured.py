@@ -26,7 +26,9 @@ FITPACK smoothing condition sum((y_i - y(s_i))^2 + ...) <= n * smoothing_mm^2 pe
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,6 +36,36 @@ from scipy.interpolate import BSpline, UnivariateSpline, make_interp_spline
 
 from wearcast.physics.profiles.rails import rail_profile, resample_by_arc_length
 from wearcast.physics.profiles.s1002 import S1002_Y_MAX_MM, S1002_Y_MIN_MM, s1002_height_mm
+
+
+class ContentIdentity:
+    """Equality and hashing by content, for frozen records of measured points (``y_mm``,
+    ``z_mm``): ``digest`` is the SHA-256 of the points (little-endian float64) and of
+    ``identity_text()`` (what else sets the record's meaning), so equal content keys the
+    same contact-table cache entry."""
+
+    y_mm: NDArray[np.float64]
+    z_mm: NDArray[np.float64]
+
+    def identity_text(self) -> str:
+        """The record's other content, hashed after the points."""
+        raise NotImplementedError
+
+    @cached_property
+    def digest(self) -> str:
+        """SHA-256 of the points and ``identity_text()`` (content identity)."""
+        h = hashlib.sha256()
+        h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
+        h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
+        h.update(self.identity_text().encode())
+        return h.hexdigest()
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, type(self)) and other.digest == self.digest
+
+    def __hash__(self) -> int:
+        return hash(self.digest)
+
 
 #: Arc-length step of the dense lookup table used to invert y(s) [mm].
 _LOOKUP_STEP_MM = 0.05

@@ -23,13 +23,13 @@ rails' gauge points, as a gauge measurement on track finds it.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.profiles.measured import ContentIdentity
 from wearcast.physics.profiles.rails import incline, resample_by_arc_length
 
 #: Depth of the gauge point below the top of the head [mm] (EN 13848-1 track gauge).
@@ -199,7 +199,7 @@ def upper_envelope(y_mm: ArrayLike, z_mm: ArrayLike) -> tuple[NDArray, NDArray]:
 
 
 @dataclass(frozen=True, eq=False)
-class MeasuredRail:
+class MeasuredRail(ContentIdentity):
     """A measured rail head, points in the rail frame (see the module docstring) [mm].
 
     ``name`` says where it comes from (file, part); ``kind`` is ``rail`` or ``roller`` (a
@@ -233,20 +233,9 @@ class MeasuredRail:
         if facts.gauge_point_mm is None:
             raise ValueError(f"{self.name}: no gauge point: {facts.is_rail_head()[1]}")
 
-    @cached_property
-    def digest(self) -> str:
-        """SHA-256 of the points, kind and stated inclination (content identity)."""
-        h = hashlib.sha256()
-        h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
-        h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
-        h.update(f"{self.kind}|{self.inclination!r}".encode())
-        return h.hexdigest()
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, MeasuredRail) and other.digest == self.digest
-
-    def __hash__(self) -> int:
-        return hash(self.digest)
+    def identity_text(self) -> str:
+        """Kind and stated inclination (hashed into ``digest`` after the points)."""
+        return f"{self.kind}|{self.inclination!r}"
 
     def __str__(self) -> str:  # how it reads in labels and errors
         return f"measured {self.kind} {self.name}"

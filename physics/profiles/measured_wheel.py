@@ -15,14 +15,12 @@ name ``S1002``.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.profiles.measured import ProfileCurve
+from wearcast.physics.profiles.measured import ContentIdentity, ProfileCurve
 
 #: Wheel-frame range the curving model searches for contact [mm] (flange tip to field side).
 CONTACT_SEARCH_Y_MM = (-55.0, 45.0)
@@ -34,7 +32,7 @@ SAMPLE_STEP_MM = 0.1
 
 
 @dataclass(frozen=True, eq=False)
-class MeasuredWheel:
+class MeasuredWheel(ContentIdentity):
     """A measured wheel profile (wheel frame, [mm]); see the module docstring.
 
     ``name`` says where it comes from (measurement, wheel, file).
@@ -71,20 +69,9 @@ class MeasuredWheel:
         ok = np.isfinite(height)
         object.__setattr__(self, "_grid", (grid[ok], height[ok]))
 
-    @cached_property
-    def digest(self) -> str:
-        """SHA-256 of the points (content identity)."""
-        h = hashlib.sha256()
-        h.update(np.ascontiguousarray(self.y_mm, "<f8").tobytes())
-        h.update(np.ascontiguousarray(self.z_mm, "<f8").tobytes())
-        h.update(repr(self.smoothing_mm).encode())
-        return h.hexdigest()
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, MeasuredWheel) and other.digest == self.digest
-
-    def __hash__(self) -> int:
-        return hash(self.digest)
+    def identity_text(self) -> str:
+        """The smoothing (hashed into ``digest`` after the points)."""
+        return repr(self.smoothing_mm)
 
     def __str__(self) -> str:  # how it reads in labels and errors
         return f"measured wheel {self.name}"

@@ -59,6 +59,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS
+from wearcast.statistics.generators.twin_routes import split_directions
 from wearcast.statistics.processing import process_profile
 from wearcast.statistics.route_measure import analytic_wear_measure, curve_direction_shares
 from wearcast.statistics.routes import Route, RouteClass
@@ -104,13 +105,13 @@ def depot_wear_table(radii_m: tuple[float, ...] = TABLE_RADII_M) -> pd.DataFrame
 
 
 def _route(name: str, rows: tuple[tuple[float | None, float], ...]) -> Route:
-    classes = []
+    classes: list[RouteClass] = []
     for radius, share in rows:
         if radius is None:
-            classes.append(RouteClass(None, None, 0.0, 90.0, share))
+            classes += split_directions(None, 0.0, 90.0, share)
         else:
             cant = float(min(130.0, round(9.0 * 65.0 ** 2 / radius)))
-            classes += [RouteClass(radius, d, cant, 65.0, share / 2) for d in ("left", "right")]
+            classes += split_directions(radius, cant, 65.0, share)
     return Route(name, tuple(classes))
 
 

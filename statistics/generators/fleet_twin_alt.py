@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vocabulary import REGIONS, WEAR_MEASURES
+from wearcast.statistics.generators.twin_routes import split_directions
 from wearcast.statistics.processing import process_profile
 from wearcast.statistics.route_measure import analytic_wear_measure, curve_direction_shares
 from wearcast.statistics.routes import Route, RouteClass
@@ -69,13 +70,13 @@ _FINE_Y = np.arange(-70.0, 60.0 + 1e-9, 0.05)
 # --- routes and wear measures ------------------------------------------------------------------
 
 def _classes(rows: tuple[tuple[float | None, float], ...]) -> tuple[RouteClass, ...]:
-    out = []
+    out: list[RouteClass] = []
     for radius, share in rows:
         if radius is None:
-            out.append(RouteClass(None, None, 0.0, 100.0, share))
+            out += split_directions(None, 0.0, 100.0, share)
         else:  # half left, half right as described (the truth may differ: left_share)
             cant = float(min(150.0, round(8.0 * 70.0**2 / radius)))
-            out += [RouteClass(radius, d, cant, 70.0, share / 2.0) for d in ("left", "right")]
+            out += split_directions(radius, cant, 70.0, share)
     return tuple(out)
 
 

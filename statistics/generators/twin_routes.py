@@ -27,8 +27,10 @@ class TwinRoute(Route):
         return {**self.to_dict(), "attributes": dict(self.attributes)}
 
 
-def _split_directions(radius_m: float | None, cant_mm: float, speed_kmh: float,
-                      share: float) -> list[RouteClass]:
+def split_directions(radius_m: float | None, cant_mm: float, speed_kmh: float,
+                     share: float) -> list[RouteClass]:
+    """The route classes of a (radius, share) row whose direction is not given: a tangent
+    class (``radius_m`` None), or the curve split into equal left- and right-hand halves."""
     if radius_m is None:
         return [RouteClass(None, None, 0.0, speed_kmh, share)]
     return [RouteClass(radius_m, d, cant_mm, speed_kmh, share / 2.0) for d in ("left", "right")]
@@ -70,7 +72,7 @@ def aosta_route(name: str = "aosta") -> TwinRoute:
     total = sum(row[3] for row in AOSTA_TABLE3)
     classes: list[RouteClass] = []
     for radius_m, cant_mm, speed_kmh, share_pct in AOSTA_TABLE3:
-        classes += _split_directions(radius_m, cant_mm, speed_kmh, share_pct / total)
+        classes += split_directions(radius_m, cant_mm, speed_kmh, share_pct / total)
     return TwinRoute(name, tuple(classes), {
         "source": "seed 003 Table 3 (Aosta - Pre Saint Didier, n_class=7)",
         "line_type": "regional, mountain", "flange_lubrication": False,
@@ -88,11 +90,11 @@ def metro_route(name: str = "metro", max_cant_mm: float = 120.0) -> TwinRoute:
     classes: list[RouteClass] = []
     for r_min, r_max, share_pct, speed_kmh in METRO_TABLE1:
         if math.isinf(r_max):
-            classes += _split_directions(None, 0.0, speed_kmh, share_pct / 100.0)
+            classes += split_directions(None, 0.0, speed_kmh, share_pct / 100.0)
             continue
         radius_m = 0.5 * (r_min + r_max)
         cant_mm = min(max_cant_mm, round(11.8 * speed_kmh**2 / radius_m))
-        classes += _split_directions(radius_m, float(cant_mm), speed_kmh, share_pct / 100.0)
+        classes += split_directions(radius_m, float(cant_mm), speed_kmh, share_pct / 100.0)
     return TwinRoute(name, tuple(classes), {
         "source": "seed 000 Table 1 (metro lines 1 and 2, type B vehicle)",
         "line_type": "metro", "flange_lubrication": False,

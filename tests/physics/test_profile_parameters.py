@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
+from tests.conftest import flange_face_worn_s1002
 from wearcast.physics.profiles.parameters import (
     flange_parameters,
     nominal_frame_flange_parameters,
@@ -36,17 +37,9 @@ def test_s1002_qr_matches_the_arc_geometry():
     assert flange_parameters(y, z).qr_mm == pytest.approx(y_sd - y_qr, abs=1e-3)
 
 
-def _flange_face_worn(y, lateral_mm):
-    """S1002 with the flange face (field-side flank, -55 < y < -30) moved towards the
-    flange by ``lateral_mm``; tip, flange back and tread untouched."""
-    z = s1002_height_mm(y)
-    flank = (y > -55.0) & (y < -30.0)
-    return np.where(flank, np.minimum(z, s1002_height_mm(y + lateral_mm)), z)
-
-
 def test_flange_face_worn_2mm_thins_the_flange_by_2mm():
     y = np.linspace(-70.0, 60.0, 2601)
-    p = flange_parameters(y, _flange_face_worn(y, 2.0))
+    p = flange_parameters(y, flange_face_worn_s1002(y, 2.0))
     assert p.sd_mm == pytest.approx(30.50, abs=0.01)
     assert p.sh_mm == pytest.approx(28.00, abs=0.01)  # tip and tape circle unchanged
     assert p.qr_mm == pytest.approx(10.794, abs=0.01)  # both flank points moved alike

@@ -19,12 +19,52 @@ from typing import Any
 
 import httpx
 import pytest
+from fastapi.testclient import TestClient
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
+from wearcast.service.app import create_app
 from wearcast.service.db import scratch_database
+from wearcast.service.settings import Settings
 
 DEFAULT_POSTGRES_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+
+
+def sqlite_settings(tmp_path: Path) -> Settings:
+    """A service on ``tmp_path`` with its SQLite database in the file ``w.db`` there."""
+    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
+
+
+def sqlite_client(tmp_path: Path) -> TestClient:
+    """An in-process client of the app on ``sqlite_settings(tmp_path)``."""
+    return TestClient(create_app(sqlite_settings(tmp_path)))
+
+
+def wait_for_job(client: TestClient, url: str, timeout_s: float = 60.0,
+                 until: tuple[str, ...] = ("done", "failed", "cancelled")) -> dict[str, Any]:
+    """GET ``url`` (a job, simulation or fit) every 50 ms until its ``status`` is in
+    ``until``: the last answer, with ``_seen_progress`` the ``progress`` of every answer
+    (None where it has none); an AssertionError after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    seen = []
+    while time.monotonic() < deadline:
+        r = client.get(url)
+        assert r.status_code == 200, r.text
+        body: dict[str, Any] = r.json()
+        seen.append(body.get("progress"))
+        if body["status"] in until:
+            body["_seen_progress"] = seen
+            return body
+        time.sleep(0.05)
+    raise AssertionError(f"{url} did not end in {timeout_s} s")
+
+
+def import_miniprof(client: Any, reference_dir: Path, name: str, manifest: str) -> Any:
+    """``POST /v1/measurements/import`` of the reference MiniProf file ``name`` with the
+    manifest CSV text ``manifest``: the response."""
+    return client.post("/v1/measurements/import", files={
+        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
+        "manifest": ("manifest.csv", manifest.encode())})
 
 
 def postgres_admin_url() -> str:
@@ -111,27 +151,40 @@ def real_server(tmp_path: Path) -> Iterator[RealServer]:
         server.stop()
 
 
-def _calibrated_model(client: Any) -> dict[str, Any]:
-    """Import a small fleet-twin unit, store the metro route and a synthetic curve-radius
-    table, and calibrate a tau_max model on it through ``client``; the table's answer."""
-    from wearcast.statistics.generators import fleet_twin as ft
+def calibrate_on_metro(client: Any, profiles: Any, name: str,
+                       calibration_filter: dict[str, Any]) -> dict[str, Any]:
+    """Through ``client``: import ``profiles`` (a fleet-twin profiles frame), store the metro
+    route and the synthetic curve-radius table, and calibrate the tau_max lead-mode model
+    ``name`` on the metro route's measurements that ``calibration_filter`` selects; the
+    route's, the table's and the model's answers."""
     from wearcast.statistics.generators import twin_routes, twin_wear_table
+
+    imported = client.post("/v1/measurements/import", files={"file": (
+        "fleet.csv", profiles.to_csv(index=False).encode(), "text/csv")})
+    assert imported.status_code == 200, imported.text
+    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json())
+    assert route.status_code == 201, route.text
+    table = client.post("/v1/wear-tables", files={"file": (
+        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
+        "text/csv")}).json()
+    model = client.post("/v1/models", json={
+        "name": name, "measure": "tau_max", "running_mode": "lead",
+        "wear_table_id": table["id"],
+        "calibration": {"route_id": "metro", "filter": calibration_filter}})
+    assert model.status_code == 201, model.text
+    return {"route": route.json(), "table": table, "model": model.json()}
+
+
+def _calibrated_model(client: Any) -> dict[str, Any]:
+    """A small fleet-twin unit and a tau_max model calibrated on it (``calibrate_on_metro``)."""
+    from wearcast.statistics.generators import fleet_twin as ft
+    from wearcast.statistics.generators import twin_routes
 
     fleet = ft.generate_fleet(ft.FleetConfig(
         units=(ft.UnitConfig("P", twin_routes.metro_route(), running_mode="lead"),),
         mileages_km=(40_000, 90_000, 140_000), mileage_jitter_km=0.0, rate_scatter=0.0,
         area_scatter=0.0, points_per_profile=120, seed=3))
-    client.post("/v1/measurements/import", files={"file": (
-        "p.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")})
-    route = client.post("/v1/routes", json=twin_routes.metro_route().to_json()).json()
-    table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
-        "text/csv")}).json()
-    model = client.post("/v1/models", json={
-        "name": "m", "measure": "tau_max", "running_mode": "lead",
-        "wear_table_id": table["id"], "calibration": {"route_id": "metro", "filter": {}}})
-    assert model.status_code == 201, model.text
-    return {"route": route, "table": table, "model": model.json()}
+    return calibrate_on_metro(client, fleet.profiles, "m", {})
 
 
 @pytest.fixture

@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.vocabulary import CurveClass
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 from wearcast.statistics.coefficient_fit_twin import make_twin
 
 CLASSES = [{"radius_m": None, "speed_kmh": 70, "share": 0.6},
@@ -28,8 +26,6 @@ def twin():
     return make_twin("metro_b", classes, (TRUE_K1, 35e-4, 5e-4, 350e-4), 200.0, 400.0, 100.0)
 
 
-def _settings(tmp_path: Path) -> Settings:
-    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
 
 
 def _body(twin, **change):
@@ -44,28 +40,17 @@ def _body(twin, **change):
 
 
 def _wait(client: TestClient, job_id: int, timeout_s: float = 60.0) -> dict:
-    deadline = time.monotonic() + timeout_s
-    seen = []
-    while time.monotonic() < deadline:
-        r = client.get(f"/v1/coefficient-fits/{job_id}")
-        assert r.status_code == 200, r.text
-        body = r.json()
-        seen.append(body["progress"])
-        if body["status"] in ("done", "failed"):
-            body["_seen"] = seen
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"fit {job_id} did not finish in {timeout_s} s")
+    return wait_for_job(client, f"/v1/coefficient-fits/{job_id}", timeout_s)
 
 
 def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin))
     assert r.status_code == 202, r.text
     assert r.json()["status"] == "queued"
     body = _wait(client, r.json()["id"])
     assert body["status"] == "done", body
-    assert body["_seen"] == sorted(body["_seen"])  # progress never goes back
+    assert body["_seen_progress"] == sorted(body["_seen_progress"])  # progress never goes back
     res = body["result"]
     # noise-free twin: the exact method returns the true k1 (zone 1 is the only zone met)
     assert res["coefficients"]["exact"][0] == pytest.approx(TRUE_K1, rel=1e-3)
@@ -94,21 +79,28 @@ def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin)
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
 ])
 def test_bad_fit_requests_are_refused_before_queuing(tmp_path, twin, change, status, field):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin, **change))
     assert r.status_code == status, r.text
     assert r.json()["errors"][0]["field"] == field
     assert client.get("/v1/coefficient-fits").json() == []
 
 
-def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
-    from wearcast.service.cli import app
-
+def _cli_wear_csv(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, twin) -> Path:
+    """The CLI's database and data folder in ``tmp_path``; the twin's fitted wear curve
+    written there as a ``y_mm,wear_mm`` CSV (its path)."""
     monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
     monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
     csv = tmp_path / "wear.csv"
     csv.write_text("y_mm,wear_mm\n" + "\n".join(
         f"{y},{w}" for y, w in zip(twin.y_mm, twin.wear_fit_mm, strict=True)))
+    return csv
+
+
+def test_cli_fit_coefficients(tmp_path, twin, monkeypatch):
+    from wearcast.service.cli import app
+
+    csv = _cli_wear_csv(tmp_path, monkeypatch, twin)
     result = CliRunner().invoke(app, [
         "fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
         "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
@@ -148,7 +140,7 @@ def _tau_body(twin, **change):
 
 
 def test_tau_max_fit_recovers_c_tau_and_names_the_law(tmp_path, tau_twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin))
     assert r.status_code == 202, r.text
     spec = r.json()["spec"]
@@ -173,7 +165,7 @@ def test_tau_max_fit_recovers_c_tau_and_names_the_law(tmp_path, tau_twin):
 
 
 def test_archard_fit_result_names_its_law(tmp_path, twin):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_body(twin, methods=["exact"], predict=None))
     assert r.status_code == 202, r.text
     assert "tau_threshold_mpa" not in r.json()["spec"]
@@ -198,7 +190,7 @@ def test_archard_fit_result_names_its_law(tmp_path, twin):
      "tau_max only"),
 ])
 def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, reason):
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/coefficient-fits", json=_tau_body(tau_twin, **change))
     assert r.status_code == 422, r.text
     detail = r.json()["errors"][0]
@@ -209,11 +201,7 @@ def test_bad_tau_max_requests_are_refused(tmp_path, tau_twin, change, field, rea
 def test_cli_fit_tau_max(tmp_path, tau_twin, monkeypatch):
     from wearcast.service.cli import app
 
-    monkeypatch.setenv("WEARCAST_DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
-    monkeypatch.setenv("WEARCAST_DATA_DIR", str(tmp_path))
-    csv = tmp_path / "wear.csv"
-    csv.write_text("y_mm,wear_mm\n" + "\n".join(
-        f"{y},{w}" for y, w in zip(tau_twin.y_mm, tau_twin.wear_fit_mm, strict=True)))
+    csv = _cli_wear_csv(tmp_path, monkeypatch, tau_twin)
     common = ["fit-coefficients", "--vehicle", "metro_b", "--class", "tangent:0:70:0.6",
               "--class", "1500:0:70:0.4:left", "--wear-csv", str(csv), "--mileage-km", "200",
               "--step-km", "100", "--law", "tau_max"]

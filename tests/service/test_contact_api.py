@@ -7,16 +7,14 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import sqlite_client
 from wearcast.physics.contact.geometry import s1002_60e1
 from wearcast.physics.contact.pose_contact import Pose, contact_at_poses
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 
 
 @pytest.fixture
 def client(tmp_path: Path) -> TestClient:
-    return TestClient(create_app(Settings(data_dir=tmp_path,
-                                          database_url=f"sqlite:///{tmp_path / 'w.db'}")))
+    return sqlite_client(tmp_path)
 
 
 def test_s1002_on_60e1_answers_what_the_physics_computes(client):

@@ -18,8 +18,7 @@ from functools import lru_cache
 import pytest
 from fastapi.testclient import TestClient
 
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
+from tests.service.conftest import sqlite_client
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import twin_effects as te
 from wearcast.statistics.generators import twin_wear_table
@@ -41,11 +40,6 @@ def _twin(effect: str, seed: int = 0):
     wear, profile = effects[effect]
     cfg = te.scenario_config(seed=seed, wear_effects=wear, profile_effects=profile)
     return cfg, table, ft.generate_fleet(cfg, table)
-
-
-def _client(tmp_path) -> TestClient:
-    return TestClient(create_app(Settings(data_dir=tmp_path,
-                                          database_url=f"sqlite:///{tmp_path / 'w.db'}")))
 
 
 def _load(client: TestClient, effect: str) -> int:
@@ -83,7 +77,7 @@ def test_every_cause_of_the_catalogue_is_tested():
 
 @pytest.mark.parametrize("cause", CAUSES)
 def test_api_names_hidden_cause(tmp_path, cause):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, cause)
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"filter": {}})
     assert r.status_code == 200, r.text
@@ -109,7 +103,7 @@ def test_api_names_hidden_cause(tmp_path, cause):
 
 
 def test_api_null_data_gives_none(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "none")
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"save_as": "never"})
     assert r.status_code == 200, r.text
@@ -119,7 +113,7 @@ def test_api_null_data_gives_none(tmp_path):
 
 
 def test_saved_extension_predicts_and_reprofiles(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "traction")
     r = client.post(f"/v1/models/{model_id}/diagnose",
                     json={"causes": ["traction", "vehicle_load"], "save_as": "with traction"})
@@ -154,7 +148,7 @@ def test_saved_extension_predicts_and_reprofiles(tmp_path):
 
 
 def test_diagnose_refuses_bad_input(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "none")
     r = client.post(f"/v1/models/{model_id}/diagnose", json={"causes": ["sunspots"]})
     assert r.status_code == 422 and r.json()["errors"][0]["field"] == "causes[0]"
@@ -172,7 +166,7 @@ def test_diagnose_refuses_bad_input(tmp_path):
 
 
 def test_report_html_has_the_figures(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "traction")
     r = client.get(f"/v1/models/{model_id}/diagnose/report",
                    params={"filter": json.dumps({"bogie_type": ["motor", "trailer"]})})
@@ -190,7 +184,7 @@ def test_saved_misalignment_model_carries_the_instrument_correction(tmp_path):
     # predicts exactly as the calibrated one and carries MP-2's correction relative to MP-1
     # (unit A's instrument, the calibration's); the rigid alignment absorbs part of the
     # offset through its lateral shift and rotation, hence the wide tolerance.
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "profile_misalignment")
     r = client.post(f"/v1/models/{model_id}/diagnose",
                     json={"causes": ["profile_misalignment", "traction"], "save_as": "fixed"})

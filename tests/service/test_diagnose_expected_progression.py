@@ -4,14 +4,15 @@ the route expects (``statistics.discrepancy_progression``) instead of linearly."
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_diagnose_api import _client, _load  # noqa: E402
+from test_diagnose_api import _load  # noqa: E402
+
+from tests.service.conftest import sqlite_client, wait_for_job
 
 MILEAGES = [1_000.0, 10_000.0, 50_000.0, 100_000.0, 200_000.0]
 
@@ -26,7 +27,7 @@ def _progression(exponent: float) -> dict:
 
 def test_a_linear_expected_progression_is_the_linear_null(tmp_path):
     # areas proportional to the mileage give g = 1 everywhere: the same diagnosis
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "traction")
     plain = client.post(f"/v1/models/{model_id}/diagnose", json={"seed": 1}).json()
     r = client.post(f"/v1/models/{model_id}/diagnose",
@@ -39,7 +40,7 @@ def test_a_linear_expected_progression_is_the_linear_null(tmp_path):
 
 
 def test_bad_progressions_name_the_field(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "none")
     short = _progression(1.0)
     short["areas"][0]["areas_mm2"] = [1.0, 2.0]
@@ -62,14 +63,9 @@ def _simulate(client, bogie_type: str, axle: int) -> int:
     r = client.post("/v1/simulations", json={**SIM, "bogie_type": bogie_type, "axle": axle})
     assert r.status_code in (201, 202), r.text
     sim_id = r.json()["id"]
-    deadline = time.monotonic() + 300.0
-    while time.monotonic() < deadline:
-        sim = client.get(f"/v1/simulations/{sim_id}").json()
-        if sim["status"] in ("done", "failed", "cancelled"):
-            assert sim["status"] == "done", sim
-            return sim_id
-        time.sleep(0.2)
-    raise AssertionError(f"simulation {sim_id} did not finish")
+    sim = wait_for_job(client, f"/v1/simulations/{sim_id}", 300.0)
+    assert sim["status"] == "done", sim
+    return sim_id
 
 
 def _areas_by_hand(result: dict, mileage_km: np.ndarray) -> dict[str, np.ndarray]:
@@ -87,7 +83,7 @@ def _areas_by_hand(result: dict, mileage_km: np.ndarray) -> dict[str, np.ndarray
 def test_the_progression_derived_from_stored_simulations(tmp_path):
     """``expected_progression_simulations`` gives the same diagnosis as the progression
     computed by hand from the same simulations' profiles and sent as ``expected_progression``."""
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     model_id = _load(client, "none")
     sims = {(b, a): _simulate(client, b, a) for b in ("motor", "trailer") for a in (1, 2)}
     r = client.post(f"/v1/models/{model_id}/diagnose",

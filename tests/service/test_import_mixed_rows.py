@@ -8,14 +8,12 @@ from __future__ import annotations
 
 import io
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 from sqlalchemy import select
 
-from tests.service.conftest import fresh_postgres_database
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.service import importing
 from wearcast.service import models_db as db
@@ -51,17 +49,9 @@ def _upload(reference_dir: Path) -> bytes:
     return buffer.getvalue()
 
 
-@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
-def url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
-    if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path / 'mixed.sqlite3'}"
-        return
-    yield from fresh_postgres_database()
-
-
-def test_a_zip_mixing_miniprof_profiles_and_parameters_imports_whole(url, reference_dir,
+def test_a_zip_mixing_miniprof_profiles_and_parameters_imports_whole(backend_url, reference_dir,
                                                                       tmp_path) -> None:
-    settings = Settings(data_dir=tmp_path, database_url=url)
+    settings = Settings(data_dir=tmp_path, database_url=backend_url)
     database = Database(settings)
     database.migrate()
     try:

@@ -13,6 +13,8 @@ import os
 import subprocess
 import sys
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -121,12 +123,24 @@ def _in_background(database: Database, data: bytes, pause: Pause, **kw: Any
     return thread, out
 
 
+@contextmanager
+def _paused_import(database: Database, data: bytes, after: int) -> Iterator[dict[str, Any]]:
+    """An import of ``data`` in a background thread, held after ``after`` chunks while the
+    ``with`` body runs, then released and joined: its ``out`` ({"result": ...} or
+    {"error": ...})."""
+    pause = Pause(after=after)
+    thread, out = _in_background(database, data, pause)
+    try:
+        yield out
+    finally:
+        pause.go_on.set()
+        thread.join()
+
+
 def test_a_pending_batch_is_invisible_to_every_read(database: Database,
                                                     upload: tuple[bytes, int]) -> None:
     data, n = upload
-    pause = Pause(after=3)
-    thread, out = _in_background(database, data, pause)
-    try:
+    with _paused_import(database, data, 3) as out:
         counts = _counts(database)
         # three chunks are stored, under a pending batch, and no read sees them
         assert counts["stored"] >= 2 * CHUNK and counts["pending_batches"] == 1
@@ -148,9 +162,6 @@ def test_a_pending_batch_is_invisible_to_every_read(database: Database,
                             .execution_options(**ALL)) >= 1
             stored_wheel = s.scalar(select(db.Wheel.wheel_id).execution_options(**ALL))
             assert s.get(db.Wheel, stored_wheel) is None
-    finally:
-        pause.go_on.set()
-        thread.join()
     assert "error" not in out, out.get("error")
     assert out["result"].created == n
     counts = _counts(database)
@@ -163,9 +174,7 @@ def test_wheels_a_pending_import_registered_are_shown_once_another_import_measur
     data, _n = upload
     frame = pd.read_csv(io.BytesIO(data))
     frame["mileage_km"] += 5.0  # the same wheels measured again, 5 km on: other content
-    pause = Pause(after=2)
-    thread, out = _in_background(database, data, pause)
-    try:
+    with _paused_import(database, data, 2) as out:
         assert _counts(database)["wheels"] == 0  # registered by the pending import only
         other = _import(database, frame.to_csv(index=False).encode(), name="again.csv")
         assert other.created > 0
@@ -177,9 +186,6 @@ def test_wheels_a_pending_import_registered_are_shown_once_another_import_measur
         # every wheel the complete import measured is shown, with its vehicle
         assert measured and measured <= shown and len(shown) <= registered
         assert _counts(database)["vehicles"] >= 1
-    finally:
-        pause.go_on.set()
-        thread.join()
     assert "error" not in out, out.get("error")
     assert _counts(database)["wheels"] == registered
 
@@ -187,9 +193,7 @@ def test_wheels_a_pending_import_registered_are_shown_once_another_import_measur
 def test_a_small_write_completes_while_a_large_import_is_half_way(
         database: Database, upload: tuple[bytes, int]) -> None:
     data, n = upload
-    pause = Pause(after=2)
-    thread, out = _in_background(database, data, pause)
-    try:
+    with _paused_import(database, data, 2) as out:
         # the import has written chunks and has not finished: the write lock is free
         with database.session_factory() as s:
             route = route_store.create_route(s, RouteIn(name="written-meanwhile", classes=[
@@ -200,9 +204,6 @@ def test_a_small_write_completes_while_a_large_import_is_half_way(
         counts = _counts(database)
         assert counts["pending_batches"] == 1 and counts["stored"] > counts["visible"] == 1
         assert "result" not in out
-    finally:
-        pause.go_on.set()
-        thread.join()
     assert "error" not in out, out.get("error")
     assert out["result"].created == n
     with database.session_factory() as s:
@@ -214,9 +215,7 @@ def test_a_small_write_completes_while_a_large_import_is_half_way(
 def test_writes_that_collide_with_a_running_import_are_refused_to_retry(
         database: Database, upload: tuple[bytes, int]) -> None:
     data, n = upload
-    pause = Pause(after=2)
-    thread, out = _in_background(database, data, pause)
-    try:
+    with _paused_import(database, data, 2) as out:
         with pytest.raises(ApiError) as same:  # the same content, while it is imported
             _import(database, data, "again.csv")
         assert same.value.status == 409 and same.value.headers.get("Retry-After")
@@ -233,24 +232,16 @@ def test_writes_that_collide_with_a_running_import_are_refused_to_retry(
             with pytest.raises(ApiError) as removal:
                 admin_store.remove(s, "batches", batch_id)
         assert removal.value.status == 409 and "being imported" in removal.value.reason
-    finally:
-        pause.go_on.set()
-        thread.join()
     assert out["result"].created == n
 
 
 def test_an_import_given_up_as_abandoned_cannot_complete(
         database: Database, upload: tuple[bytes, int]) -> None:
     data, n = upload
-    pause = Pause(after=2)
-    thread, out = _in_background(database, data, pause)
-    try:
+    with _paused_import(database, data, 2) as out:
         with database.session_factory() as s:  # what the sweep does to a silent import
             batch_id = s.scalar(select(db.ImportBatch.id))
             assert pending_batches.discard_batch(s, batch_id) >= CHUNK
-    finally:
-        pause.go_on.set()
-        thread.join()
     assert isinstance(out.get("error"), ApiError) and out["error"].status == 409
     assert _counts(database) == {"visible": 0, "stored": 0, "pending_batches": 0,
                                  "batches": 0, "wheels": 0, "vehicles": 0}

@@ -4,7 +4,6 @@ longer starts from a new S1002 every time). Real MiniProf wheels from the refere
 from __future__ import annotations
 
 import io
-import time
 import zipfile
 from pathlib import Path
 
@@ -12,6 +11,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import wait_for_job
 from wearcast.physics import curving
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -95,12 +95,7 @@ def test_a_simulation_starts_from_the_measured_wheel(setup: dict) -> None:
         "steps": {"mode": "adaptive", "count": 1}, "measurement_id": mid})
     assert r.status_code == 202, r.text
     sim_id = r.json()["id"]
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        body = client.get(f"/v1/simulations/{sim_id}").json()
-        if body["status"] in ("done", "failed"):
-            break
-        time.sleep(0.1)
+    body = wait_for_job(client, f"/v1/simulations/{sim_id}", 120.0)
     assert body["status"] == "done", body.get("error")
     start = np.array(body["result"]["profiles_mm"][0])
     y = np.array(body["result"]["y_mm"])

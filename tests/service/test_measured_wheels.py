@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.service.conftest import import_miniprof
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
@@ -197,9 +198,7 @@ def test_own_baseline_declared_in_the_manifest_and_datum_entries_reported(
     name = "whl_left_iter288.whl"
     manifest = ("file,wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,reference_profile\n"
                 f"{name},W1,V1,motor,1,left,0,own\n")
-    response = client.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", manifest.encode())})
+    response = import_miniprof(client, reference_dir, name, manifest)
     assert response.status_code == 200, response.text
     datum = [w for w in response.json()["warnings"] if w["code"] == "datum_found"]
     assert datum and "Xoffset/Yoffset are 0" in datum[0]["message"]
@@ -207,8 +206,6 @@ def test_own_baseline_declared_in_the_manifest_and_datum_entries_reported(
     item = client.get("/v1/measurements").json()["items"][0]
     assert item["reference_profile"] == f"own:{item['id']}" and item["reference_fits"]
     assert abs(item["flange_area_mm2"]) < 1.0 and abs(item["tread_area_mm2"]) < 1.0
-    bad = client.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", manifest.replace(",own", ",P8").replace("W1", "W2")
-                     .encode())})
+    bad = import_miniprof(client, reference_dir, name,
+                          manifest.replace(",own", ",P8").replace("W1", "W2"))
     assert bad.status_code == 422 and "reference_profile" in bad.text

@@ -11,17 +11,14 @@ on a null and a hidden friction level in the slow tests).
 
 from __future__ import annotations
 
-import time
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.vocabulary import CurveClass
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 from wearcast.statistics.generators.scenarios import cached_vehicle_simulator
 
 ROUTE = {"name": "curvy", "classes": [
@@ -41,11 +38,6 @@ MODEL = {"kind": "physics", "name": "loop", "vehicle": "metro_b", "route_id": "c
 def _simulate():
     return cached_vehicle_simulator(LOOP_ROUTE, "metro_b", law="usfd", mileage_km=RUN_KM,
                                     depth_per_step_mm=1.0)
-
-
-def _client(tmp_path: Path) -> TestClient:
-    return TestClient(create_app(Settings(data_dir=tmp_path,
-                                          database_url=f"sqlite:///{tmp_path / 'w.db'}")))
 
 
 def _load(client: TestClient, hidden: dict | None = None, *, vehicles: int = 4,
@@ -79,7 +71,7 @@ def _field(r) -> str:
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    client = _client(tmp_path_factory.mktemp("physics"))
+    client = sqlite_client(tmp_path_factory.mktemp("physics"))
     n = _load(client)
     r = client.post("/v1/models", json=MODEL)
     assert r.status_code == 201, r.text
@@ -213,18 +205,13 @@ def test_a_bad_physics_request_is_a_422_naming_its_field(built) -> None:
 
 
 def test_a_physics_build_answers_202_with_its_job_when_asked_not_to_wait(tmp_path) -> None:
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     _load(client, vehicles=2)
     r = client.post("/v1/models", json=MODEL, headers={"Prefer": "respond-async"})
     assert r.status_code == 202, r.text
     job = r.json()
     assert job["kind"] == "physics_model" and r.headers["location"] == f"/v1/jobs/{job['id']}"
-    deadline = time.monotonic() + 120.0
-    while time.monotonic() < deadline:
-        job = client.get(f"/v1/jobs/{job['id']}").json()
-        if job["status"] not in ("queued", "running"):
-            break
-        time.sleep(0.2)
+    job = wait_for_job(client, f"/v1/jobs/{job['id']}", 120.0)
     assert job["status"] == "done", job
     model = client.get(f"/v1/models/{job['result']['model_id']}").json()
     assert model["kind"] == "physics" and model["n_calibration_measurements"] == 80
@@ -239,7 +226,7 @@ def test_a_physics_build_answers_202_with_its_job_when_asked_not_to_wait(tmp_pat
 def test_the_whole_catalogue_names_a_hidden_cause_or_none(tmp_path, hidden, expected) -> None:
     # about 12 loop runs of ~5 s each and one chain of rail steps: the whole catalogue (seven
     # causes: the route has no segments, so not the curve classes) on loop data
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     _load(client, hidden, vehicles=5)
     r = client.post("/v1/models", json=MODEL)
     assert r.status_code == 201, r.text
@@ -279,7 +266,7 @@ def test_a_scale_beyond_the_first_run_continues_the_run(tmp_path) -> None:
     # wheels wearing 3x the loop's rate: the first run (twice the furthest mileage) reaches a
     # scale of 2.5 only, so the build continues it and fits 3 (measured when written: one
     # continuation, scale within 3 %)
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     truth = cached_vehicle_simulator(LOOP_ROUTE, "metro_b", law="usfd", mileage_km=6000.0,
                                      depth_per_step_mm=1.0)({})
     _load(client, vehicles=3, truth=truth, scale=3.0)

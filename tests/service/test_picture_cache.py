@@ -11,12 +11,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.service.conftest import calibrate_on_metro
 from wearcast.service import picture_cache
 from wearcast.service.app import create_app
 from wearcast.service.picture_cache import PictureJob, RenderedCache, picture_key
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
-from wearcast.statistics.generators import twin_routes, twin_wear_table
+from wearcast.statistics.generators import twin_routes
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -38,20 +39,8 @@ def fleet() -> pd.DataFrame:
 @pytest.fixture
 def setup(tmp_path: Path, fleet: pd.DataFrame) -> dict:
     client = TestClient(create_app(Settings(data_dir=tmp_path)))
-    r = client.post("/v1/measurements/import", files={"file": (
-        "fleet.csv", fleet.to_csv(index=False).encode(), "text/csv")})
-    assert r.status_code == 200, r.text
-    route = twin_routes.metro_route().to_json()
-    assert client.post("/v1/routes", json=route).status_code == 201
-    table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
-        "text/csv")}).json()
-    model = client.post("/v1/models", json={
-        "name": "metro", "measure": "tau_max", "running_mode": "lead",
-        "wear_table_id": table["id"],
-        "calibration": {"route_id": "metro", "filter": {"route_id": "metro"}}})
-    assert model.status_code == 201, model.text
-    return {"client": client, "model_id": model.json()["id"]}
+    made = calibrate_on_metro(client, fleet, "metro", {"route_id": "metro"})
+    return {"client": client, "model_id": made["model"]["id"]}
 
 
 def test_a_picture_answers_304_to_its_etag(setup: dict) -> None:

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.service.conftest import import_miniprof
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 from wearcast.statistics.maintenance.limits import FleetLimits
@@ -151,22 +152,16 @@ def test_miniprof_diameter_from_the_file_header(reference_dir: Path, tmp_path: P
     name = "left-wheel-v1-pre-dry.whl"
     manifest = ("file,wheel_id,vehicle_id,bogie_type,axle,side,mileage_km,diameter_mm\n"
                 f"{name},W1,V1,trailer,1,left,1000,\n")
-    r = c.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", manifest.encode())})
+    r = import_miniprof(c, reference_dir, name, manifest)
     assert r.status_code == 200, r.text
     [item] = c.get("/v1/measurements").json()["items"]
     assert item["diameter_mm"] == pytest.approx(719.1924)  # DiameterTaperline= in the file
     manifest = manifest.replace("1000,", "2000,712.5")
-    r = c.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", manifest.encode())})
+    r = import_miniprof(c, reference_dir, name, manifest)
     items = c.get("/v1/measurements", params={"mileage_km": 2000}).json()["items"]
     assert items[0]["diameter_mm"] == 712.5  # the manifest's value wins
     bad = manifest.replace("712.5", "-3")
-    r = c.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", bad.encode())})
+    r = import_miniprof(c, reference_dir, name, bad)
     assert r.status_code == 422 and "diameter_mm" in r.text
 
 

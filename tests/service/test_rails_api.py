@@ -4,21 +4,14 @@ the nominal one in curve-radius tables and simulations (issue 10 item 5)."""
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import sqlite_client, wait_for_job
 from wearcast.physics.profiles.rails import rail_profile
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
-
-
-def _client(tmp_path: Path) -> TestClient:
-    return TestClient(create_app(Settings(data_dir=tmp_path,
-                                          database_url=f"sqlite:///{tmp_path / 'w.db'}")))
 
 
 def _import(client: TestClient, name: str, data: bytes, **form: str):
@@ -40,7 +33,7 @@ def test_synthetic_worn_60e1_file_gives_its_wear(tmp_path: Path) -> None:
     z = np.minimum(z, -1.2)
     keep = z > -30.0
     x_file, y_file = -y[keep], -z[keep]  # gauge side at +X, Y down
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     r = _import(client, "worn.ban", _ban(x_file, y_file), gauge_side="positive_x",
                 inclination="1/40", reference="UIC60")
     assert r.status_code == 200, r.text
@@ -73,7 +66,7 @@ def test_header_wear_and_gauge_point_depth_are_compared(tmp_path: Path) -> None:
     z = np.minimum(z, -0.5)
     keep = z > -30.0
     data = _ban(y[keep], z[keep], extra_header="W1=0.52\nW2=1.5\nRailGaugePoint=16\n")
-    body = _import(_client(tmp_path), "w.ban", data, gauge_side="negative_x").json()
+    body = _import(sqlite_client(tmp_path), "w.ban", data, gauge_side="negative_x").json()
     rail = body["created"][0]
     assert rail["instrument_wear_mm"] == {"W1": 0.52, "W2": 1.5}
     text = " ".join(body["warnings"])
@@ -82,7 +75,7 @@ def test_header_wear_and_gauge_point_depth_are_compared(tmp_path: Path) -> None:
 
 
 def test_bad_rail_imports_are_4xx_naming_the_field(tmp_path: Path) -> None:
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     y, z = rail_profile("60E1", step_mm=0.5, inclination=0.0)
     good = _ban(y, z)
     r = _import(client, "empty.ban", b"")
@@ -104,7 +97,7 @@ def test_bad_rail_imports_are_4xx_naming_the_field(tmp_path: Path) -> None:
 
 def test_real_rail_files_import_with_warnings(tmp_path: Path, reference_dir: Path) -> None:
     folder = reference_dir / "miniprof"
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     low = _import(client, "avg_low2.ban", (folder / "avg_low2.ban").read_bytes()).json()
     (rail,) = low["created"]
     assert rail["kind"] == "rail" and rail["n_points"] == 526
@@ -147,7 +140,7 @@ def test_real_rail_files_import_with_warnings(tmp_path: Path, reference_dir: Pat
 
 def test_measured_rail_in_a_wear_table_and_a_simulation(tmp_path: Path,
                                                         reference_dir: Path) -> None:
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     data = (reference_dir / "miniprof" / "avg_low2.ban").read_bytes()
     rail_id = _import(client, "avg_low2.ban", data).json()["created"][0]["id"]
     request = {"vehicle": "manchester", "radii": [{"radius_m": 1000}]}
@@ -181,12 +174,7 @@ def test_measured_rail_in_a_wear_table_and_a_simulation(tmp_path: Path,
     for label, extra in (("nominal", {}), ("measured", {"rail_id": rail_id})):
         r = client.post("/v1/simulations", json={**tiny, **extra})
         assert r.status_code == 202, r.text
-        deadline = time.monotonic() + 120
-        while True:
-            body = client.get(f"/v1/simulations/{r.json()['id']}").json()
-            if body["status"] in ("done", "failed") or time.monotonic() > deadline:
-                break
-            time.sleep(0.1)
+        body = wait_for_job(client, f"/v1/simulations/{r.json()['id']}", 120.0)
         assert body["status"] == "done", body
         results[label] = body
     assert results["measured"]["spec"]["resolved_rail"]["rail_id"] == rail_id

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
+from tests.service.conftest import calibrate_on_metro
 from wearcast.service.app import create_app
 from wearcast.service.readers.miniprof import parse_miniprof, to_wheel_frame
 from wearcast.service.settings import Settings
 from wearcast.statistics.generators import fleet_twin as ft
-from wearcast.statistics.generators import twin_routes, twin_wear_table
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -31,18 +31,7 @@ def setup(tmp_path_factory: pytest.TempPathFactory) -> dict:
         pytest.skip(f"reference data not found at {REFERENCE_DIR}")
     client = TestClient(create_app(Settings(data_dir=tmp_path_factory.mktemp("reprof"))))
     fleet = ft.generate_fleet(ft.metro_calibration_config())
-    assert client.post("/v1/measurements/import", files={"file": (
-        "fleet.csv", fleet.profiles.to_csv(index=False).encode(), "text/csv")}).status_code == 200
-    route = twin_routes.metro_route().to_json()
-    assert client.post("/v1/routes", json=route).status_code == 201
-    table = client.post("/v1/wear-tables", files={"file": (
-        "t.csv", twin_wear_table.synthetic_wear_table().to_csv(index=False).encode(),
-        "text/csv")}).json()
-    model = client.post("/v1/models", json={
-        "name": "metro", "measure": "tau_max", "running_mode": "lead",
-        "wear_table_id": table["id"],
-        "calibration": {"route_id": "metro", "filter": {"route_id": "metro"}}})
-    assert model.status_code == 201, model.text
+    model = calibrate_on_metro(client, fleet.profiles, "metro", {"route_id": "metro"})["model"]
     buffer = io.BytesIO()
     rows = ["file,wheel_id,vehicle_id,bogie_type,axle,side,mileage_km"]
     with zipfile.ZipFile(buffer, "w") as archive:
@@ -53,7 +42,7 @@ def setup(tmp_path_factory: pytest.TempPathFactory) -> dict:
     imported = client.post("/v1/measurements/import",
                            files={"file": ("wheels.zip", buffer.getvalue())})
     assert imported.status_code == 200, imported.text
-    return {"client": client, "model_id": model.json()["id"]}
+    return {"client": client, "model_id": model["id"]}
 
 
 def _reprofiling(setup: dict, **body) -> dict:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.service.conftest import import_miniprof
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 
@@ -59,9 +60,7 @@ def test_miniprof_without_its_manifest_row_is_refused(reference_dir: Path,
     client = TestClient(create_app(Settings(data_dir=tmp_path)))
     name = "left-wheel-v1-pre-dry.whl"
     manifest = MANIFEST + "other.whl,W9,V1,motor,1,left,0,x\n"
-    response = client.post("/v1/measurements/import", files={
-        "file": (name, (reference_dir / "miniprof" / name).read_bytes()),
-        "manifest": ("manifest.csv", manifest.encode())})
+    response = import_miniprof(client, reference_dir, name, manifest)
     assert response.status_code == 422
     assert response.json()["errors"][0]["file"] == name
     assert client.get("/v1/measurements").json()["total"] == 0

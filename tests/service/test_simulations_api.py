@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import sqlite_client, sqlite_settings, wait_for_job
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
 from wearcast.service.job_store import RESTART_REASON
-from wearcast.service.settings import Settings
 from wearcast.service.simulation_schemas import SimulationIn
 from wearcast.service.simulation_store import create_simulation
 
@@ -24,27 +23,12 @@ TINY = {"vehicle": "metro_b", "law": "archard_kth", "application": "global",
         "steps": {"mode": "adaptive", "count": 2}}
 
 
-def _settings(tmp_path: Path) -> Settings:
-    return Settings(data_dir=tmp_path, database_url=f"sqlite:///{tmp_path / 'w.db'}")
-
-
 def _wait(client: TestClient, sim_id: int, timeout_s: float = 60.0) -> dict:
-    deadline = time.monotonic() + timeout_s
-    seen = []
-    while time.monotonic() < deadline:
-        r = client.get(f"/v1/simulations/{sim_id}")
-        assert r.status_code == 200, r.text
-        body = r.json()
-        seen.append(body["progress"])
-        if body["status"] in ("done", "failed"):
-            body["_seen_progress"] = seen
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"simulation {sim_id} did not finish in {timeout_s} s")
+    return wait_for_job(client, f"/v1/simulations/{sim_id}", timeout_s)
 
 
 def test_tiny_simulation_runs_in_the_background_and_reports_its_result(tmp_path: Path) -> None:
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/simulations", json={**TINY, "name": "tiny"})
     assert r.status_code == 202, r.text
     queued = r.json()
@@ -69,7 +53,7 @@ def test_tiny_simulation_runs_in_the_background_and_reports_its_result(tmp_path:
 
 
 def test_simulation_over_a_stored_route(tmp_path: Path) -> None:
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     metro = next(r for r in json.loads((EXAMPLE / "routes.json").read_text())
                  if r["name"] == "metro")
     assert client.post("/v1/routes", json=metro).status_code == 201
@@ -86,7 +70,7 @@ def test_simulation_over_a_stored_route(tmp_path: Path) -> None:
 def test_kik_piotrowski_patch_width_is_passed_to_the_loop(tmp_path: Path) -> None:
     # A 200 m curve puts the leading outer wheel on the conformal flange root, where the
     # Kik-Piotrowski width spreads the same wear wider: a lower peak over the same mileage.
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     sharp = {**TINY, "classes": [{"radius_m": 200, "cant_mm": 100, "speed_kmh": 50,
                                   "direction": "left", "share": 1.0}],
              "steps": {"mode": "fixed", "count": 1, "step_km": 50}}
@@ -115,7 +99,7 @@ def test_kik_piotrowski_patch_width_is_passed_to_the_loop(tmp_path: Path) -> Non
 ])
 def test_bad_simulation_requests_are_refused_before_queuing(tmp_path: Path, change: dict,
                                                             status: int, field: str) -> None:
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/simulations", json={**TINY, **change})
     assert r.status_code == status, r.text
     assert r.json()["errors"][0]["field"] == field
@@ -124,7 +108,7 @@ def test_bad_simulation_requests_are_refused_before_queuing(tmp_path: Path, chan
 
 def test_a_restart_queues_an_interrupted_job_again_and_fails_it_after_a_second_stop(
         tmp_path: Path) -> None:
-    settings = _settings(tmp_path)
+    settings = sqlite_settings(tmp_path)
     app = create_app(settings)
     with app.state.database.session_factory() as session:
         # interrupted once: runs again from the start; interrupted twice: failed with a reason
@@ -143,7 +127,7 @@ def test_a_restart_queues_an_interrupted_job_again_and_fails_it_after_a_second_s
 def test_a_simulation_that_fails_reports_the_error(tmp_path: Path) -> None:
     # valid input the physics cannot solve (20 m at 150 km/h): the job fails with the
     # solver's message instead of hanging or killing the worker
-    client = TestClient(create_app(_settings(tmp_path)))
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/simulations", json={
         **TINY, "classes": [{"radius_m": 20, "speed_kmh": 150, "direction": "left"}]})
     assert r.status_code == 202, r.text

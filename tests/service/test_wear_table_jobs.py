@@ -3,35 +3,20 @@ table builds run as jobs with recovery, cancel, timeout and quota like every job
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
-
 from fastapi.testclient import TestClient
 
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
+from tests.service.conftest import sqlite_client, wait_for_job
 
 BODY = {"name": "metro radii", "vehicle": "metro_b",
         "radii": [{"radius_m": 300, "cant_mm": 100}, {"radius_m": 1000, "cant_mm": 40}]}
 
 
-def _client(tmp_path: Path) -> TestClient:
-    return TestClient(create_app(Settings(data_dir=tmp_path,
-                                          database_url=f"sqlite:///{tmp_path / 'w.db'}")))
-
-
 def _wait(client: TestClient, job_id: int, timeout_s: float = 120.0) -> dict:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        body = client.get(f"/v1/jobs/{job_id}").json()
-        if body["status"] in ("done", "failed", "cancelled"):
-            return body
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id} did not end in {timeout_s} s")
+    return wait_for_job(client, f"/v1/jobs/{job_id}", timeout_s)
 
 
 def test_a_table_build_job_stores_the_same_table_as_the_direct_build(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     r = client.post("/v1/wear-tables/jobs", json=BODY)
     assert r.status_code == 202, r.text
     queued = r.json()
@@ -47,7 +32,7 @@ def test_a_table_build_job_stores_the_same_table_as_the_direct_build(tmp_path):
 
 
 def test_bad_table_jobs_are_refused_before_queuing(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     for change, field in (({"vehicle": "tram_x"}, "vehicle"),
                           ({"radii": None, "route_id": "nowhere"}, "route_id"),
                           ({"measurement_id": 99}, "measurement_id"),
@@ -59,7 +44,7 @@ def test_bad_table_jobs_are_refused_before_queuing(tmp_path):
 
 
 def test_a_table_job_can_be_cancelled(tmp_path):
-    client = _client(tmp_path)
+    client = sqlite_client(tmp_path)
     many = {**BODY, "radii": [{"radius_m": r, "cant_mm": 50} for r in range(200, 3000, 50)]}
     job = client.post("/v1/wear-tables/jobs", json=many).json()
     r = client.post(f"/v1/jobs/{job['id']}/cancel")

@@ -18,10 +18,9 @@ import pandas as pd
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.service.conftest import sqlite_client
 from wearcast.physics.contact_candidates_kernel import N_SLOTS
 from wearcast.service import wear_table_store
-from wearcast.service.app import create_app
-from wearcast.service.settings import Settings
 from wearcast.statistics.wear_tables import validate_wear_table
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "service" / "example_fleet"
@@ -33,8 +32,7 @@ def _profiles_csv() -> bytes:
 
 
 def _client(tmp_path: Path) -> TestClient:
-    client = TestClient(create_app(Settings(data_dir=tmp_path,
-                                            database_url=f"sqlite:///{tmp_path / 'w.db'}")))
+    client = sqlite_client(tmp_path)
     for route in json.loads((EXAMPLE / "routes.json").read_text()):
         assert client.post("/v1/routes", json=route).status_code == 201
     return client

@@ -19,6 +19,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import max_t_null_p_values, nested_layout
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.extension import apply_extension
 from wearcast.statistics.generators import fleet_twin_alt as fa
@@ -115,25 +116,15 @@ def test_resampled_null_keeps_its_size_under_clustering():
     # heavy-tailed measurement noise, and a vehicle-level covariate without effect; the
     # resampled max-T test (nuisance model, folds by vehicle) must reject at alpha = 5 % in
     # about 5 % of 100 simulated data sets (binomial 2-sigma bound ~ 10 %)
-    from wearcast.statistics import finder_scoring as fs
-
     rng = np.random.default_rng(1)
     n_veh, per_veh, per_wheel = 9, 8, 4
-    vehicle = np.repeat(np.arange(n_veh), per_veh * per_wheel)
-    wheel = np.repeat(np.arange(n_veh * per_veh), per_wheel)
-    n = vehicle.size
+    vehicle, wheel = nested_layout(n_veh, per_veh, per_wheel)
     level = (vehicle % 2 == 0).astype(float)
-    folds = vehicle % 5
-    null_design = np.ones((n, 1))
-    alt_design = np.column_stack([np.ones(n), level])
-    rejections = 0
-    for _ in range(100):
-        r = (np.repeat(rng.normal(0, 0.2, n_veh), per_veh * per_wheel)
-             + np.repeat(rng.normal(0, 0.1, n_veh * per_veh), per_wheel)
-             + 0.1 * rng.standard_t(3, n))[:, None]
-        obs = fs.bootstrap_gains(null_design, [alt_design], r, folds)[0]
-        nm = fs.NuisanceModel.fit(r - r.mean(), np.ones_like(r), vehicle, wheel)
-        null = fs.bootstrap_gains(null_design, [alt_design], nm.draws(99, rng), folds)
-        _, adj = fs.min_p(obs, null)
-        rejections += adj[0] < 0.05
-    assert rejections <= 10
+
+    def residuals() -> np.ndarray:
+        return (np.repeat(rng.normal(0, 0.2, n_veh), per_veh * per_wheel)
+                + np.repeat(rng.normal(0, 0.1, n_veh * per_veh), per_wheel)
+                + 0.1 * rng.standard_t(3, vehicle.size))[:, None]
+
+    p_values = max_t_null_p_values(level, vehicle, wheel, residuals, 100, rng)
+    assert np.sum(p_values < 0.05) <= 10

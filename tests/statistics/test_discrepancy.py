@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import max_t_null_p_values, nested_layout
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import hybrid, hybrid_prediction
 from wearcast.statistics.discrepancy_report import diagnosis_figures, report_html
@@ -58,25 +59,17 @@ def test_resampled_null_keeps_its_size_under_noise_that_shrinks_with_mileage():
     # rejects in about 5 % of 200 data sets (binomial 2-sigma bound ~ 8 %)
     rng = np.random.default_rng(2)
     n_veh, per_veh, per_wheel = 9, 8, 6
-    vehicle = np.repeat(np.arange(n_veh), per_veh * per_wheel)
-    wheel = np.repeat(np.arange(n_veh * per_veh), per_wheel)
+    vehicle, wheel = nested_layout(n_veh, per_veh, per_wheel)
     t = np.tile(np.arange(1, per_wheel + 1), n_veh * per_veh).astype(float)
     x = np.log(t) - np.log(t).reshape(-1, per_wheel).mean(axis=1).repeat(per_wheel)
-    n = vehicle.size
-    folds = vehicle % 5
-    null_design = np.ones((n, 1))
-    alt_design = np.column_stack([np.ones(n), x])
-    rejections = 0
-    for _ in range(200):
-        r = (np.repeat(rng.normal(0, 0.1, n_veh), per_veh * per_wheel)
-             + np.repeat(rng.normal(0, 0.1, n_veh * per_veh), per_wheel)
-             + 0.3 / t * rng.standard_normal(n))[:, None]
-        obs = fs.bootstrap_gains(null_design, [alt_design], r, folds)[0]
-        nm = fs.NuisanceModel.fit(r - r.mean(), np.ones_like(r), vehicle, wheel)
-        null = fs.bootstrap_gains(null_design, [alt_design], nm.draws(99, rng), folds)
-        _, adj = fs.min_p(obs, null)
-        rejections += adj[0] <= 0.05
-    assert rejections <= 16
+
+    def residuals() -> np.ndarray:
+        return (np.repeat(rng.normal(0, 0.1, n_veh), per_veh * per_wheel)
+                + np.repeat(rng.normal(0, 0.1, n_veh * per_veh), per_wheel)
+                + 0.3 / t * rng.standard_normal(vehicle.size))[:, None]
+
+    p_values = max_t_null_p_values(x, vehicle, wheel, residuals, 200, rng)
+    assert np.sum(p_values <= 0.05) <= 16
 
 
 def test_wild_draws_keep_every_residual_at_its_row():

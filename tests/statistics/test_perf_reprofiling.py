@@ -8,15 +8,14 @@ crossing to within max(0.1 % of the mileage, 50 km) (``MILEAGE_RTOL``/``MILEAGE_
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
+from tests.statistics import _reprofiling_helpers as fixtures
 from wearcast.statistics import hybrid_prediction, hybrid_profiles, reprofiling
 from wearcast.statistics.hybrid_prediction import predict, region_rates
 from wearcast.statistics.hybrid_profiles import parameters_at_areas, profile_at_areas
@@ -41,10 +40,6 @@ from wearcast.statistics.wear_tables import (
 )
 
 KW = {"bogie_type": "motor", "axle": 1}
-_spec = importlib.util.spec_from_file_location(
-    "_reprofiling_helpers", Path(__file__).with_name("_reprofiling_helpers.py"))
-fixtures = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(fixtures)
 Y, SPLIT, ROUTE, TANGENT = fixtures.Y, fixtures.SPLIT, fixtures.ROUTE, fixtures.TANGENT
 _table, _model = fixtures.table, fixtures.model
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import wearcast.physics.profiles.parameters as phys
+from tests.conftest import flange_face_worn_s1002
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.cleaning import clean_profile
 from wearcast.statistics.profile_parameters import (
@@ -24,14 +25,6 @@ from wearcast.statistics.profile_parameters import (
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM
 
 
-def _flange_face_worn(y, lateral_mm):
-    """S1002 with the flange face (field-side flank, -55 < y < -30) moved towards the
-    flange by ``lateral_mm``; tip, flange back and tread untouched."""
-    z = s1002_height_mm(y)
-    flank = (y > -55.0) & (y < -30.0)
-    return np.where(flank, np.minimum(z, s1002_height_mm(y + lateral_mm)), z)
-
-
 def test_parameters_from_zero_wear_curve_are_s1002():
     p = parameters_from_wear_curve(DEFAULT_GRID_Y_MM, np.zeros(DEFAULT_GRID_Y_MM.size))
     assert (p.sd_mm, p.sh_mm, p.qr_mm) == pytest.approx((32.5, 28.0, 10.8), abs=0.01)
@@ -39,7 +32,7 @@ def test_parameters_from_zero_wear_curve_are_s1002():
 
 def test_parameters_from_wear_curve_match_the_worn_profile():
     grid = DEFAULT_GRID_Y_MM
-    wear = s1002_height_mm(grid) - _flange_face_worn(grid, 1.5)
+    wear = s1002_height_mm(grid) - flange_face_worn_s1002(grid, 1.5)
     p = parameters_from_wear_curve(grid, wear)
     assert p.sd_mm == pytest.approx(31.0, abs=0.01)
 

@@ -1,18 +1,13 @@
 import dataclasses
-import importlib.util
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.statistics import _reprofiling_helpers as fixtures
 from wearcast.statistics.profile_parameters import WheelLimits
 from wearcast.statistics.reprofiling import reprofiling_mileage
 
-_spec = importlib.util.spec_from_file_location(
-    "_reprofiling_helpers", Path(__file__).with_name("_reprofiling_helpers.py"))
-fixtures = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(fixtures)
 Y, SPLIT, ROUTE, TANGENT = fixtures.Y, fixtures.SPLIT, fixtures.ROUTE, fixtures.TANGENT
 _table, _model = fixtures.table, fixtures.model
 
