@@ -40,7 +40,7 @@ def sqlite_client(tmp_path: Path) -> TestClient:
     return TestClient(create_app(sqlite_settings(tmp_path)))
 
 
-def wait_for_job(client: TestClient, url: str, timeout_s: float = 60.0,
+def wait_for_job(client: httpx.Client, url: str, timeout_s: float = 60.0,
                  until: tuple[str, ...] = ("done", "failed", "cancelled")) -> dict[str, Any]:
     """GET ``url`` (a job, simulation or fit) every 50 ms until its ``status`` is in
     ``until``: the last answer, with ``_seen_progress`` the ``progress`` of every answer

@@ -21,6 +21,7 @@ with warnings.catch_warnings():
     warnings.simplefilter("ignore")
     from fastapi.testclient import TestClient
 
+from tests.service.conftest import wait_for_job
 from wearcast.service import job_store
 from wearcast.service import models_db as db
 from wearcast.service.app import create_app
@@ -36,31 +37,21 @@ MEDIUM = {**TINY, "steps": {"mode": "fixed", "count": 5, "step_km": 2000}}
 TEST_KEY = os.environ["WEARCAST_API_KEY"]
 
 
-def _wait(client: TestClient | httpx.Client, job_id: int, until: tuple[str, ...] = (
-        "done", "failed", "cancelled"), timeout_s: float = 120.0) -> dict:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        body = client.get(f"/v1/jobs/{job_id}").json()
-        if body["status"] in until:
-            return body
-        time.sleep(0.1)
-    raise AssertionError(f"job {job_id} not in {until} after {timeout_s} s: {body}")
-
-
 def test_cancel_quota_and_a_long_job_does_not_hold_back_the_next(backend_url: str,
                                                                  tmp_path: Path) -> None:
     client = TestClient(create_app(Settings(data_dir=tmp_path, database_url=backend_url,
                                             job_workers=2, job_quota_per_key=2)))
     long_job = client.post("/v1/simulations", json=LONGER).json()["id"]
-    _wait(client, long_job, ("running",))
+    wait_for_job(client, f"/v1/jobs/{long_job}", until=("running",), timeout_s=120)
     short = client.post("/v1/simulations", json=TINY).json()["id"]
     over = client.post("/v1/simulations", json=TINY)  # two jobs of this key are active
     assert over.status_code == 429 and "job_quota_per_key" in over.text
-    assert _wait(client, short)["status"] == "done"  # ran beside the long one
+    # ran beside the long one
+    assert wait_for_job(client, f"/v1/jobs/{short}", timeout_s=120)["status"] == "done"
     assert client.get(f"/v1/jobs/{long_job}").json()["status"] == "running"
     cancelled = client.post(f"/v1/jobs/{long_job}/cancel")
     assert cancelled.status_code == 200 and cancelled.json()["cancel_requested"] is True
-    body = _wait(client, long_job)
+    body = wait_for_job(client, f"/v1/jobs/{long_job}", timeout_s=120)
     assert body["status"] == "cancelled" and body["progress"] < 1.0
     assert client.post(f"/v1/jobs/{long_job}/cancel").status_code == 409
     jobs = client.get("/v1/jobs").json()
@@ -71,7 +62,7 @@ def test_cancel_quota_and_a_long_job_does_not_hold_back_the_next(backend_url: st
 def test_a_job_past_its_time_limit_fails_saying_so(tmp_path: Path) -> None:
     client = TestClient(create_app(Settings(data_dir=tmp_path, job_timeout_s=0.001)))
     job = client.post("/v1/simulations", json=TINY).json()["id"]
-    body = _wait(client, job)
+    body = wait_for_job(client, f"/v1/jobs/{job}", timeout_s=120)
     assert body["status"] == "failed" and "job_timeout_s" in body["error"]
 
 
@@ -121,14 +112,14 @@ def test_a_server_killed_during_a_job_resumes_it_after_restart(tmp_path: Path) -
     server, client = _serve(port, env)
     try:
         job = client.post("/v1/simulations", json=MEDIUM).json()["id"]
-        _wait(client, job, ("running",))
+        wait_for_job(client, f"/v1/jobs/{job}", until=("running",), timeout_s=120)
         server.send_signal(signal.SIGKILL)
         server.wait(timeout=30)
         server, client = _serve(port, env)
         body = client.get(f"/v1/jobs/{job}").json()
         # recovered at the start: queued again, already running, or (the loop is fast) done
         assert body["status"] in ("queued", "running", "done") and body["attempts"] >= 1
-        body = _wait(client, job, timeout_s=600)
+        body = wait_for_job(client, f"/v1/jobs/{job}", timeout_s=600)
         assert body["status"] == "done", body
         assert body["attempts"] == 2  # interrupted once, run again from the start
     finally:
@@ -151,7 +142,7 @@ def test_a_job_runs_through_the_queue_in_a_separate_worker_process(tmp_path: Pat
     worker = _start(["worker", "--processes", "1", "--threads", "1"], env)
     try:
         job = client.post("/v1/simulations", json=TINY).json()["id"]
-        body = _wait(client, job, timeout_s=180)
+        body = wait_for_job(client, f"/v1/jobs/{job}", timeout_s=180)
         assert body["status"] == "done", body
         # the API process runs no job thread in queue mode: the worker process ran it
         assert not app.state.jobs._threads or all(
