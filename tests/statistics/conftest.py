@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics.findings import FinderResult
 
 
 def nested_layout(n_vehicles: int, wheels_per_vehicle: int, measurements_per_wheel: int
@@ -38,3 +39,9 @@ def max_t_null_p_values(covariate: NDArray[np.float64], vehicle: NDArray[np.int_
         _, adj = fs.min_p(obs, null)
         p_values.append(adj[0])
     return np.array(p_values)
+
+
+def findings_summary(d: FinderResult, digits: int = 3) -> list[tuple[str, float, float]]:
+    """Each finding's cause, relative gain and p-value: the message of a verdict assertion."""
+    return [(f.cause, round(f.gain.relative, digits), f.evidence["p_value"])
+            for f in d.findings]

@@ -17,6 +17,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import causes as cz
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.discrepancy_data import build_data
@@ -68,16 +69,14 @@ def test_campaign_has_the_nuisance_it_promises():
 @pytest.mark.parametrize("cause", ["traction", "seasonal_friction", "wear_measure"])
 def test_depot_hidden_effect_is_named(cause):
     d = diagnosed(cause)
-    assert d.verdict == cause, [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"])
-                                for f in d.findings]
+    assert d.verdict == cause, findings_summary(d)
     assert d.runner_up is not None and d.margin is not None and d.margin > 0
     assert d.margin_p_value is not None and d.margin_p_value < 0.05
 
 
 def test_depot_null_gives_none():
     d = diagnosed("none")
-    assert d.verdict == "none", [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"])
-                                 for f in d.findings]
+    assert d.verdict == "none", findings_summary(d)
 
 
 @pytest.mark.parametrize("seed", [106, 111, 119])
@@ -93,8 +92,7 @@ def test_weak_depot_traction_is_named_and_its_null_gives_none(seed):
         args, kwargs = scenarios.depot_scenario(effects, seed).finder_arguments()
         d = diagnose(*args, **kwargs, n_boot=300)
         assert d.verdict == expected, (expected, d.runner_up, d.margin, d.candidates,
-                                       [(f.cause, round(f.gain.relative, 3),
-                                         f.evidence["p_value"]) for f in d.findings])
+                                       findings_summary(d))
 
 
 @pytest.mark.slow

@@ -26,6 +26,7 @@ from typing import Any
 
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import fleet_twin_loop as fl
@@ -73,8 +74,7 @@ def diagnosed(name: str, seed: int = 100, progression: bool = True):
 @pytest.mark.parametrize("cause", ["traction", "seasonal_friction", "nonlinear_progression"])
 def test_loop_hidden_effect_is_named(cause):
     d = diagnosed(cause)
-    assert d.verdict == cause, [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"])
-                                for f in d.findings]
+    assert d.verdict == cause, findings_summary(d)
     assert d.finding(cause).gain.ci95_low > 0.0
 
 
@@ -83,8 +83,7 @@ def test_loop_effect_free_data_gives_none(seed):
     # the loop's own progression (tread exponent ~1.03-1.08, flange ~0.97-0.99 over the
     # fleet's range) is in the baseline: nothing is left to name
     d = diagnosed("none", seed)
-    findings = [(f.cause, round(f.gain.relative, 3), f.evidence["p_value"]) for f in d.findings]
-    assert d.verdict == "none", findings
+    assert d.verdict == "none", findings_summary(d)
     assert "expected progression" in d.null_test
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.discrepancy import _instrument_centred, _noise_whitened, diagnose
 from wearcast.statistics.generators import fleet_twin as ft
@@ -49,8 +50,7 @@ def test_weak_instrument_error_is_named(generator, seed):
     else:
         s = scenarios.alt_scenario(fa.AltEffects(instrument_scale=("LP-2", 0.005)), seed)
     d = _diagnosis(s)
-    assert d.verdict == "profile_misalignment", [
-        (f.cause, round(f.gain.relative, 3), f.evidence["p_value"]) for f in d.findings]
+    assert d.verdict == "profile_misalignment", findings_summary(d)
     f = d.finding("profile_misalignment")
     assert f.evidence["p_value"] <= 0.04 and f.gain.relative >= 0.01
 

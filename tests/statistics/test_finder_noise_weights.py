@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import cause_base as cb
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import depot as dp
@@ -68,8 +69,7 @@ def test_half_strength_depot_traction_is_named(seed):
     s = scenarios.depot_scenario(dp.DepotEffects(traction=1.1), seed)
     args, kwargs = s.finder_arguments()
     d = diagnose(*args, **kwargs, n_boot=300)
-    assert d.verdict == "traction", [(f.cause, round(f.gain.relative, 4),
-                                      f.evidence["p_value"]) for f in d.findings]
+    assert d.verdict == "traction", findings_summary(d, digits=4)
     ci = d.finding("traction").extension["intervals"]["tread_multiplier_motor"]
     assert ci["ci95_low"] <= 1.1 <= ci["ci95_high"]
 
@@ -78,5 +78,4 @@ def test_half_strength_depot_null_gives_none():
     s = scenarios.depot_scenario(dp.DepotEffects(), 101)
     args, kwargs = s.finder_arguments()
     d = diagnose(*args, **kwargs, n_boot=300)
-    assert d.verdict == "none", [(f.cause, round(f.gain.relative, 4), f.evidence["p_value"])
-                                 for f in d.findings]
+    assert d.verdict == "none", findings_summary(d, digits=4)

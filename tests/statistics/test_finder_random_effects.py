@@ -16,6 +16,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
@@ -234,8 +235,7 @@ def test_weak_alt_season_is_named_and_its_null_gives_none(seed):
         args, kwargs = s.finder_arguments()
         d = diagnose(*args, **kwargs, n_boot=300)
         assert d.verdict == expected, (amplitude, d.runner_up, d.margin, d.candidates,
-                                       [(f.cause, round(f.gain.relative, 3),
-                                         f.evidence["p_value"]) for f in d.findings])
+                                       findings_summary(d))
 
 
 @pytest.mark.slow

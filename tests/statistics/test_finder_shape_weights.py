@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.statistics.conftest import findings_summary
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics.discrepancy import diagnose
 from wearcast.statistics.generators import fleet_twin as ft
@@ -47,8 +48,7 @@ def test_weak_flange_offset_is_named_with_precision_weights(seed):
                                 table=ft.synthetic_wear_table())
     args, kwargs = s.finder_arguments()
     d = diagnose(*args, **kwargs, n_boot=200)
-    assert d.verdict == "profile_misalignment", [
-        (f.cause, round(f.gain.relative, 3), f.evidence["p_value"]) for f in d.findings]
+    assert d.verdict == "profile_misalignment", findings_summary(d)
     f = d.finding("profile_misalignment")
     assert f.evidence["p_value"] <= 0.04 and f.gain.relative >= 0.01
     # the largest correction is the offset instrument's, relative to the calibration's
