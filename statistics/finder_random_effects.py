@@ -98,9 +98,7 @@ def variance_components(residual: Array, loading: Array, codes: NDArray[np.int64
     y = np.asarray(residual, dtype=float).reshape(-1)
     w = np.asarray(loading, dtype=float).reshape(-1)
     g = int(codes.max()) + 1
-    ww = np.bincount(codes, weights=w * w, minlength=g)
-    wy = np.bincount(codes, weights=w * y, minlength=g)
-    u = np.where(ww > 0, wy / np.where(ww > 0, ww, 1.0), 0.0)
+    u, ww = _group_estimates(codes, w, y)
     eps = y - w * u[codes]
     region_of_group = np.zeros(g, dtype=np.int64)
     region_of_group[codes] = codes % 2
@@ -114,6 +112,15 @@ def variance_components(residual: Array, loading: Array, codes: NDArray[np.int64
             spread = float(np.var(u[groups], ddof=1))
             s_u2[r] = max(spread - s_e2[r] * float(np.mean(1.0 / ww[groups])), 0.0)
     return s_u2, s_e2
+
+
+def _group_estimates(codes: NDArray[np.int64], w: Array, y: Array) -> tuple[Array, Array]:
+    """Each group's least-squares effect w'y / w'w of y = w u_g + eps (0 for an empty group)
+    and its w'w, over groups 0 .. max(codes)."""
+    g = int(codes.max()) + 1
+    ww = np.bincount(codes, weights=w * w, minlength=g).astype(float)
+    wy = np.bincount(codes, weights=w * y, minlength=g)
+    return np.where(ww > 0, wy / np.where(ww > 0, ww, 1.0), 0.0).astype(float), ww
 
 
 def nested_components(residual: Array, loading: Array, wheel: NDArray[np.int64],
@@ -135,9 +142,7 @@ def nested_components(residual: Array, loading: Array, wheel: NDArray[np.int64],
     y = np.asarray(residual, dtype=float).reshape(-1)
     w = np.asarray(loading, dtype=float).reshape(-1)
     gv = int(vehicle.max()) + 1
-    ww_v = np.bincount(vehicle, weights=w * w, minlength=gv)
-    wy_v = np.bincount(vehicle, weights=w * y, minlength=gv)
-    v_hat = np.where(ww_v > 0, wy_v / np.where(ww_v > 0, ww_v, 1.0), 0.0)
+    v_hat, ww_v = _group_estimates(vehicle, w, y)
     ww_j = np.bincount(wheel, weights=w * w, minlength=int(wheel.max()) + 1)
     # sum over each vehicle's wheels of (w_j'w_j)^2: every (wheel, region) group once
     first = np.unique(wheel, return_index=True)[1]
