@@ -60,10 +60,11 @@ Methods
 
 Measured against the fine BEM on conformal treads (``benchmarks/normal_contact_accuracy.py``;
 S1002 on 60E1 1:40 and 1:20 and nine measured MiniProf wheels, 10 and 60 kN, 198 cases):
-"auto" p95 (max) position 0.10 mm (0.19), F_n 0.01 %, peak pressure 1.8 % (3.8 %), Hertz in
-32 % of the cases; "bem-coarse" alone (50-case subset) 0.005 mm, 0.01 %, 1.7 %; "kp" (as
-above) 0.06 mm (0.85), 0.01 %, 15.8 % (30 % on the centred S1002 / 60E1 1:40 tread), so it
-misses the 10 % goal and is not the default.
+"auto" p95 (max) position 0.17 mm (0.31), F_n 0.00 %, peak pressure 2.8 % (22 %, the
+``whl_left_iter288`` flank patch above), Hertz in 58 % of the cases (0.10 mm, 3.4 %, 32 % with
+the curvature-spread criterion); "bem-coarse" alone (50-case subset) 0.005 mm, 0.01 %,
+1.7 %; "kp" (as above) 0.06 mm (0.85), 0.01 %, 15.8 % (30 % on the centred S1002 / 60E1 1:40
+tread), so it misses the 10 % goal and is not the default.
 """
 
 from __future__ import annotations
