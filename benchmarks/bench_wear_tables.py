@@ -7,7 +7,11 @@ Run: ``.venv/bin/python benchmarks/bench_wear_tables.py`` (target: under 2 s war
 The last lines time the Aosta route's curving solves (both bogie types, as the table solves
 them) without and with the contact pipeline at each equilibrium pose
 (``curving.solve_curving_cases(..., contact_pipeline=True)``, ``CurvingResult.pipeline``), in
-the same run: the extra cost of issue 11's one contact pipeline.
+the same run: the extra cost of issue 11's one contact pipeline, and the share of the
+pipeline's patches and wheel poses that took the Hertz fast path (``hertz_patches``).
+``--pipeline-only`` runs just those lines; run with another checkout's interpreter
+(``cd ../base && .venv/bin/python /path/to/this/benchmarks/bench_wear_tables.py``) they
+measure that checkout the same way.
 """
 
 from __future__ import annotations
@@ -68,32 +72,67 @@ def aosta() -> None:
           f"{min(times):5.2f} s  median {np.median(times):5.2f} s  (target 0.5 s)")
 
 
+def hertz_patches(pipeline: dict[str, np.ndarray]) -> tuple[int, int, int, int]:
+    """(Hertz patches, loaded patches, wheels all of whose patches are Hertz, loaded wheels)
+    of one curving result's pipeline contacts (2 wheelsets x 2 wheels x slots). A patch took
+    the Hertz fast path when its peak pressure is Hertz's p0 = 3 F_n / (2 pi a b) of its
+    equivalent ellipse (Johnson 1985 eq. 4.39 ff.) to 1e-6; a boundary-element patch misses
+    that identity by percents (``tests/physics/test_wear_tables_contact_model.py``). The
+    identity needs no flag from the pipeline, so this script counts the same way on any
+    checkout (``--baseline-python``-style runs of an older tree)."""
+    fn = pipeline["normal_force_n"]
+    loaded = fn > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p0 = 1.5 * fn / (np.pi * pipeline["a_mm"] * pipeline["b_mm"])
+    hertz = loaded & np.isclose(pipeline["peak_pressure_mpa"], p0, rtol=1e-6, atol=0.0)
+    wheel_loaded = loaded.any(axis=-1)
+    wheel_hertz = wheel_loaded & (hertz == loaded).all(axis=-1)
+    return (int(hertz.sum()), int(loaded.sum()), int(wheel_hertz.sum()),
+            int(wheel_loaded.sum()))
+
+
 def aosta_pipeline_cost() -> None:
-    """The Aosta classes' curving without and with the contact pipeline (warm, best of 2)."""
+    """The Aosta classes' curving without and with the contact pipeline (warm, best of 2),
+    and the share of the pipeline's patches and wheel poses on the Hertz fast path."""
     route = aosta_route()
     best: dict[bool, float] = {}
+    counts = np.zeros(4, dtype=int)
     for pipeline in (False, True):
         times = []
         for _ in range(2):
             t0 = time.perf_counter()
+            results = []
             for kind in ("motor", "trailer"):
                 vehicle = vehicle_preset("minuetto", kind)
                 cases = [curving.curve_case(
                     c.radius_m, c.cant_mm if c.radius_m is not None else 0.0,
                     None if c.speed_kmh is None else c.speed_kmh / 3.6, "left",
                     torque_nm=vehicle.traction_torque_nm) for c in route.classes]
-                curving.solve_curving_cases(vehicle, cases, contact_pipeline=pipeline)
+                results += curving.solve_curving_cases(vehicle, cases,
+                                                       contact_pipeline=pipeline)
             times.append(time.perf_counter() - t0)
         best[pipeline] = min(times)
+        if pipeline:
+            counts = np.sum([hertz_patches(r.pipeline) for r in results
+                             if r.pipeline is not None], axis=0)
     wheel_poses = len(route.classes) * 2 * 4  # bogie types x (2 wheelsets x 2 wheels)
     extra_ms = 1e3 * (best[True] - best[False]) / wheel_poses
     print(f"  aosta curving ({len(route.classes)} classes x motor, trailer): table contacts "
           f"{best[False]:5.2f} s, with the contact pipeline at each pose {best[True]:5.2f} s "
           f"(x{best[True] / best[False]:.1f}; {extra_ms:.1f} ms per wheel and pose over "
           f"{wheel_poses} wheel poses)")
+    print(f"  the pipeline's Hertz fast path: {counts[0]} of {counts[1]} patches "
+          f"({counts[0] / max(counts[1], 1):.0%}), all patches of {counts[2]} of {counts[3]} "
+          f"wheel poses ({counts[2] / max(counts[3], 1):.0%})")
 
 
 if __name__ == "__main__":
-    main()
-    aosta()
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--pipeline-only", action="store_true",
+                        help="only the Aosta curving with and without the contact pipeline")
+    if not parser.parse_args().pipeline_only:
+        main()
+        aosta()
     aosta_pipeline_cost()

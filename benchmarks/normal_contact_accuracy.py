@@ -6,14 +6,16 @@ shifts -4 ... +4 mm (tread contact of the left wheel; two-point and flange cases
 left out unless the sweep reaches them), yaw 0, roll solved; wheel loads 10 kN and 60 kN.
 For each case the left wheel's patches carry the load with the boundary-element method
 (``normal_contact`` method "bem", the reference) and with the production method ("auto":
-Hertz where the patch is elliptic by the stated criterion, else Kik-Piotrowski), and the
-script prints, per case set, the p95 and max over cases of
+Hertz where the patch is elliptic by the stated criterion, ``normal_contact.is_elliptic``,
+else the coarse BEM), and the script prints, per case set, the p95 and max over cases of
 
 - the contact position: pressure centre on the wheel, |y_wheel(method) - y_wheel(BEM)| [mm],
 - the normal force of the dominant patch relative to BEM's (at the same wheel load),
 - the peak pressure relative to BEM's,
 
-plus the share of patches the production method gave to Hertz, and the time per case.
+plus the share of patches the production method gave to Hertz, and the time per case
+(``hertz_criterion_accuracy.py``: the same errors over the Hertz patches alone, with the
+Manchester cases).
 
 Acceptance (issue 11): position 0.5 mm, F_n 5 %, peak pressure 10 % (p95 over cases).
 
