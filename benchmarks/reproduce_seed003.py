@@ -3,7 +3,7 @@
 Run: .venv/bin/python benchmarks/reproduce_seed003.py [--steps 20] [--nclass 2 3 4 ...]
      [--vehicle minuetto]
      .venv/bin/python benchmarks/reproduce_seed003.py --rail-steps [--rail-route table3|nclass10]
-        [--rail-feedback high_low|mean]
+        [--rail-feedback high_low|mean] [--patch-width hertz|kik_piotrowski]
 
 Seed 003 (Tables 5, 8) replaces the Aosta - Pre Saint Didier line (about 31 km) by N_c curve
 classes: n_class radius intervals equally spaced in curvature x n_class cant subclasses;
@@ -98,6 +98,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from wearcast.physics.class_contacts import PATCH_WIDTHS  # noqa: E402
 from wearcast.physics.rail_feedback import FEEDBACKS, simulate_rail_steps  # noqa: E402
 from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_loop import WearSteps, simulate_wear
@@ -325,7 +326,7 @@ def table3_classes() -> list[CurveClass]:
 
 
 def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int,
-               feedback: str = "high_low") -> None:
+               feedback: str = "high_low", patch_width: str = "hertz") -> None:
     """Seed 003 Tables 4, 5, 8: wheel evolutions on the rail of each rail step."""
     if route == "table3":
         classes = table3_classes()
@@ -341,11 +342,11 @@ def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int,
     t0 = time.perf_counter()
     print(f"rail steps: {vehicle}, route {route} ({len(classes)} classes), USFD, "
           f"{n_rail_steps} rail steps of 0.8 mm x {wheel_steps} wheel steps of 0.2 mm, "
-          f"rail feedback {feedback}", flush=True)
+          f"rail feedback {feedback}, patch width {patch_width}", flush=True)
     rs = simulate_rail_steps(
         vehicle, classes, n_rail_steps=n_rail_steps, law="usfd",
         steps=WearSteps(n_steps=wheel_steps, depth_per_step_mm=0.2),
-        unbalanced_acceleration_m_s2=A_NC_M_S2, feedback=feedback,
+        unbalanced_acceleration_m_s2=A_NC_M_S2, feedback=feedback, patch_width=patch_width,
         progress=lambda j, n, km: print(f"  rail step {j - 1}: km_tot {km:.1f} "
                                         f"({time.perf_counter() - t0:.0f} s)", flush=True))
     print(f"total {rs.elapsed_s:.1f} s")
@@ -386,13 +387,16 @@ def main() -> None:
     parser.add_argument("--rail-feedback", default="high_low", choices=FEEDBACKS,
                         help="high_low: the high and low rails fed back each under its own "
                              "wheels (contact table per side); mean: seed 003's one mean rail")
+    parser.add_argument("--patch-width", default="hertz", choices=PATCH_WIDTHS,
+                        help="patch width of the contacts and of the rail depth's spread "
+                             "(class_contacts: kik_piotrowski widens conformal patches)")
     args = parser.parse_args()
     if not REFERENCE.exists():
         print(f"skipped: {REFERENCE} not found (needs ../shared/reference beside the repo)")
         return
     if args.rail_steps:
         rail_steps(args.vehicle, args.rail_route, args.n_rail_steps, args.steps,
-                   args.rail_feedback)
+                   args.rail_feedback, args.patch_width)
         return
     steps = WearSteps(n_steps=args.steps, depth_per_step_mm=0.2)
     complete, runs = sweep(args.vehicle, args.nclass, steps)

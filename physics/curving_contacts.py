@@ -116,8 +116,8 @@ def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float | tuple[float,
     out = {name: np.zeros(shape) for name in PATCH_FIELDS}
     ok = np.ones(n_cases, dtype=bool)
     errors: dict[int, str] = {}
-    origins = ((float(rail_origin_mm),) * 2 if np.ndim(rail_origin_mm) == 0
-               else tuple(float(v) for v in rail_origin_mm))  # type: ignore[union-attr]
+    origins = ((rail_origin_mm, rail_origin_mm) if isinstance(rail_origin_mm, (int, float))
+               else (float(rail_origin_mm[0]), float(rail_origin_mm[1])))
     for s_idx, side in enumerate(SIDES):
         sign = 1.0 if side == "left" else -1.0
         keys = [(c, w) for c in range(n_cases) for w in range(2)]

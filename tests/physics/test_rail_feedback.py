@@ -162,7 +162,8 @@ def test_high_and_low_rails_are_worn_and_fed_back_each_under_its_own_wheels(rail
     # stays below it; the mean rail (tangent track's) takes the mean of the two.
     for j in range(2):
         n = rs.vehicles_per_step[j]
-        peaks = (n * rs.high_depth_per_vehicle_mm[j].max(), n * rs.low_depth_per_vehicle_mm[j].max())
+        peaks = (n * rs.high_depth_per_vehicle_mm[j].max(),
+                 n * rs.low_depth_per_vehicle_mm[j].max())
         assert max(peaks) == pytest.approx(rs.rail_step_depth_mm, rel=1e-9)
         assert np.allclose(rs.rail_depth_per_vehicle_mm[j], 0.5 * (
             rs.high_depth_per_vehicle_mm[j] + rs.low_depth_per_vehicle_mm[j]))
@@ -254,13 +255,14 @@ SEED_RATIO_TOLERANCE = 0.05
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1 "
-    "(FASTSIM curving: 757 -> 745 km, ratio 0.984 against the seed's 1.038; with the earlier "
-    "saturation creep law 587 -> 553 km, 0.94). On the worn rail the flange patches are more "
-    "conformal (saturation-law run: route mean area 6.0 -> 7.4 mm^2) and their frictional "
-    "power T gamma falls 3 %, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) "
-    "makes the worn volume of a patch proportional to its AREA there: the wheel's worn volume "
-    "per km rises (FASTSIM curving: 60.8 -> 61.2 mm^3/km)"))
+    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1, with "
+    "the high and low rails fed back each under its own wheels (the default, contact table "
+    "per side: 757.2 -> 738.7 km, ratio 0.976) as with seed 003's one mean rail (757.2 -> "
+    "744.0 km, 0.982) against the seed's 1.038 (benchmarks/reproduce_seed003.py --rail-steps "
+    "[--rail-feedback mean]). On the worn rail the flange patches are more conformal and "
+    "their frictional power falls, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 "
+    "N/mm^2) makes a patch's worn volume proportional to its AREA there: the wheel's worn "
+    "volume per km rises (60.8 -> 60.9 mm^3/km per side, 61.2 mean)"))
 def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference_dir):
     import pandas as pd
 

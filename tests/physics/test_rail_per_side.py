@@ -5,7 +5,13 @@ from dataclasses import fields, replace
 import numpy as np
 import pytest
 
-from wearcast.physics.bogie_equations import bogie_residual, compiled_residual, initial_state
+from wearcast.physics.bogie_equations import (
+    bogie_contacts,
+    bogie_residual,
+    compiled_residual,
+    initial_state,
+    wheelset_roll,
+)
 from wearcast.physics.class_contacts import class_contacts_all_wheels
 from wearcast.physics.curving import (
     build_contact_table,
@@ -164,3 +170,32 @@ def test_class_contacts_take_each_wheels_own_rail():
     # in the curves the worn rails change the contacts
     assert not np.allclose(plain[(1, "right")].normal_force_n[0],
                            sided[(1, "right")].normal_force_n[0], rtol=1e-3)
+
+
+def test_each_wheel_takes_its_own_rails_table_in_numpy_and_in_the_kernel(tables):
+    # The mirror test cannot tell a consistent swap of the two tables: here each wheel's
+    # candidates are checked against its own table, and the compiled residual against numpy.
+    _, pair = tables
+    assert pair.right is not None
+    assert not np.allclose(pair.gap_mm, pair.right.gap_mm, atol=0.05)
+    veh = vehicle_preset("metro_b")
+    rng = np.random.default_rng(11)
+    q = initial_state(veh, pair) + rng.normal(0.0, 0.5, (4, 12))
+    q[:, 0] = [-6.0, -3.0, 2.0, 5.0]  # leading wheelset shifts [mm] (+ left)
+    y = q[:, [0, 5]]
+    c = bogie_contacts(pair, y, q[:, [1, 6]] * 1e-3, q[:, [2, 7]] * 1e-3,
+                       q[:, [3, 4, 8, 9]].reshape(4, 2, 2), np.full(4, 1.0 / 300.0),
+                       pair.nominal_radius_m, veh.friction)
+    left, right = pair.candidates(y[:, 0]), pair.right.candidates(-y[:, 0])
+    assert np.array_equal(c.rail_y_mm[:, 0, 0], left["rail_y_mm"])
+    assert np.array_equal(c.rail_y_mm[:, 0, 1], right["rail_y_mm"])
+    assert np.array_equal(c.contact_angle_rad[:, 0, 1], right["angle_rad"])
+    for grid in (None, 8):
+        ref = bogie_residual(q, veh, pair, 1.0 / 300.0, 0.4, 0.0, creep_grid=grid)
+        assert np.allclose(compiled_residual(q, veh, pair, 1.0 / 300.0, 0.4, 0.0, grid), ref,
+                           rtol=1e-9, atol=1e-10)
+    # the right wheel's rigid rise is its own table's
+    d = q[:, 3:5]
+    expected = (pair.rigid_rise(y[:, 0]) - d[:, 0] - pair.right.rigid_rise(-y[:, 0]) + d[:, 1]
+                ) / 1500.0
+    assert np.array_equal(wheelset_roll(pair, y[:, 0], d), expected)
