@@ -199,3 +199,26 @@ def test_each_wheel_takes_its_own_rails_table_in_numpy_and_in_the_kernel(tables)
     expected = (pair.rigid_rise(y[:, 0]) - d[:, 0] - pair.right.rigid_rise(-y[:, 0]) + d[:, 1]
                 ) / 1500.0
     assert np.array_equal(wheelset_roll(pair, y[:, 0], d), expected)
+
+
+def test_the_whole_vehicle_runs_with_a_high_and_a_low_rail():
+    from wearcast.physics.vehicle_wear_simulation import (
+        VehicleWearOptions,
+        simulate_vehicle_wear,
+        vehicle_bogies,
+    )
+
+    curves = [CurveClass(300.0, 100.0, None, "left", 0.5),
+              CurveClass(300.0, 100.0, None, "right", 0.5)]
+    kwargs = {"law": "usfd", "mileage_km": 100.0, "depth_per_step_mm": 1.0}
+    plain = simulate_vehicle_wear("metro_b", curves, **kwargs)
+    same = simulate_vehicle_wear("metro_b", curves, options=VehicleWearOptions(
+        high_rail="60E1", low_rail="60E1"), **kwargs)
+    assert np.array_equal(plain.profiles_mm, same.profiles_mm)
+    sided = simulate_vehicle_wear("metro_b", curves, options=VehicleWearOptions(
+        high_rail=HIGH, low_rail=LOW), **kwargs)
+    direct = simulate_vehicle_wear(
+        [(replace(b, high_rail_profile=HIGH, low_rail_profile=LOW), n)
+         for b, n in vehicle_bogies("metro_b")], curves, **kwargs)
+    assert np.array_equal(sided.profiles_mm, direct.profiles_mm)
+    assert np.max(np.abs(sided.profiles_mm - plain.profiles_mm)) > 1e-3
