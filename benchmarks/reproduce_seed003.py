@@ -65,6 +65,22 @@ N_step, tonnage and W1/W2/W3 of the mean, high and low rail. Tracked wheel: the 
 outer wheel (the loop's default), not seed 003's mean wheel of the whole vehicle, so the
 absolute km_tot are not comparable; the ratios are.
 
+High and low rails of their own (``--rail-feedback high_low``, the default): the high rail
+(outer rail of every curve) and the low rail are worn each by its own depth and fed back under
+their own wheels (the curving's contact table per side); N_step scales the deeper of the two
+to D_step^r, so a step is about half the mean rail's tonnage; tangent track runs on the mean
+rail. Result (load 8-10 on 2 shared vCPUs, Hertz patches): km_tot 757.2, 738.7, 715.4, 726.3
+and 232,975 km (ratios 1, 0.976, 0.945, 0.959 and a broken 307.7) against ``--rail-feedback
+mean`` (seed 003's one mean rail, FASTSIM curving) 757.2, 744.0, 712.6, 729.8, 747.0 (1, 0.982,
+0.941, 0.964, 0.987). NOT reproduced either way. The fifth step is broken: on the rails worn
+to 7.2 Mt (high-rail gauge-corner groove 3.6 mm deep over about 3 mm, W3 2.5 mm) the curving
+with the worn low rail inside does not converge for any curve class (70 fallbacks to the nearest
+converged operating point, tangent track: no flange wear). With ``--patch-width
+kik_piotrowski`` (wider conformal patches, the rail depth spread over them) no step breaks:
+high_low 1362.2, 1366.2, 1323.6, 1287.5, 1204.9 km (1, 1.003, 0.972, 0.945, 0.885), mean
+1362.2, 1362.9, 1364.4, 1310.5, 1268.6 km (1, 1.001, 1.002, 0.962, 0.931); the wheel's worn
+volume per km still rises with the rail step (61.7 -> 70.6 mm^3/km, high_low).
+
 Result of the first rail-step run (649 s at load 5-7 on 2 shared vCPUs): km_tot 587.0, 552.9,
 568.0, 588.2, 607.2 km (ratios 1, 0.942, 0.968, 1.002, 1.034 against the seed's 1, 1.038,
 1.154, 1.238, 1.339): NOT reproduced, the mileage falls at rail step 1. The worn rail does make
