@@ -73,9 +73,10 @@ rail. Result (load 8-10 on 2 shared vCPUs, Hertz patches): km_tot 757.2, 738.7, 
 and 232,975 km (ratios 1, 0.976, 0.945, 0.959 and a broken 307.7) against ``--rail-feedback
 mean`` (seed 003's one mean rail, FASTSIM curving) 757.2, 744.0, 712.6, 729.8, 747.0 (1, 0.982,
 0.941, 0.964, 0.987). NOT reproduced either way. The fifth step is broken: on the rails worn
-to 7.2 Mt (high-rail gauge-corner groove 3.6 mm deep over about 3 mm, W3 2.5 mm) the curving
-with the worn low rail inside does not converge for any curve class (70 fallbacks to the nearest
-converged operating point, tangent track: no flange wear). With ``--patch-width
+to 7.2 Mt (high rail W3 2.51 mm after step 3, from 0.09 after step 2: the gauge-corner wear of
+the new wheel lands on the same narrow band every step) the curving solves fail (70 contact
+fallbacks, the wheel's worn volume falls to 0.21 mm^3/km: the curves took the contact of a
+converged operating point without flange contact). With ``--patch-width
 kik_piotrowski`` (wider conformal patches, the rail depth spread over them) no step breaks:
 high_low 1362.2, 1366.2, 1323.6, 1287.5, 1204.9 km (1, 1.003, 0.972, 0.945, 0.885), mean
 1362.2, 1362.9, 1364.4, 1310.5, 1268.6 km (1, 1.001, 1.002, 0.962, 0.931); the wheel's worn

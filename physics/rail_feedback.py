@@ -21,11 +21,10 @@ Two feedbacks (``FEEDBACKS``):
   everywhere; N_step scales its depth to D_step^r.
 
 Known limit: with Hertz patches (``patch_width="hertz"``) the high rail's gauge-corner wear
-lands on the same ~3 mm band every step (the wheel restarts from new), a groove; on seed 003's
-route the fifth ``high_low`` step's curving then fails for every curve class with the worn low
-rail inside (a flat, conformal tread gap with several shallow minima: the equilibrium stalls),
-and the loop's fallback contacts make that step meaningless (``contact_fallbacks``;
-``benchmarks/reproduce_seed003.py --rail-steps``).
+lands on the same narrow band every step (the wheel restarts from new); on seed 003's route
+the fifth ``high_low`` step's curving solves then fail and the loop's fallback contacts make
+that step meaningless (``contact_fallbacks``; ``benchmarks/reproduce_seed003.py
+--rail-steps``).
 
 Depths in mm, mileage in km, masses in t (Mt = 1e6 t).
 """
