@@ -3,6 +3,7 @@
 Run: .venv/bin/python benchmarks/reproduce_seed003.py [--steps 20] [--nclass 2 3 4 ...]
      [--vehicle minuetto]
      .venv/bin/python benchmarks/reproduce_seed003.py --rail-steps [--rail-route table3|nclass10]
+        [--rail-feedback high_low|mean] [--patch-width hertz|kik_piotrowski]
 
 Seed 003 (Tables 5, 8) replaces the Aosta - Pre Saint Didier line (about 31 km) by N_c curve
 classes: n_class radius intervals equally spaced in curvature x n_class cant subclasses;
@@ -64,6 +65,23 @@ N_step, tonnage and W1/W2/W3 of the mean, high and low rail. Tracked wheel: the 
 outer wheel (the loop's default), not seed 003's mean wheel of the whole vehicle, so the
 absolute km_tot are not comparable; the ratios are.
 
+High and low rails of their own (``--rail-feedback high_low``, the default): the high rail
+(outer rail of every curve) and the low rail are worn each by its own depth and fed back under
+their own wheels (the curving's contact table per side); N_step scales the deeper of the two
+to D_step^r, so a step is about half the mean rail's tonnage; tangent track runs on the mean
+rail. Result (load 8-10 on 2 shared vCPUs, Hertz patches): km_tot 757.2, 738.7, 715.4, 726.3
+and 232,975 km (ratios 1, 0.976, 0.945, 0.959 and a broken 307.7) against ``--rail-feedback
+mean`` (seed 003's one mean rail, FASTSIM curving) 757.2, 744.0, 712.6, 729.8, 747.0 (1, 0.982,
+0.941, 0.964, 0.987). NOT reproduced either way. The fifth step is broken: on the rails worn
+to 7.2 Mt (high rail W3 2.51 mm after step 3, from 0.09 after step 2: the gauge-corner wear of
+the new wheel lands on the same narrow band every step) the curving solves fail (70 contact
+fallbacks, the wheel's worn volume falls to 0.21 mm^3/km: the curves took the contact of a
+converged operating point without flange contact). With ``--patch-width
+kik_piotrowski`` (wider conformal patches, the rail depth spread over them) no step breaks:
+high_low 1362.2, 1366.2, 1323.6, 1287.5, 1204.9 km (1, 1.003, 0.972, 0.945, 0.885), mean
+1362.2, 1362.9, 1364.4, 1310.5, 1268.6 km (1, 1.001, 1.002, 0.962, 0.931); the wheel's worn
+volume per km still rises with the rail step (61.7 -> 70.6 mm^3/km, high_low).
+
 Result of the first rail-step run (649 s at load 5-7 on 2 shared vCPUs): km_tot 587.0, 552.9,
 568.0, 588.2, 607.2 km (ratios 1, 0.942, 0.968, 1.002, 1.034 against the seed's 1, 1.038,
 1.154, 1.238, 1.339): NOT reproduced, the mileage falls at rail step 1. The worn rail does make
@@ -97,7 +115,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from wearcast.physics.rail_feedback import simulate_rail_steps  # noqa: E402
+from wearcast.physics.class_contacts import PATCH_WIDTHS  # noqa: E402
+from wearcast.physics.rail_feedback import FEEDBACKS, simulate_rail_steps  # noqa: E402
 from wearcast.physics.vocabulary import CurveClass
 from wearcast.physics.wear_loop import WearSteps, simulate_wear
 from wearcast.physics.wear_simulation import WearSimulation  # noqa: E402
@@ -323,7 +342,8 @@ def table3_classes() -> list[CurveClass]:
                                        comment="#"))
 
 
-def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int) -> None:
+def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int,
+               feedback: str = "high_low", patch_width: str = "hertz") -> None:
     """Seed 003 Tables 4, 5, 8: wheel evolutions on the rail of each rail step."""
     if route == "table3":
         classes = table3_classes()
@@ -338,11 +358,12 @@ def rail_steps(vehicle: str, route: str, n_rail_steps: int, wheel_steps: int) ->
             for d, g in ref.groupby("description")}
     t0 = time.perf_counter()
     print(f"rail steps: {vehicle}, route {route} ({len(classes)} classes), USFD, "
-          f"{n_rail_steps} rail steps of 0.8 mm x {wheel_steps} wheel steps of 0.2 mm", flush=True)
+          f"{n_rail_steps} rail steps of 0.8 mm x {wheel_steps} wheel steps of 0.2 mm, "
+          f"rail feedback {feedback}, patch width {patch_width}", flush=True)
     rs = simulate_rail_steps(
         vehicle, classes, n_rail_steps=n_rail_steps, law="usfd",
         steps=WearSteps(n_steps=wheel_steps, depth_per_step_mm=0.2),
-        unbalanced_acceleration_m_s2=A_NC_M_S2,
+        unbalanced_acceleration_m_s2=A_NC_M_S2, feedback=feedback, patch_width=patch_width,
         progress=lambda j, n, km: print(f"  rail step {j - 1}: km_tot {km:.1f} "
                                         f"({time.perf_counter() - t0:.0f} s)", flush=True))
     print(f"total {rs.elapsed_s:.1f} s")
@@ -380,12 +401,19 @@ def main() -> None:
     parser.add_argument("--rail-route", default="table3",
                         help="table3 (seed 003 Table 3, n_class = 7) or nclass<N>")
     parser.add_argument("--n-rail-steps", type=int, default=5)
+    parser.add_argument("--rail-feedback", default="high_low", choices=FEEDBACKS,
+                        help="high_low: the high and low rails fed back each under its own "
+                             "wheels (contact table per side); mean: seed 003's one mean rail")
+    parser.add_argument("--patch-width", default="hertz", choices=PATCH_WIDTHS,
+                        help="patch width of the contacts and of the rail depth's spread "
+                             "(class_contacts: kik_piotrowski widens conformal patches)")
     args = parser.parse_args()
     if not REFERENCE.exists():
         print(f"skipped: {REFERENCE} not found (needs ../shared/reference beside the repo)")
         return
     if args.rail_steps:
-        rail_steps(args.vehicle, args.rail_route, args.n_rail_steps, args.steps)
+        rail_steps(args.vehicle, args.rail_route, args.n_rail_steps, args.steps,
+                   args.rail_feedback, args.patch_width)
         return
     steps = WearSteps(n_steps=args.steps, depth_per_step_mm=0.2)
     complete, runs = sweep(args.vehicle, args.nclass, steps)

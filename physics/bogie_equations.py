@@ -115,9 +115,18 @@ def bogie_contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu,
     shift = s * y_mm[..., None]  # (..., W, 2)
     # the geometry depends on the shift only: evaluate it once per distinct shift (finite
     # difference Jacobians perturb the other unknowns with the shifts unchanged)
-    unique, inverse = np.unique(shift.reshape(-1), return_inverse=True)
-    col = {k: v[inverse].reshape(shift.shape + v.shape[-1:])
-           for k, v in table.candidates(unique).items()}  # (..., W, 2, slots)
+    if table.right is None:  # one rail profile: both wheels from the one (mirrored) table
+        unique, inverse = np.unique(shift.reshape(-1), return_inverse=True)
+        col = {k: v[inverse].reshape(shift.shape + v.shape[-1:])
+               for k, v in table.candidates(unique).items()}  # (..., W, 2, slots)
+    else:  # a rail per side: each wheel's candidates from its own rail's table
+        per_side = []
+        for i in range(2):
+            sh = shift[..., i]
+            unique, inverse = np.unique(sh.reshape(-1), return_inverse=True)
+            per_side.append({k: v[inverse].reshape(sh.shape + v.shape[-1:])
+                             for k, v in table.side(i).candidates(unique).items()})
+        col = {k: np.stack([per_side[0][k], per_side[1][k]], axis=-2) for k in per_side[0]}
     ang = col["angle_rad"]
     cos, sin = np.cos(ang), np.sin(ang)
     approach = (d_mm[..., None] - col["gap_mm"]) * cos
@@ -161,9 +170,10 @@ def wheelset_loads(c: BogieContacts):
 
 def wheelset_roll(table: ContactTable, y_mm, d_mm):
     """Wheelset roll [rad] (+ = left wheel up) from the wheels' rigid rise at the contact shift
-    y (+ left) less their elastic approaches d (..., 2)."""
+    y (+ left) less their elastic approaches d (..., 2); each wheel's rise from its own
+    rail's table (``ContactTable.side``)."""
     rise_left = table.rigid_rise(y_mm) - d_mm[..., 0]
-    rise_right = table.rigid_rise(-y_mm) - d_mm[..., 1]
+    rise_right = table.side(1).rigid_rise(-y_mm) - d_mm[..., 1]
     return (rise_left - rise_right) / (2.0 * TAPE_CIRCLE_HALF_SPACING_MM)
 
 
@@ -235,18 +245,16 @@ def bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, 
 class CompiledBogie:
     """:func:`bogie_residual` of one vehicle on one contact table by the compiled kernels of
     ``bogie_residual_kernel`` (the same numbers to rounding; ``bogie_residual`` is their numpy
-    reference), for the equilibrium solvers' many small batches: the table's arrays and the
-    vehicle's constants are gathered once.
+    reference), for the equilibrium solvers' many small batches: the table's arrays (each
+    wheel's table, ``ContactTable.side``) and the vehicle's constants are gathered once.
 
     creep_grid : None for the saturation law, n for FASTSIM on an n x n grid
     """
 
     def __init__(self, vehicle: BogieVehicle, table: ContactTable,
                  creep_grid: int | None = None):
-        self.tab = (table.gap_mm, table.gap2_per_mm, table.smoothing_mm, table.wheel_y_mm,
-                    table.wheel_z_mm, table.wheel_slope, table.shift_mm, table.rigid_rise_mm,
-                    table.hertz_log_ratio, table.hertz_approach1, table.hertz_a1,
-                    table.hertz_b1, KALKER_TABLE, KALKER_ROW_SHAPE)
+        self.tab = _kernel_tab(table)
+        self.tab_right = self.tab if table.right is None else _kernel_tab(table.right)
         self.consts = np.array([
             table.nominal_radius_m, vehicle.friction, SHEAR_MODULUS_MPA, CREEP_POISSON,
             vehicle.wheel_load_n, vehicle.semi_wheelbase_m,
@@ -269,7 +277,7 @@ class CompiledBogie:
         [1/m], unbalanced acceleration [m/s^2], torque [N m] (``bogie_residual``)."""
         return bogie_residual_flat(np.ascontiguousarray(q, dtype=float),
                                    np.ascontiguousarray(params, dtype=float), self.tab,
-                                   self.consts, self.creep_grid)
+                                   self.tab_right, self.consts, self.creep_grid)
 
     def jacobian(self, q: NDArray, params: NDArray, steps: NDArray
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -281,7 +289,15 @@ class CompiledBogie:
         return bogie_jacobian_flat(np.ascontiguousarray(q, dtype=float),
                                    np.ascontiguousarray(steps, dtype=float),
                                    np.ascontiguousarray(params, dtype=float), self.tab,
-                                   self.consts, self.creep_grid)
+                                   self.tab_right, self.consts, self.creep_grid)
+
+
+def _kernel_tab(table: ContactTable) -> tuple:
+    """One wheel's table arrays in the kernel's order (``bogie_residual_flat``)."""
+    return (table.gap_mm, table.gap2_per_mm, table.smoothing_mm, table.wheel_y_mm,
+            table.wheel_z_mm, table.wheel_slope, table.shift_mm, table.rigid_rise_mm,
+            table.hertz_log_ratio, table.hertz_approach1, table.hertz_a1, table.hertz_b1,
+            KALKER_TABLE, KALKER_ROW_SHAPE)
 
 
 def compiled_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, torque,
@@ -298,12 +314,14 @@ def compiled_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_un
 
 
 def initial_state(vehicle: BogieVehicle, table: ContactTable) -> NDArray:
-    """Centred wheelsets on tangent track, wheels loaded on the tread."""
-    centre = table.candidates(0.0)
-    tread = int(np.argmin(centre["gap_mm"]))
-    d0 = (centre["approach1_mm"][tread] * vehicle.wheel_load_n ** (2.0 / 3.0)
-          / np.cos(centre["angle_rad"][tread]))
+    """Centred wheelsets on tangent track, wheels loaded on the tread (each wheel's approach
+    from its own rail's table)."""
     q = np.zeros(N_STATE)
-    q[[3, 4, 8, 9]] = d0
+    for i in range(2):
+        centre = table.side(i).candidates(0.0)
+        tread = int(np.argmin(centre["gap_mm"]))
+        d0 = (centre["approach1_mm"][tread] * vehicle.wheel_load_n ** (2.0 / 3.0)
+              / np.cos(centre["angle_rad"][tread]))
+        q[[3 + i, 8 + i]] = d0
     return q
 

@@ -1,6 +1,6 @@
 """The bogie's equilibrium residual and its forward-difference Jacobian as compiled kernels.
 
-``bogie_residual_flat(q, params, tab, consts, creep_grid)`` does per state what
+``bogie_residual_flat(q, params, tab, tab_right, consts, creep_grid)`` does per state what
 ``bogie_equations.bogie_residual`` does (creep forces from the smooth Kalker +
 Shen-Hedrick-Elkins law of ``contact.creep``, creep_grid 0, or from FASTSIM on an n x n grid):
 the contact candidates of each wheel at its shift (``contact_candidates_kernel.slots_one``),
@@ -156,10 +156,12 @@ def _slot_columns(shift, tab, consts, memory, g_row):
 
 
 @njit(cache=True)
-def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
+def _wheelset_sums(qrow, w, k, tab, tab_right, consts, memory, memory_right, g_row,
+                   creep_grid, out):
     """Track-frame loads of wheelset w's contacts (``bogie_equations.wheelset_loads``) into
-    out: lateral [N], vertical left and right [N], yaw moment [N m], sum r Fx [N m]."""
-    _, mem_cols, mem_w, _, _, _ = memory
+    out: lateral [N], vertical left and right [N], yaw moment [N m], sum r Fx [N m]. The
+    left wheel's candidates come from ``tab`` (remembered in ``memory``), the right wheel's
+    from ``tab_right`` (``memory_right``): the table of each wheel's own rail."""
     kalker_table = tab[12]
     kalker_rows = tab[13]
     r0 = consts[R0]
@@ -171,7 +173,14 @@ def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
     pitch = 0.0
     for side in range(2):
         sgn = 1.0 if side == 0 else -1.0
-        hit = _slot_columns(sgn * y, tab, consts, memory, g_row)
+        if side == 0:
+            hit = _slot_columns(y, tab, consts, memory, g_row)
+            mem_cols = memory[1]
+            mem_w = memory[2]
+        else:
+            hit = _slot_columns(-y, tab_right, consts, memory_right, g_row)
+            mem_cols = memory_right[1]
+            mem_w = memory_right[2]
         d = qrow[5 * w + 3 + side]
         vert = 0.0
         for t in range(mem_w.shape[1]):
@@ -213,11 +222,13 @@ def _wheelset_sums(qrow, w, k, tab, consts, memory, g_row, creep_grid, out):
 
 
 @njit(cache=True)
-def _assemble(qrow, k, a_unb, torque, sums, tab, consts, out):
+def _assemble(qrow, k, a_unb, torque, sums, tab, tab_right, consts, out):
     """The 12 scaled equations of a state from its wheelsets' loads ``sums`` (2, 5)
-    (``bogie_equations.bogie_residual``) into out."""
+    (``bogie_equations.bogie_residual``) into out; each wheel's rigid rise from its own
+    table (``tab`` left, ``tab_right`` right; one shift grid)."""
     shift_grid = tab[6]
     rigid_rise = tab[7]
+    rigid_rise_right = tab_right[7]
     r0 = consts[R0]
     q_wheel = consts[Q_WHEEL]
     am = consts[SEMI_WHEELBASE]
@@ -232,7 +243,7 @@ def _assemble(qrow, k, a_unb, torque, sums, tab, consts, out):
         y = qrow[5 * w]
         psi = qrow[5 * w + 1] * 1e-3
         rise_left = interp_like_numpy(y, shift_grid, rigid_rise) - qrow[5 * w + 3]
-        rise_right = interp_like_numpy(-y, shift_grid, rigid_rise) - qrow[5 * w + 4]
+        rise_right = interp_like_numpy(-y, shift_grid, rigid_rise_right) - qrow[5 * w + 4]
         roll = (rise_left - rise_right) / (2.0 * half_spacing)
         y_centre = y - 1000.0 * r0 * roll
         dy = (y_centre + 1000.0 * k * x**2 / 2.0 - yb - 1000.0 * psib * x) / 1000.0
@@ -260,19 +271,22 @@ def _finite(row) -> bool:
 
 
 @njit(cache=True)
-def bogie_residual_flat(q, params, tab, consts, creep_grid):
+def bogie_residual_flat(q, params, tab, tab_right, consts, creep_grid):
     """Scaled residual (N, 12) of the states q (N, 12) at the load parameters params (N, 3):
     curvature kappa [1/m], unbalanced acceleration a_unb [m/s^2], torque [N m]; with the
     creep forces of the saturation law (``creep_grid`` 0) or of FASTSIM on a creep_grid x
     creep_grid grid (``fastsim_kernel.fastsim_totals_one``, CONTACT's spin offset).
 
     tab: the contact table's gap, g'', smoothing, wheel y, z and slope, shift grid, rigid rise,
-    Hertz log ratio, approach1, a1, b1, and Kalker's table and row shapes; consts: the
+    Hertz log ratio, approach1, a1, b1, and Kalker's table and row shapes, of the left wheel;
+    tab_right: the same of the right wheel (its own rail; the same arrays when both rails
+    are one profile, the mirrored track; one shift grid and wheel grid size); consts: the
     constants at the indices above (``bogie_equations.compiled_residual``). A state with a
     non-finite entry gets a NaN residual."""
     n = q.shape[0]
     out = np.empty((n, 12))
     memory = _new_memory(int(consts[SLOTS]))
+    memory_right = _new_memory(int(consts[SLOTS]))
     g_row = np.empty(tab[0].shape[1])
     sums = np.empty((2, 5))
     for i in range(n):
@@ -280,14 +294,15 @@ def bogie_residual_flat(q, params, tab, consts, creep_grid):
             out[i, :] = np.nan
             continue
         for w in range(2):
-            _wheelset_sums(q[i], w, params[i, 0], tab, consts, memory, g_row, creep_grid,
-                           sums[w])
-        _assemble(q[i], params[i, 0], params[i, 1], params[i, 2], sums, tab, consts, out[i])
+            _wheelset_sums(q[i], w, params[i, 0], tab, tab_right, consts, memory,
+                           memory_right, g_row, creep_grid, sums[w])
+        _assemble(q[i], params[i, 0], params[i, 1], params[i, 2], sums, tab, tab_right, consts,
+                  out[i])
     return out
 
 
 @njit(cache=True)
-def bogie_jacobian_flat(q, steps, params, tab, consts, creep_grid):
+def bogie_jacobian_flat(q, steps, params, tab, tab_right, consts, creep_grid):
     """Residual r0 (N, 12) of the states q and its forward-difference Jacobian (N, 12, 12),
     column c = (r(q + steps[c] e_c) - r0) / steps[c], as the solvers' finite differences
     (``equilibrium_solvers``) compute from :func:`bogie_residual_flat` -- the same numbers:
@@ -298,6 +313,7 @@ def bogie_jacobian_flat(q, steps, params, tab, consts, creep_grid):
     r0 = np.empty((n, 12))
     jac = np.empty((n, 12, 12))
     memory = _new_memory(int(consts[SLOTS]))
+    memory_right = _new_memory(int(consts[SLOTS]))
     g_row = np.empty(tab[0].shape[1])
     base = np.empty((2, 5))
     sums = np.empty((2, 5))
@@ -312,8 +328,9 @@ def bogie_jacobian_flat(q, steps, params, tab, consts, creep_grid):
         a_unb = params[i, 1]
         torque = params[i, 2]
         for w in range(2):
-            _wheelset_sums(q[i], w, k, tab, consts, memory, g_row, creep_grid, base[w])
-        _assemble(q[i], k, a_unb, torque, base, tab, consts, r0[i])
+            _wheelset_sums(q[i], w, k, tab, tab_right, consts, memory, memory_right, g_row,
+                           creep_grid, base[w])
+        _assemble(q[i], k, a_unb, torque, base, tab, tab_right, consts, r0[i])
         for c in range(12):
             for j in range(12):
                 qp[j] = q[i, j]
@@ -322,9 +339,9 @@ def bogie_jacobian_flat(q, steps, params, tab, consts, creep_grid):
                 for j in range(5):
                     sums[w, j] = base[w, j]
             if c < 10:
-                _wheelset_sums(qp, c // 5, k, tab, consts, memory, g_row, creep_grid,
-                               sums[c // 5])
-            _assemble(qp, k, a_unb, torque, sums, tab, consts, rp)
+                _wheelset_sums(qp, c // 5, k, tab, tab_right, consts, memory, memory_right,
+                               g_row, creep_grid, sums[c // 5])
+            _assemble(qp, k, a_unb, torque, sums, tab, tab_right, consts, rp)
             for j in range(12):
                 jac[i, j, c] = (rp[j] - r0[i, j]) / steps[i, c]
     return r0, jac

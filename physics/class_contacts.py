@@ -5,10 +5,15 @@ docs/references.md): the quasi-static bogie curving of :mod:`wearcast.physics.cu
 contact table rebuilt from the wheel profile z(y) on the vehicle's rail. Classes of the same
 radius, cant and speed share one solution (an operating point); a right-hand class is the
 mirror image of a left-hand one, so the tracked wheel of a right curve is the opposite wheel of
-the left-curve solution. If the batched solve does not converge for some operating point, it is
-retried from its last equilibrium; if it still fails, the class keeps the contact of its
-previous contact update, or, on the first update, the contact of the converged operating point
-nearest in curvature (then cant) -- the stated simpler contact; both are counted as fallbacks.
+the left-curve solution. A vehicle with a high and a low rail of their own
+(``BogieVehicle.high_rail_profile`` / ``low_rail_profile``) runs every curve with the high
+rail outside, so the mirror still holds: the curves are solved as left curves on the table
+pair (low rail left, high rail right), tangent track on ``rail_profile``
+(``curving_table.track_rails``). If the batched solve does not converge for some operating
+point, it is retried from its last equilibrium; if it still fails, the class keeps the
+contact of its previous contact update, or, on the first update, the contact of the converged
+operating point nearest in curvature (then cant) -- the stated simpler contact; both are
+counted as fallbacks.
 If no class converges, :class:`~wearcast.physics.curving.CurvingConvergenceError` is raised.
 
 Forces in N, lengths in mm (rolling radius in mm), speeds in m/s.
@@ -24,6 +29,7 @@ from numpy.typing import NDArray
 
 from wearcast.physics.bogie_equations import BogieContacts
 from wearcast.physics.curving import (
+    ContactTable,
     CurvingConvergenceError,
     CurvingResult,
     build_contact_table,
@@ -31,6 +37,7 @@ from wearcast.physics.curving import (
     curve_case,
     solve_curving_cases_or_none,
 )
+from wearcast.physics.curving_table import same_rail, track_rails
 from wearcast.physics.vehicles import BogieVehicle
 from wearcast.physics.vocabulary import CurveClass
 
@@ -84,9 +91,28 @@ def _curvature(point: tuple) -> float:
     return 0.0 if point[0] is None else 1.0 / point[0]
 
 
-def _solve_points(vehicle: BogieVehicle, points: list[tuple], table, fastsim_grid: int,
+def _solve_points(vehicle: BogieVehicle, points: list[tuple],
+                  tables: tuple[ContactTable, ContactTable], fastsim_grid: int,
                   warm: dict | None = None, warm_first: bool = False
                   ) -> list[CurvingResult | None]:
+    """:func:`_solve_table_points` of the curve points on ``tables[0]`` and the tangent
+    points on ``tables[1]`` (one batch when they are one table)."""
+    if tables[0] is tables[1]:
+        return _solve_table_points(vehicle, points, tables[0], fastsim_grid, warm, warm_first)
+    out: list[CurvingResult | None] = [None] * len(points)
+    for tangent, table in ((False, tables[0]), (True, tables[1])):
+        idx = [k for k, p in enumerate(points) if (p[0] is None) == tangent]
+        if idx:
+            res = _solve_table_points(vehicle, [points[k] for k in idx], table, fastsim_grid,
+                                      warm, warm_first)
+            for k, r in zip(idx, res, strict=True):
+                out[k] = r
+    return out
+
+
+def _solve_table_points(vehicle: BogieVehicle, points: list[tuple], table: ContactTable,
+                        fastsim_grid: int, warm: dict | None = None, warm_first: bool = False
+                        ) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
     from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
     ``CurvingResult.saturation_state`` on the previous profile) if it has one, else it is None
@@ -168,8 +194,7 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
                          f"got {patch_width!r}")
     y = np.asarray(y_mm, dtype=float)
     z = np.asarray(z_mm, dtype=float)
-    table = build_contact_table(lambda q: np.interp(q, y, z), vehicle.rail_profile,
-                                vehicle.rail_inclination, vehicle.wheel_radius_m)
+    tables = _class_tables(vehicle, y, z, classes)
     points = [_operating_point(c, unbalanced_acceleration_m_s2, tangent_speed_kmh)
               for c in classes]
     unique = sorted(set(points), key=lambda p: (p[0] is None, p[0] or 0.0, p[1], p[2]))
@@ -177,7 +202,7 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
     warm: dict | None = None
     for pc in prev.values():
         warm = {**(warm or {}), **pc.states}
-    solved = dict(zip(unique, _solve_points(vehicle, unique, table, fastsim_grid, warm,
+    solved = dict(zip(unique, _solve_points(vehicle, unique, tables, fastsim_grid, warm,
                                             warm_first), strict=True))
     states = dict(warm or {})
     states.update({p: r.saturation_state for p, r in solved.items() if r is not None})
@@ -193,6 +218,31 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
                                          prev.get(wheel), patch_width, states, stacks)
         fallbacks += fb
     return out, fallbacks
+
+
+def _class_tables(vehicle: BogieVehicle, y: NDArray, z: NDArray,
+                  classes: Sequence[CurveClass]) -> tuple[ContactTable, ContactTable]:
+    """(curve table, tangent table) of the wheel profile z(y): the curves' on the rails of
+    a left curve (``track_rails``: low rail left, high rail right), tangent track's on
+    ``rail_profile``; one table, built once, when those rails are all one profile."""
+    def wheel(q: NDArray) -> NDArray:
+        return np.interp(q, y, z)
+
+    curve_left, curve_right = track_rails(vehicle, "left")
+    plain = vehicle.rail_profile
+    if same_rail(curve_left, plain) and same_rail(curve_right, plain):
+        table = build_contact_table(wheel, plain, vehicle.rail_inclination,
+                                    vehicle.wheel_radius_m)
+        return table, table
+    has_curves = any(not c.is_tangent for c in classes)
+    has_tangent = any(c.is_tangent for c in classes)
+    curve = (build_contact_table(wheel, curve_left, vehicle.rail_inclination,
+                                 vehicle.wheel_radius_m, rail_right=curve_right)
+             if has_curves or not has_tangent else None)
+    tangent = (build_contact_table(wheel, plain, vehicle.rail_inclination,
+                                   vehicle.wheel_radius_m) if has_tangent else curve)
+    assert tangent is not None
+    return (tangent if curve is None else curve), tangent
 
 
 def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points: list,
@@ -259,10 +309,19 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
         speed[kept] = previous.speed_m_s[kept]
     loaded = data["in_contact"].astype(bool) & (data["normal_force_n"] > 1.0)
     if patch_width == "kik_piotrowski":
-        data["b_mm"] = np.where(loaded, conformal_half_width_mm(
-            y, z, vehicle.rail_profile, vehicle.rail_inclination, data["wheel_y_mm"],
-            data["rail_y_mm"], np.where(loaded, data["normal_force_n"], 0.0), data["a_mm"],
-            data["b_mm"]), data["b_mm"])
+        # the rail under the tracked wheel: tangent track's, or in a curve (solved as a left
+        # curve) the left rail of the curve table where the wheel is on the solution's left
+        curve_rails = track_rails(vehicle, "left")
+        under = [vehicle.rail_profile if c.is_tangent else curve_rails[int(si[k])]
+                 for k, c in enumerate(classes)]
+        for rail_k in {id(r): r for r in under}.values():
+            rows = np.array([r is rail_k for r in under])
+            width = conformal_half_width_mm(
+                y, z, rail_k, vehicle.rail_inclination, data["wheel_y_mm"][rows],
+                data["rail_y_mm"][rows],
+                np.where(loaded[rows], data["normal_force_n"][rows], 0.0), data["a_mm"][rows],
+                data["b_mm"][rows])
+            data["b_mm"][rows] = np.where(loaded[rows], width, data["b_mm"][rows])
     rail["in_contact"] = rail["in_contact"].astype(bool) & (rail["normal_force_n"] > 1.0)
     data["in_contact"] = loaded
     return ClassContacts(**data, speed_m_s=speed, rail_axles=rail, states=states), fallbacks

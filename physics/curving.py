@@ -123,7 +123,8 @@ def solve_curving(vehicle: BogieVehicle, radius_m: float | None, cant_mm: float 
     direction : ``left`` or ``right`` (side towards which the track bends)
     unbalanced_acceleration_m_s2 : a_nc used when the speed is not given [m/s^2]
     tangent_speed_m_s : speed on tangent track when not given [m/s]
-    table : contact table (default: the vehicle's profile pair, cached)
+    table : contact table (default: the vehicle's profile pair on the curve's rails, cached,
+        ``curving_table.vehicle_contact_table``)
     tol : tolerance on the norm of the scaled residual (forces [N] and moments [N m] divided by
         the static wheel load [N]); the default 1e-6 is 0.05 N on a 50 kN wheel
     fastsim_grid : FASTSIM grid n (n x n) for tau_max on the final state
@@ -186,7 +187,12 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     cases : operating points (:func:`curve_case`)
     labels : per case (radius_m or None, direction, cant_mm) for the results (default from
         the curvature)
-    table, tol, fastsim_grid : as :func:`solve_curving`
+    table, tol, fastsim_grid : as :func:`solve_curving`; a given table serves every case
+        (a table with a rail per side, ``ContactTable.right``, puts its left rail under the
+        left wheels whatever the curve's direction); without one each case takes the
+        vehicle's rails of its own direction (``curving_table.track_rails``: a vehicle with a
+        high and a low rail runs the cases of each direction, and tangent track, on their
+        own tables)
     skip_failed : return None for the cases that did not converge instead of raising (one
         batch for any number of failures; the wear loop's fallback)
     initial_states : per case an equilibrium state (``CurvingResult.saturation_state``: the
@@ -225,6 +231,11 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     CurvingConvergenceError naming the first case that did not converge (not with
     ``skip_failed``).
     """
+    if table is None and (vehicle.high_rail_profile is not None
+                          or vehicle.low_rail_profile is not None):
+        return _solve_by_direction(vehicle, cases, labels, tol, fastsim_grid, skip_failed,
+                                   initial_states, creep_grid, contact_pipeline,
+                                   pipeline_equilibrium)
     table = vehicle_contact_table(vehicle) if table is None else table
     n = len(cases)
     if labels is None:
@@ -331,6 +342,32 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     return results
 
 
+def _solve_by_direction(vehicle: BogieVehicle, cases: list[CurveCase],
+                        labels: list[tuple[float | None, str, float]] | None, tol: float,
+                        fastsim_grid: int, skip_failed: bool,
+                        initial_states: list[NDArray | None] | None, creep_grid: int | None,
+                        contact_pipeline: bool, pipeline_equilibrium: bool
+                        ) -> list[CurvingResult | None]:
+    """:func:`solve_curving_cases_or_none` of a vehicle with a high and a low rail: the cases
+    grouped by the curve's direction (tangent track apart), each group on its rails' table."""
+    groups: dict[str | None, list[int]] = {}
+    for k, c in enumerate(cases):
+        kappa = c.curvature_per_m
+        groups.setdefault(None if kappa == 0 else ("left" if kappa > 0 else "right"),
+                          []).append(k)
+    out: list[CurvingResult | None] = [None] * len(cases)
+    for direction, idx in groups.items():
+        res = solve_curving_cases_or_none(
+            vehicle, [cases[k] for k in idx],
+            None if labels is None else [labels[k] for k in idx],
+            vehicle_contact_table(vehicle, direction), tol, fastsim_grid, skip_failed,
+            None if initial_states is None else [initial_states[k] for k in idx],
+            creep_grid, contact_pipeline, pipeline_equilibrium)
+        for k, r in zip(idx, res, strict=True):
+            out[k] = r
+    return out
+
+
 def solve_free_wheelset(table: ContactTable, radius_m: float, wheel_load_n: float = 50_000.0,
                         friction: float = 0.35, direction: str = "left",
                         tol: float = DEFAULT_TOLERANCE) -> tuple[float, float, NDArray]:
@@ -406,7 +443,7 @@ def flange_contact_radius_m(vehicle: BogieVehicle, cant_mm: float = 0.0,
     to R_min. Found on a geometric grid of radii solved together, refined by nested grids.
     """
     threshold = 0.01 * vehicle.wheel_load_n if threshold_n is None else threshold_n
-    table = vehicle_contact_table(vehicle)
+    table = vehicle_contact_table(vehicle, "left")
 
     def touches(radii: NDArray) -> NDArray:
         cases = [curve_case(float(r), cant_mm, speed_m_s, "left", unbalanced_acceleration_m_s2)

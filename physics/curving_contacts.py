@@ -86,7 +86,8 @@ def _fill(out: dict[str, NDArray], index: tuple[int, int, int], pc: PoseContact,
             out[name][index + (k,)] = v
 
 
-def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float, shift_mm: NDArray,
+def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float | tuple[float, float],
+                      shift_mm: NDArray,
                       yaw_rad: NDArray, roll_rad: NDArray, rolling_ratio: NDArray,
                       wheel_load_n: NDArray, curvature_per_m: NDArray, mu: float,
                       shear_modulus_mpa: float, creep_grid: int) -> PipelineContacts:
@@ -96,7 +97,8 @@ def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float, shift_mm: NDA
     ----------
     track : the wheelset on its track (``curving_table.ContactTable.track``)
     rail_origin_mm : distance of the curving table's rail-frame origin from the track centre
-        [mm] (rail y = distance from the centre line - origin)
+        [mm] (rail y = distance from the centre line - origin); a (left, right) pair when the
+        two rails are profiles of their own (``ContactTable.side``)
     shift_mm, yaw_rad, roll_rad, rolling_ratio : (cases, 2 wheelsets) wheelset centre shift
         [mm] (+ left), yaw [rad] (+ nose left), roll [rad] (+ left wheel up), Omega r0 / V
     wheel_load_n : (cases, 2 wheelsets, 2 sides) vertical wheel loads [N]
@@ -114,6 +116,8 @@ def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float, shift_mm: NDA
     out = {name: np.zeros(shape) for name in PATCH_FIELDS}
     ok = np.ones(n_cases, dtype=bool)
     errors: dict[int, str] = {}
+    origins = ((rail_origin_mm, rail_origin_mm) if isinstance(rail_origin_mm, (int, float))
+               else (float(rail_origin_mm[0]), float(rail_origin_mm[1])))
     for s_idx, side in enumerate(SIDES):
         sign = 1.0 if side == "left" else -1.0
         keys = [(c, w) for c in range(n_cases) for w in range(2)]
@@ -143,7 +147,7 @@ def pipeline_contacts(track: WheelsetTrack, rail_origin_mm: float, shift_mm: NDA
             if pc is None:
                 continue
             try:
-                _fill(out, (c, w, s_idx), pc, sign, rail_origin_mm)
+                _fill(out, (c, w, s_idx), pc, sign, origins[s_idx])
             except PipelineContactError as err:
                 ok[c] = False
                 errors.setdefault(c, f"{side} wheel: {err}")

@@ -11,7 +11,7 @@ Frames and signs: docs/conventions.md and ``contact.geometry``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -86,6 +86,12 @@ class ContactTable:
     log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
     ``hertz_b1`` [mm]. ``track``: the wheelset on its track the table was built from (the
     contact pipeline evaluates the curving's contacts on it, ``curving_contacts``).
+
+    ``right``: the right wheel's table when the two rails differ (a high and a low rail of
+    their own, ``build_contact_table(..., rail_right=...)``): the left-wheel table of the
+    mirrored track (rails exchanged), so that its shift is also towards ITS wheel's field
+    side; None when both rails are one profile (the right wheel is this table's mirror
+    image). :meth:`side` gives each wheel's table.
     """
 
     shift_mm: NDArray[np.float64]
@@ -103,6 +109,22 @@ class ContactTable:
     hertz_a1: NDArray[np.float64]
     hertz_b1: NDArray[np.float64]
     track: WheelsetTrack
+    right: ContactTable | None = None
+
+    def side(self, index: int) -> ContactTable:
+        """The table of wheel ``index`` (0 left, 1 right, ``vocabulary.SIDES`` order): this
+        one for the left wheel, and for the right wheel ``right`` when the rails differ, else
+        this one (mirror symmetry)."""
+        if index not in (0, 1):
+            raise ValueError(f"side index must be 0 (left) or 1 (right), got {index!r}")
+        return self if index == 0 or self.right is None else self.right
+
+    def mirrored(self) -> ContactTable:
+        """The table of the mirrored track (left and right rails exchanged): the right
+        wheel's table becomes the left one's; itself when both rails are one profile."""
+        if self.right is None:
+            return self
+        return replace(self.right, right=replace(self, right=None))
 
     def rigid_rise(self, shift_mm: ArrayLike) -> NDArray[np.float64]:
         """Rise of the wheel at rigid contact for a shift towards its field side [mm]."""
@@ -416,7 +438,8 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
                         wheel_radius_m: float = 0.46, max_shift_mm: float = 15.0,
                         shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
                         wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
-                        smoothing_mm: tuple[float, float] = GAP_SMOOTHING_MM) -> ContactTable:
+                        smoothing_mm: tuple[float, float] = GAP_SMOOTHING_MM,
+                        rail_right: str | RailShape | None = None) -> ContactTable:
     """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
 
     The gap comes from the rigid multi-point geometry (``contact.geometry``, the module checked
@@ -429,7 +452,13 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     ----------
     wheel_height_mm : wheel profile z(y) in the wheel frame [mm]; default S1002
         (``profiles.s1002``)
-    rail : ``60E1`` or ``60E2`` (``profiles.rails``) or a measured rail shape
+    rail : ``60E1`` or ``60E2`` (``profiles.rails``) or a measured rail shape: the left rail
+        (and the right one unless ``rail_right`` is given)
+    rail_right : the right rail when it is another profile (a high and a low rail of their
+        own in a curve): the roll of the rigid geometry is then solved on the two rails, and
+        the result carries the right wheel's own table (``ContactTable.right``, built the same
+        way on the mirrored track). None, or a rail equal to ``rail``: one (mirrored) table,
+        the same numbers as without it
     inclination : rail inclination slope (1/40, 1/20)
     wheel_radius_m : nominal rolling radius at the tape circle [m]
     max_shift_mm, shift_step_mm : table range +-max_shift and step of the shift [mm]
@@ -454,6 +483,27 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     placed with the gauge 1435 mm measured 14 mm below the top; gaps are vertical distances
     (valid while contact angles stay below ~75 deg; the S1002 flank is at 70 deg).
     """
+    args = (wheel_height_mm, inclination, wheel_radius_m, max_shift_mm, shift_step_mm,
+            wheel_step_mm, wheel_y_range_mm, smoothing_mm)
+    if rail_right is None or same_rail(rail, rail_right):
+        return _side_table(rail, None, *args)
+    return replace(_side_table(rail, rail_right, *args),
+                   right=_side_table(rail_right, rail, *args))
+
+
+def same_rail(a: str | RailShape, b: str | RailShape) -> bool:
+    """Whether two rails are one profile (names equal, or shapes equal by content)."""
+    return type(a) is type(b) and bool(a == b)
+
+
+def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
+                wheel_height_mm: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None,
+                inclination: float, wheel_radius_m: float, max_shift_mm: float,
+                shift_step_mm: float, wheel_step_mm: float,
+                wheel_y_range_mm: tuple[float, float], smoothing_mm: tuple[float, float]
+                ) -> ContactTable:
+    """The left wheel's table on ``rail`` with ``opposite`` as the right rail (None: the
+    same rail, mirrored) (:func:`build_contact_table`)."""
     wheel = s1002_height_mm if wheel_height_mm is None else wheel_height_mm
     r0_mm = 1000.0 * wheel_radius_m
     y_w = np.arange(wheel_y_range_mm[0], wheel_y_range_mm[1] + 1e-9, wheel_step_mm)
@@ -462,7 +512,7 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     slope = (wheel(y_w + h) - wheel(y_w - h)) / (2 * h)
     # the rigid geometry on a curve through the wheel's points (0.05 mm) and the rail's
     track = wheelset_track(wheel_curve_from_height(wheel, wheel_y_range_mm), rail,
-                           inclination, r0_mm)
+                           inclination, r0_mm, rail_right=opposite)
     # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
     centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
     y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
@@ -506,28 +556,53 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
 
 @lru_cache(maxsize=16)
 def contact_table_for(wheel_profile: str, rail: str, inclination: float,
-                      wheel_radius_m: float) -> ContactTable:
+                      wheel_radius_m: float, rail_right: Any = None) -> ContactTable:
     """Cached :func:`build_contact_table` for a named wheel profile (``S1002``)."""
     if wheel_profile.upper() != "S1002":
         raise ValueError(f"unknown wheel profile {wheel_profile!r}; known: S1002")
-    return build_contact_table(None, rail, inclination, wheel_radius_m)
+    return build_contact_table(None, rail, inclination, wheel_radius_m, rail_right=rail_right)
 
 
 @lru_cache(maxsize=16)
 def measured_wheel_table_for(wheel: MeasuredWheel, rail: str, inclination: float,
-                             wheel_radius_m: float) -> ContactTable:
+                             wheel_radius_m: float, rail_right: Any = None) -> ContactTable:
     """Cached :func:`build_contact_table` for a measured wheel (over the part of the contact
     search range its points cover)."""
     return build_contact_table(wheel.height_mm, rail, inclination, wheel_radius_m,
-                               wheel_y_range_mm=wheel.search_range_mm)
+                               wheel_y_range_mm=wheel.search_range_mm, rail_right=rail_right)
 
 
-def vehicle_contact_table(vehicle: BogieVehicle) -> ContactTable:
-    """The (cached) contact table of a vehicle's profile pair."""
-    rail: Any = vehicle.rail_profile  # a name or a hashable measured-rail shape
+def track_rails(vehicle: BogieVehicle, direction: str | None = None
+                ) -> tuple[str | RailShape, str | RailShape]:
+    """The (left, right) rails under a vehicle in a curve to ``direction`` (``left`` or
+    ``right``; None for tangent track).
+
+    A vehicle with a high and a low rail of their own (``BogieVehicle.high_rail_profile`` /
+    ``low_rail_profile``) runs in every curve with the high rail outside: in a left curve the
+    right rail is the high one, in a right curve the left one. On tangent track, and without
+    them, both rails are ``rail_profile``.
+    """
+    if direction is not None and direction not in ("left", "right"):
+        raise ValueError(f"direction must be 'left', 'right' or None, got {direction!r}")
+    high = vehicle.high_rail_profile
+    low = vehicle.low_rail_profile
+    if direction is None or (high is None and low is None):
+        return vehicle.rail_profile, vehicle.rail_profile
+    high = vehicle.rail_profile if high is None else high
+    low = vehicle.rail_profile if low is None else low
+    return (low, high) if direction == "left" else (high, low)
+
+
+def vehicle_contact_table(vehicle: BogieVehicle, direction: str | None = None) -> ContactTable:
+    """The (cached) contact table of a vehicle's profile pair on the rails of a curve to
+    ``direction`` (:func:`track_rails`; None: tangent track)."""
+    left, right = track_rails(vehicle, direction)
+    rail: Any = left  # a name or a hashable measured-rail shape
+    other: Any = None if same_rail(left, right) else right
     if isinstance(vehicle.wheel_profile, MeasuredWheel):
         return measured_wheel_table_for(vehicle.wheel_profile, rail,
                                         float(vehicle.rail_inclination),
-                                        float(vehicle.wheel_radius_m))
+                                        float(vehicle.wheel_radius_m), other)
     return contact_table_for(vehicle.wheel_profile, rail,
-                             float(vehicle.rail_inclination), float(vehicle.wheel_radius_m))
+                             float(vehicle.rail_inclination), float(vehicle.wheel_radius_m),
+                             other)

@@ -38,7 +38,9 @@ def pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_gri
     ws = q[:, :10].reshape(m, 2, 5)
     y, d = ws[..., 0], ws[..., 3:5]
     loads = np.broadcast_to(wheel_loads(vehicle, params[:, 1])[:, None, :], (m, 2, 2))
-    pc = pipeline_contacts(table.track, TAPE_CIRCLE_HALF_SPACING_MM - table.rail_offset_mm,
+    origins = (TAPE_CIRCLE_HALF_SPACING_MM - table.rail_offset_mm,
+               TAPE_CIRCLE_HALF_SPACING_MM - table.side(1).rail_offset_mm)
+    pc = pipeline_contacts(table.track, origins,
                            centre_shift(table, y, d), ws[..., 1] * 1e-3, wheelset_roll(table, y, d),
                            1.0 + ws[..., 2] * 1e-3, loads, params[:, 0], vehicle.friction,
                            SHEAR_MODULUS_MPA, creep_grid)

@@ -1,13 +1,30 @@
 """Rail fed back into the contact: the wheel-and-rail evolution of seed 003 §6.1 (item 2).
 
-For each rail step j the wheel evolves from new over its n_sw wheel steps on the rail r_j
-(:func:`wearcast.physics.wear_loop.simulate_wear` with the rail wear from all wheels; the
-contact table rebuilt with r_j and the current wheel at every contact update); the mean rail's
-depth per vehicle, averaged over those wheel steps (the seed's arithmetic mean of the virtual
-rail profiles), is scaled to D_step^r (seed 003 eq. 4: N_step = D_step^r / max depth) and
-removed along the rail's normal, giving r_{j+1}
+For each rail step j the wheel evolves from new over its n_sw wheel steps on the rails of step
+j (:func:`wearcast.physics.wear_loop.simulate_wear` with the rail wear from all wheels; the
+contact table rebuilt with those rails and the current wheel at every contact update); the
+rails' depths per vehicle, averaged over those wheel steps (the seed's arithmetic mean of the
+virtual rail profiles), are scaled to D_step^r (seed 003 eq. 4: N_step = D_step^r / max depth)
+and removed along the rail's normal, giving the rails of step j + 1
 (:class:`~wearcast.physics.rail_head_wear.WornRail`). km_tot^j (seed 003 Tables 5, 8) is the
-mileage at the end of the wheel evolution on r_j.
+mileage at the end of the wheel evolution on the rails of step j.
+
+Two feedbacks (``FEEDBACKS``):
+
+* ``high_low`` (default): the high rail (outer rail of every curve) and the low rail (inner)
+  are profiles of their own, each worn by its own depth and fed back under its own wheels
+  (``BogieVehicle.high_rail_profile`` / ``low_rail_profile``: the curving's contact table per
+  side); N_step scales the deeper of the two to D_step^r. Tangent track runs on the mean rail
+  r_j, worn by the mean of the two depths (the tangent wear is shared by both rails,
+  ``rail_wear_per_vehicle``).
+* ``mean``: seed 003 §4.3's one mean rail profile, (high + low) / 2, under both wheels
+  everywhere; N_step scales its depth to D_step^r.
+
+Known limit: with Hertz patches (``patch_width="hertz"``) the high rail's gauge-corner wear
+lands on the same narrow band every step (the wheel restarts from new); on seed 003's route
+the fifth ``high_low`` step's curving solves then fail and the loop's fallback contacts make
+that step meaningless (``contact_fallbacks``; ``benchmarks/reproduce_seed003.py
+--rail-steps``).
 
 Depths in mm, mileage in km, masses in t (Mt = 1e6 t).
 """
@@ -31,21 +48,28 @@ from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_loop import SEED_003_RAIL_D_STEP_MM, WearSteps, simulate_wear
 from wearcast.physics.wear_simulation import WearSimulation
 
+#: Rail feedbacks of :func:`simulate_rail_steps` (module docstring).
+FEEDBACKS = ("high_low", "mean")
+
 
 @dataclass(frozen=True)
 class RailStepSimulation:
     """Result of :func:`simulate_rail_steps` (seed 003 §6.1, item 2; Tables 5 and 8).
 
     wheel_runs : one :class:`WearSimulation` per rail step j, the wheel from new on rail r_j
-    rails : r_0 .. r_n (n + 1; r_0 the vehicle's rail), the mean rail fed into the contact
+    rails : r_0 .. r_n (n + 1; r_0 the vehicle's rail), the mean rail (``mean``: the rail of
+        both wheels everywhere; ``high_low``: the rail of tangent track)
     high_rails, low_rails : the outer and inner rail of the curves, r_0 .. r_n, worn with the
-        same vehicle numbers from their own depths (computed on the mean rail's contact; they
-        are outputs, not fed back: the contact takes one rail for both wheels)
+        same vehicle numbers from their own depths (``high_low``: fed back, each under its
+        own wheels in every curve; ``mean``: outputs only, the contact takes the mean rail)
+    feedback : ``high_low`` or ``mean`` (module docstring)
     km_tot : (n,) mileage at the end of each wheel evolution [km] (seed 003 km_tot^j)
     vehicles_per_step : (n,) N_step^j = D_step^r / max(mean rail depth per vehicle) (eq. 4)
     rail_y_mm : (n_rail,) the inclined rail frame's lateral grid [mm]
     rail_depth_per_vehicle_mm : (n, n_rail) mean rail depth per vehicle, averaged over the
         wheel steps of each rail step [mm]
+    high_depth_per_vehicle_mm, low_depth_per_vehicle_mm : (n, n_rail) the same of the high
+        and the low rail [mm]
     rail_step_depth_mm : D_step^r [mm]; vehicle_mass_t : mass per vehicle passage [t]
     elapsed_s : wall time [s]
     """
@@ -61,6 +85,9 @@ class RailStepSimulation:
     rail_step_depth_mm: float
     vehicle_mass_t: float
     elapsed_s: float
+    high_depth_per_vehicle_mm: NDArray
+    low_depth_per_vehicle_mm: NDArray
+    feedback: str = "high_low"
 
     @property
     def tonnage_mt(self) -> NDArray:
@@ -92,7 +119,7 @@ class RailStepSimulation:
                          "tonnage_mt": float(self.tonnage_mt[j]),
                          "rail_after": wear})
         return {"rail_steps": rows, "rail_step_depth_mm": self.rail_step_depth_mm,
-                "elapsed_s": self.elapsed_s}
+                "feedback": self.feedback, "elapsed_s": self.elapsed_s}
 
 
 def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
@@ -100,40 +127,56 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
                         rail_step_depth_mm: float = SEED_003_RAIL_D_STEP_MM,
                         steps: WearSteps | None = None, law: WearLaw | str = "usfd",
                         progress: Callable[[int, int, float], None] | None = None,
-                        **kwargs: Any) -> RailStepSimulation:
+                        feedback: str = "high_low", **kwargs: Any) -> RailStepSimulation:
     """Wheel and rail evolution with the worn rail fed back into the contact (seed 003 §6.1).
 
     For rail step j = 0 .. n_rail_steps - 1 the wheel evolves from new over ``steps`` (default
-    20 adaptive steps of D_step^w = 0.2 mm, seed 003) on rail r_j (:func:`simulate_wear` with
-    ``rail_from_all_wheels``: the contact table is rebuilt with r_j and the current wheel at
-    every contact update); the mean rail depth per vehicle averaged over the wheel steps is
-    smoothed like the wheel's (``smoothing``, default a 3 mm moving average), scaled so that
-    its maximum is D_step^r (eq. 4) and removed along the rail's normal
-    (``rail_head_wear.wear_rail``): r_{j+1}. The high and low rails are worn alongside with
-    the same N_step from their own depths (outputs only).
+    20 adaptive steps of D_step^w = 0.2 mm, seed 003) on the rails of step j
+    (:func:`simulate_wear` with ``rail_from_all_wheels``: the contact table is rebuilt with
+    them and the current wheel at every contact update); the high, low and mean rail depths
+    per vehicle averaged over the wheel steps are smoothed like the wheel's (``smoothing``,
+    default a 3 mm moving average), scaled by N_step so that the fed-back depth peaks at
+    D_step^r (eq. 4: ``high_low`` the deeper of high and low, ``mean`` the mean) and removed
+    along the rail's normal (``rail_head_wear.wear_rail``): the rails of step j + 1. With
+    ``high_low`` the high and low rails are fed back each under its own wheels (module
+    docstring); with ``mean`` the mean rail under both and the other two are outputs.
 
     vehicle : BogieVehicle or preset name (its ``rail_profile`` is r_0: a name, or a
-        ``WornRail`` to continue from); law : default seed 003's USFD; progress :
-        callback(rail step done, n_rail_steps, km_tot); kwargs : passed to
-        :func:`simulate_wear` (axle, side, application, smoothing, ...).
+        ``WornRail`` to continue from; its ``high_rail_profile`` / ``low_rail_profile``, when
+        given, start the high and low rails); law : default seed 003's USFD; progress :
+        callback(rail step done, n_rail_steps, km_tot); feedback : ``high_low`` or ``mean``;
+        kwargs : passed to :func:`simulate_wear` (axle, side, application, smoothing, ...).
     """
     start = time.perf_counter()
     if n_rail_steps < 1 or not rail_step_depth_mm > 0:
         raise ValueError("n_rail_steps must be >= 1 and rail_step_depth_mm positive")
     if "rail_from_all_wheels" in kwargs:
         raise ValueError("simulate_rail_steps always takes the rail wear from all wheels")
+    if feedback not in FEEDBACKS:
+        raise ValueError(f"feedback must be one of {', '.join(FEEDBACKS)}, got {feedback!r}")
     veh = vehicle_preset(vehicle) if isinstance(vehicle, str) else vehicle
     rail: Any = veh.rail_profile
-    if not isinstance(rail, (str, WornRail)):
-        raise ValueError("vehicle.rail_profile must be a rail name or a WornRail "
-                         f"to wear it, got {rail!r}")
+    high0: Any = rail if veh.high_rail_profile is None else veh.high_rail_profile
+    low0: Any = rail if veh.low_rail_profile is None else veh.low_rail_profile
+    for name, r in (("rail_profile", rail), ("high_rail_profile", high0),
+                    ("low_rail_profile", low0)):
+        if not isinstance(r, (str, WornRail)):
+            raise ValueError(f"vehicle.{name} must be a rail name or a WornRail "
+                             f"to wear it, got {r!r}")
+    if feedback == "mean" and (veh.high_rail_profile is not None
+                               or veh.low_rail_profile is not None):
+        raise ValueError("feedback 'mean' puts one rail under both wheels: the vehicle must "
+                         "not carry a high or low rail of its own")
     given = kwargs.get("smoothing")
     smooth = Smoothing() if given is None else given
-    rails, highs, lows = [rail], [rail], [rail]
+    rails, highs, lows = [rail], [high0], [low0]
+    high_depths, low_depths = [], []
     runs, km_tot, n_step, depths = [], [], [], []
     rail_y = None
     for j in range(n_rail_steps):
-        run = simulate_wear(_with_rail(veh, rails[-1]), route_classes, law=law, steps=steps,
+        on = (_with_rail(veh, rails[-1]) if feedback == "mean"
+              else _with_rails(veh, rails[-1], highs[-1], lows[-1]))
+        run = simulate_wear(on, route_classes, law=law, steps=steps,
                             rail_from_all_wheels=True, **kwargs)
         runs.append(run)
         km_tot.append(float(run.mileage_km[-1]))
@@ -144,12 +187,14 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
         mean, high, low = (smooth.apply(d, rail_y) for d in (
             run.rail_depth_per_vehicle_mm, run.rail_high_depth_per_vehicle_mm,
             run.rail_low_depth_per_vehicle_mm))
-        peak = float(np.max(mean))
+        peak = float(np.max(mean) if feedback == "mean" else max(np.max(high), np.max(low)))
         if not peak > 0:
             raise ValueError("the rail does not wear on this route (no loaded patch)")
         n = rail_step_depth_mm / peak
         n_step.append(n)
         depths.append(mean)
+        high_depths.append(high)
+        low_depths.append(low)
         incl = float(veh.rail_inclination)
         rails.append(wear_rail(rails[-1], rail_y, n * mean, incl, name=f"r{j + 1}"))
         highs.append(wear_rail(highs[-1], rail_y, n * high, incl, name=f"high r{j + 1}"))
@@ -163,9 +208,17 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
         low_rails=tuple(lows), km_tot=np.array(km_tot), vehicles_per_step=np.array(n_step),
         rail_y_mm=rail_y, rail_depth_per_vehicle_mm=np.array(depths),
         rail_step_depth_mm=float(rail_step_depth_mm), vehicle_mass_t=mass_t,
-        elapsed_s=time.perf_counter() - start)
+        elapsed_s=time.perf_counter() - start,
+        high_depth_per_vehicle_mm=np.array(high_depths),
+        low_depth_per_vehicle_mm=np.array(low_depths), feedback=feedback)
 
 
 def _with_rail(vehicle: BogieVehicle, rail: str | RailShape) -> BogieVehicle:
     """The vehicle on another rail (a name or a rail shape)."""
     return replace(vehicle, rail_profile=rail)
+
+
+def _with_rails(vehicle: BogieVehicle, rail: str | RailShape, high: str | RailShape,
+                low: str | RailShape) -> BogieVehicle:
+    """The vehicle on a line with tangent rail ``rail`` and curves' high and low rails."""
+    return replace(vehicle, rail_profile=rail, high_rail_profile=high, low_rail_profile=low)

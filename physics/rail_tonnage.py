@@ -87,7 +87,7 @@ def rails_worn_to_tonnages(vehicle: BogieVehicle | str, route_classes: Any,
                              f"({done_mt:.2f} Mt after them)")
         step = simulate_rail_steps(replace(veh, rail_profile=rail), route_classes,
                                    n_rail_steps=1, rail_step_depth_mm=rail_step_depth_mm,
-                                   steps=steps, law=law, **kwargs)
+                                   steps=steps, law=law, feedback="mean", **kwargs)
         step_mt = float(step.vehicles_per_step[0]) * mass_t / 1e6
         per_step.append(step_mt)
         depth = step.rail_depth_per_vehicle_mm[0]

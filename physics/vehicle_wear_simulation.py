@@ -86,6 +86,10 @@ class VehicleWearOptions:
     rail : the rail under every wheel, replacing the preset's: a name (``60E1``, ``60E2``),
         a measured rail or a rail worn by the loop (``rail_head_wear.WornRail``, e.g. a rail
         step of ``rail_feedback.simulate_rail_steps``); None: the preset's
+    high_rail, low_rail : the outer and the inner rail of every curve when they are profiles
+        of their own (``BogieVehicle.high_rail_profile`` / ``low_rail_profile``: the curving's
+        contact table per side; e.g. ``RailStepSimulation.high_rails[j]`` / ``low_rails[j]``);
+        tangent track keeps ``rail``; None: ``rail`` in the curves too
     traction_torque_nm : driving (+) or braking (-) torque on every axle of every motor bogie
         [N m], held over the whole route (the mean tractive effort the line demands, seed 001
         §2.2's traction on motor wheels); trailer bogies roll free; None: the preset's
@@ -99,6 +103,8 @@ class VehicleWearOptions:
     application: str = "global"
     rail: Any = None
     traction_torque_nm: float | None = None
+    high_rail: Any = None
+    low_rail: Any = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.forward_share <= 1.0:
@@ -233,6 +239,9 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
     bogies = vehicle_bogies(vehicle, opts.friction)
     if opts.rail is not None:
         bogies = [(replace(b, rail_profile=opts.rail), n) for b, n in bogies]
+    if opts.high_rail is not None or opts.low_rail is not None:
+        bogies = [(replace(b, high_rail_profile=opts.high_rail, low_rail_profile=opts.low_rail),
+                   n) for b, n in bogies]
     if opts.traction_torque_nm is not None:
         bogies = [(replace(b, traction_torque_nm=float(opts.traction_torque_nm))
                    if b.bogie_type == "motor" else b, n) for b, n in bogies]

@@ -71,6 +71,10 @@ class BogieVehicle:
     rail_inclination : rail inclination as a slope (1/40 or 1/20)
     friction : wheel-rail coefficient of friction mu [-]
     traction_torque_nm : driving (+) or braking (-) torque per axle [N m]
+    high_rail_profile, low_rail_profile : the outer and the inner rail of every curve when
+        they are profiles of their own (a worn high rail, a measured low rail; None:
+        ``rail_profile``); tangent track keeps ``rail_profile`` on both sides
+        (``curving_table.track_rails``)
     """
 
     name: str
@@ -92,6 +96,8 @@ class BogieVehicle:
     rail_inclination: float = 1.0 / 40.0
     friction: float = 0.35
     traction_torque_nm: float = 0.0
+    high_rail_profile: str | RailShape | None = None
+    low_rail_profile: str | RailShape | None = None
 
     def __post_init__(self) -> None:
         if self.bogie_type not in ("motor", "trailer"):
@@ -104,13 +110,18 @@ class BogieVehicle:
             raise ValueError("wheel_profile must be 'S1002' or a measured wheel "
                              f"(profiles.measured_wheel.MeasuredWheel), got "
                              f"{self.wheel_profile!r}")
-        if isinstance(self.rail_profile, str):
-            if self.rail_profile not in ("60E1", "60E2"):
-                raise ValueError("rail_profile must be '60E1' or '60E2' (or a measured rail), "
-                                 f"got {self.rail_profile!r}")
-        elif not callable(getattr(self.rail_profile, "contact_points", None)):
-            raise ValueError("rail_profile must be '60E1', '60E2' or a rail given by its points "
-                             f"(profiles.measured_rail.MeasuredRail), got {self.rail_profile!r}")
+        for name in ("rail_profile", "high_rail_profile", "low_rail_profile"):
+            rail = getattr(self, name)
+            if rail is None and name != "rail_profile":
+                continue
+            if isinstance(rail, str):
+                if rail not in ("60E1", "60E2"):
+                    raise ValueError(f"{name} must be '60E1' or '60E2' (or a measured rail), "
+                                     f"got {rail!r}")
+            elif not callable(getattr(rail, "contact_points", None)):
+                raise ValueError(f"{name} must be '60E1', '60E2' or a rail given by its "
+                                 "points (profiles.measured_rail.MeasuredRail), got "
+                                 f"{rail!r}")
         positive = ("wheelbase_m", "wheel_radius_m", "wheelset_mass_kg", "bogie_mass_kg",
                     "primary_longitudinal_stiffness_n_per_m", "primary_lateral_stiffness_n_per_m",
                     "primary_semi_spacing_m", "friction")

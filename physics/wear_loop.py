@@ -358,7 +358,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                                         if rail_sides else None),
         rail_low_depth_per_vehicle_mm=(np.mean([r["low"] for r in rail_sides], axis=0)
                                        if rail_sides else None),
-        rail=veh.rail_profile)
+        rail=veh.rail_profile, high_rail=veh.high_rail_profile, low_rail=veh.low_rail_profile)
 
 
 def _check_diverged(z_mm: NDArray, z_initial_mm: NDArray, step: int, mileage_km: float) -> None:

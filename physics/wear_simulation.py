@@ -29,7 +29,10 @@ class WearSimulation:
     application, rail_y_mm, rail_depth_per_vehicle_mm (n_rail,), rail_steps (rail step ->
     vehicles, tonnage [Mt], max depth [mm]; ``rail_wear_per_vehicle.rail_step_rows``),
     rail_high/low_depth_per_vehicle_mm (n_rail,) with ``rail_from_all_wheels`` (else None),
-    rail (the rail the wheel ran on: a name or a rail shape), step_basis_mm (n_steps, n_basis,
+    rail (the rail the wheel ran on: a name or a rail shape; with a high and a low rail of
+    their own, the rail of tangent track), high_rail / low_rail (the curves' outer and inner
+    rails when they are profiles of their own, ``BogieVehicle.high_rail_profile``, else
+    None), step_basis_mm (n_steps, n_basis,
     n): vertical-equivalent depth of each step per unit basis coefficient (the zone
     coefficients for Archard/KTH), used by the exact calibration; coefficients (n_basis,).
     """
@@ -57,6 +60,8 @@ class WearSimulation:
     rail_high_depth_per_vehicle_mm: NDArray | None = None
     rail_low_depth_per_vehicle_mm: NDArray | None = None
     rail: Any = "60E1"
+    high_rail: Any = None
+    low_rail: Any = None
 
     @property
     def wear_mm(self) -> NDArray:

@@ -105,6 +105,9 @@ class WheelsetTrack:
         it is known and the rail curve does not reach it (a measured head whose lip overhangs
         the gauge face: the curve is what a wheel can touch, the gauge point lies under the
         lip); None finds it on the curve, ``gauge_height_mm`` below the inclined top
+    rail_right_gauge_point_mm : the same for ``rail_right`` when it is given (its own head
+        may need the known point where the left one does not); without ``rail_right`` the
+        right rail is ``rail`` and takes ``rail_gauge_point_mm``
     """
 
     wheel: ProfileCurve
@@ -119,6 +122,7 @@ class WheelsetTrack:
     rail_inclination: float = 1.0 / 40.0
     wheel_sample_mm: float = 0.2
     rail_gauge_point_mm: tuple[float, float] | None = None
+    rail_right_gauge_point_mm: tuple[float, float] | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -199,13 +203,15 @@ def _prepare(wt: WheelsetTrack) -> tuple[_Side, _Side]:
     if "sides" in wt._cache:
         return wt._cache["sides"]
     sides = []
-    for sign, wheel, rail in ((1.0, wt.wheel, wt.rail),
-                              (-1.0, wt.wheel_right or wt.wheel, wt.rail_right or wt.rail)):
+    right_gauge = (wt.rail_gauge_point_mm if wt.rail_right is None
+                   else wt.rail_right_gauge_point_mm)
+    for sign, wheel, rail, gauge_point in (
+            (1.0, wt.wheel, wt.rail, wt.rail_gauge_point_mm),
+            (-1.0, wt.wheel_right or wt.wheel, wt.rail_right or wt.rail, right_gauge)):
         s_w = wheel.sample(wt.wheel_sample_mm)
         y_w, z_w = wheel.point(s_w)
         ry, rz, rslope, rs, offset = _rail_envelope(rail, wt.rail_inclination, wt.gauge_mm,
-                                                    wt.gauge_height_mm, sign,
-                                                    wt.rail_gauge_point_mm)
+                                                    wt.gauge_height_mm, sign, gauge_point)
         sides.append(_Side(sign, wheel, rail, s_w,
                            sign * (wt.tape_circle_distance_mm / 2.0 + y_w),
                            -(wt.nominal_radius_mm + z_w), ry, rz, rslope, rs, offset,

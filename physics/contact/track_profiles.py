@@ -40,18 +40,27 @@ def wheel_curve_from_height(wheel_height_mm: Callable[[NDArray[np.float64]], NDA
 
 
 def wheelset_track(wheel: ProfileCurve, rail: str | RailShape, inclination: float,
-                   nominal_radius_mm: float, wheel_sample_mm: float = 0.2) -> WheelsetTrack:
-    """The wheelset on a track of ``rail`` inclined by ``inclination`` (a slope, 1/40).
+                   nominal_radius_mm: float, wheel_sample_mm: float = 0.2,
+                   rail_right: str | RailShape | None = None) -> WheelsetTrack:
+    """The wheelset on a track of ``rail`` inclined by ``inclination`` (a slope, 1/40);
+    ``rail_right``: the right rail when it differs from the left one (None: ``rail`` on both
+    sides, the mirrored track).
 
     The gauge point is found on the rail curve as for a named rail; a measured or worn head
     comes in the nominal rail frame with its gauge point at 60E1's
     (``MeasuredRail.contact_points``), which may lie under a lip the contact curve omits: then
-    that known point places it.
+    that known point places it (each rail by its own head).
     """
-    y_rail, z_rail = rail_profile(rail, step_mm=0.1, inclination=0.0)
-    gauge_point = None
-    if not isinstance(rail, str) and not reaches_gauge_depth(y_rail, z_rail, inclination):
-        gauge_point = (NOMINAL_GAUGE_POINT_Y_MM, -GAUGE_HEIGHT_MM)
-    return WheelsetTrack(wheel=wheel, rail=ProfileCurve.from_points(y_rail, z_rail),
+    def curve_and_gauge(r: str | RailShape) -> tuple[ProfileCurve, tuple[float, float] | None]:
+        y_rail, z_rail = rail_profile(r, step_mm=0.1, inclination=0.0)
+        gauge_point = None
+        if not isinstance(r, str) and not reaches_gauge_depth(y_rail, z_rail, inclination):
+            gauge_point = (NOMINAL_GAUGE_POINT_Y_MM, -GAUGE_HEIGHT_MM)
+        return ProfileCurve.from_points(y_rail, z_rail), gauge_point
+
+    left, gauge_left = curve_and_gauge(rail)
+    right, gauge_right = (None, None) if rail_right is None else curve_and_gauge(rail_right)
+    return WheelsetTrack(wheel=wheel, rail=left, rail_right=right,
                          nominal_radius_mm=nominal_radius_mm, rail_inclination=inclination,
-                         wheel_sample_mm=wheel_sample_mm, rail_gauge_point_mm=gauge_point)
+                         wheel_sample_mm=wheel_sample_mm, rail_gauge_point_mm=gauge_left,
+                         rail_right_gauge_point_mm=gauge_right)

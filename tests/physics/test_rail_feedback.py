@@ -115,11 +115,19 @@ def test_rail_takes_its_share_of_every_wheels_volume_per_law(bogie_contacts, law
 @pytest.fixture(scope="module")
 def rail_steps():
     return simulate_rail_steps("metro_b", CURVES, n_rail_steps=2, law="usfd",
+                               steps=WearSteps(n_steps=4, depth_per_step_mm=0.5),
+                               feedback="mean")
+
+
+@pytest.fixture(scope="module")
+def high_low_steps():
+    return simulate_rail_steps("metro_b", CURVES, n_rail_steps=2, law="usfd",
                                steps=WearSteps(n_steps=4, depth_per_step_mm=0.5))
 
 
 def test_rail_steps_wear_the_rail_by_d_step_and_feed_it_back(rail_steps):
     rs = rail_steps
+    assert rs.feedback == "mean"
     assert len(rs.wheel_runs) == 2 and len(rs.rails) == 3
     assert rs.rails[0] == "60E1" and isinstance(rs.rails[1], WornRail)
     # Each wheel evolution ran on its rail step's rail (the contact table's rail).
@@ -139,6 +147,46 @@ def test_rail_steps_wear_the_rail_by_d_step_and_feed_it_back(rail_steps):
         low.corner_45.value_mm)
     d = rs.to_dict()
     assert [r["rail_step"] for r in d["rail_steps"]] == [0, 1]
+
+
+def test_high_and_low_rails_are_worn_and_fed_back_each_under_its_own_wheels(rail_steps,
+                                                                          high_low_steps):
+    rs, mean = high_low_steps, rail_steps
+    assert rs.feedback == "high_low"
+    # Rail step 0 runs on new rails: one profile under both wheels, the same numbers as the
+    # mean feedback's (the per-side contact with one rail twice is the mirrored one).
+    a, b = rs.wheel_runs[0], mean.wheel_runs[0]
+    assert np.array_equal(a.profiles_mm, b.profiles_mm) and np.array_equal(a.mileage_km,
+                                                                          b.mileage_km)
+    # Eq. (4) on the deeper of the two rails: its scaled depth peaks at D_step^r, the other
+    # stays below it; the mean rail (tangent track's) takes the mean of the two.
+    for j in range(2):
+        n = rs.vehicles_per_step[j]
+        peaks = (n * rs.high_depth_per_vehicle_mm[j].max(),
+                 n * rs.low_depth_per_vehicle_mm[j].max())
+        assert max(peaks) == pytest.approx(rs.rail_step_depth_mm, rel=1e-9)
+        assert np.allclose(rs.rail_depth_per_vehicle_mm[j], 0.5 * (
+            rs.high_depth_per_vehicle_mm[j] + rs.low_depth_per_vehicle_mm[j]))
+    first_high = rs.vehicles_per_step[0] * rs.high_depth_per_vehicle_mm[0]
+    assert rs.high_rails[1].area_loss_mm2() == pytest.approx(_arc_integral("60E1", first_high),
+                                                            rel=0.03)
+    # the high rail wears on its gauge corner, the low rail on its crown (N_step is set by
+    # the deeper one, so each is worn less than D_step^r where it is the shallower)
+    high, low = rs.head_wear(1, "high"), rs.head_wear(1, "low")
+    assert high.corner_45.value_mm > 0.1 and high.corner_45.value_mm > 5 * high.vertical.value_mm
+    assert low.vertical.value_mm > 0.1 and low.vertical.value_mm > 5 * abs(low.corner_45.value_mm)
+    # Fed back: each wheel evolution ran with its step's high rail outside and low rail
+    # inside every curve, tangent track on the mean rail; the mean feedback's step 1 ran on
+    # the mean rail alone and wore the wheel otherwise.
+    for j, run in enumerate(rs.wheel_runs):
+        assert run.rail == rs.rails[j]
+        assert run.high_rail == rs.high_rails[j] and run.low_rail == rs.low_rails[j]
+    assert mean.wheel_runs[1].high_rail is None
+    assert rs.high_rails[1] != rs.low_rails[1]
+    assert not np.array_equal(rs.wheel_runs[1].profiles_mm, mean.wheel_runs[1].profiles_mm)
+    assert rs.to_dict()["feedback"] == "high_low"
+    with pytest.raises(ValueError, match="feedback"):
+        simulate_rail_steps("metro_b", CURVES, feedback="both")
 
 
 def test_worn_rail_makes_the_flange_contact_more_conformal(rail_steps):
@@ -207,13 +255,14 @@ SEED_RATIO_TOLERANCE = 0.05
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1 "
-    "(FASTSIM curving: 757 -> 745 km, ratio 0.984 against the seed's 1.038; with the earlier "
-    "saturation creep law 587 -> 553 km, 0.94). On the worn rail the flange patches are more "
-    "conformal (saturation-law run: route mean area 6.0 -> 7.4 mm^2) and their frictional "
-    "power T gamma falls 3 %, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 N/mm^2) "
-    "makes the worn volume of a patch proportional to its AREA there: the wheel's worn volume "
-    "per km rises (FASTSIM curving: 60.8 -> 61.2 mm^3/km)"))
+    "not reproduced: on seed 003's Table 3 route the loop's km_tot FALLS at rail step 1, with "
+    "the high and low rails fed back each under its own wheels (the default, contact table "
+    "per side: 757.2 -> 738.7 km, ratio 0.976) as with seed 003's one mean rail (757.2 -> "
+    "744.0 km, 0.982) against the seed's 1.038 (benchmarks/reproduce_seed003.py --rail-steps "
+    "[--rail-feedback mean]). On the worn rail the flange patches are more conformal and "
+    "their frictional power falls, but USFD's plateau (K_w = 55.1 for 10.4 <= I_w <= 77.2 "
+    "N/mm^2) makes a patch's worn volume proportional to its AREA there: the wheel's worn "
+    "volume per km rises (60.8 -> 60.9 mm^3/km per side, 61.2 mean)"))
 def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference_dir):
     import pandas as pd
 
