@@ -122,7 +122,8 @@ def rail_steps():
 @pytest.fixture(scope="module")
 def high_low_steps():
     return simulate_rail_steps("metro_b", CURVES, n_rail_steps=2, law="usfd",
-                               steps=WearSteps(n_steps=4, depth_per_step_mm=0.5))
+                               steps=WearSteps(n_steps=4, depth_per_step_mm=0.5),
+                               feedback="high_low")
 
 
 def test_rail_steps_wear_the_rail_by_d_step_and_feed_it_back(rail_steps):
@@ -147,6 +148,8 @@ def test_rail_steps_wear_the_rail_by_d_step_and_feed_it_back(rail_steps):
         low.corner_45.value_mm)
     d = rs.to_dict()
     assert [r["rail_step"] for r in d["rail_steps"]] == [0, 1]
+    assert [r["contact_fallbacks"] for r in d["rail_steps"]] == [
+        run.contact_fallbacks for run in rs.wheel_runs]
 
 
 def test_high_and_low_rails_are_worn_and_fed_back_each_under_its_own_wheels(rail_steps,
