@@ -25,7 +25,7 @@ from wearcast.physics.profiles.parameters import flange_parameters_rows
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import AlignedProfile, ReferenceHeight, align_to_reference
 from wearcast.statistics.alignment_batch import align_to_reference_batch
-from wearcast.statistics.cleaning import CleanedProfile, clean_profile
+from wearcast.statistics.cleaning import CleanedProfile, clean_profile, resample_profile
 from wearcast.statistics.cleaning_batch import clean_profiles_batch
 from wearcast.statistics.processing import ProcessedProfile
 from wearcast.statistics.profile_parameters import FlangeParameters
@@ -36,34 +36,8 @@ from wearcast.statistics.wear_curves import (
     DEFAULT_SPLIT_Y_MM,
     WearAreas,
     reference_on_grid,
+    wear_areas_rows,
 )
-
-
-def wear_areas_rows(grid_y_mm: NDArray[np.float64], wear_mm: NDArray[np.float64],
-                    split_y_mm: float = DEFAULT_SPLIT_Y_MM
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`.wear_curves.wear_areas_mm2` of each row of ``wear_mm`` (M, g) [mm] on the
-    ascending grid (g,) [mm]: flange and tread areas (M,) [mm²] (trapezoids, NaN intervals
-    left out, the interval straddling the split cut there)."""
-    m, g = wear_mm.shape
-    if g < 2:
-        return np.zeros(m), np.zeros(m)
-    dy = np.diff(grid_y_mm)
-    segment = 0.5 * (wear_mm[:, 1:] + wear_mm[:, :-1]) * dy
-    n_flange = max(int(np.searchsorted(grid_y_mm, split_y_mm, side="right")) - 1, -1)
-    cut = max(n_flange, 0)
-    flange = np.nansum(segment[:, :cut], axis=1)
-    tread = np.nansum(segment[:, cut:], axis=1)
-    if 0 <= n_flange < g - 1 and grid_y_mm[n_flange] < split_y_mm:
-        i = n_flange
-        y0, y1 = float(grid_y_mm[i]), float(grid_y_mm[i + 1])
-        w0, w1 = wear_mm[:, i], wear_mm[:, i + 1]
-        both = np.isfinite(w0) & np.isfinite(w1)
-        w_split = w0 + (split_y_mm - y0) * (w1 - w0) / (y1 - y0)
-        left = np.where(both, 0.5 * (w0 + w_split) * (split_y_mm - y0), 0.0)
-        flange = flange + left
-        tread = tread - left
-    return flange, tread
 
 
 def _wear_rows(aligned: Sequence[AlignedProfile], grid: NDArray[np.float64],
@@ -73,8 +47,7 @@ def _wear_rows(aligned: Sequence[AlignedProfile], grid: NDArray[np.float64],
     z_ref = reference_on_grid(grid, reference_height)
     out = np.empty((len(aligned), grid.size))
     for row, a in zip(out, aligned, strict=True):
-        row[:] = np.interp(grid, a.y_mm, a.z_mm)
-        row[(grid < a.y_mm[0]) | (grid > a.y_mm[-1])] = np.nan
+        row[:] = resample_profile(a.y_mm, a.z_mm, grid)
     return z_ref - out
 
 
