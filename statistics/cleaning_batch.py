@@ -1,12 +1,12 @@
-""":func:`.cleaning.clean_profile` for a block of raw profiles, as the block processing
-(:mod:`.processing_batch`) asks for it.
+""":func:`.cleaning.clean_profile` for a list of raw profiles.
 
 The cleaning rules are written once, in :func:`.cleaning.clean_profile`; this is that function
-profile by profile. (A vectorised copy of the rules over the block's rows was measured as
-saving some 7 % of the cleaning time of a block of 128 profiles, a few per cent of the
-block's processing, which did not pay for a second copy of every rule.) A profile with a NaN
-coordinate and one that cannot be used get ``None``: the caller runs ``clean_profile`` on it
-itself (for the note on the dropped points, or the ``ValueError`` that says why).
+profile by profile, with the contract the block processing once had of its vectorised copy of
+the rules: a profile with a NaN or infinite coordinate and one that cannot be used get
+``None``, and the caller runs ``clean_profile`` on it itself (for the note on the dropped
+points, or the ``ValueError`` that says why). The block processing (:mod:`.processing_batch`)
+now calls ``clean_profile`` directly. (The vectorised copy saved about 7 % of the cleaning
+time of a block of 128 profiles, which did not pay for a second copy of every rule.)
 """
 
 from __future__ import annotations

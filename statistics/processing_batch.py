@@ -2,11 +2,14 @@
 
 The import processes profiles by the hundred (docs/conventions.md "The hybrid model" steps
 1–2 per measurement: seed 001 §3.1, seed 000 §IV.A). One call per profile pays numpy's
-per-call cost some three hundred times per profile; here the steps that dominate run once per
-chunk over the profiles held as rows of one array (:mod:`.ragged`): the cleaning of regular
-profiles (:func:`.cleaning_batch.clean_profiles_batch`; the others one by one), the rigid
-alignment (:func:`.alignment_batch.align_to_reference_batch`), the wear areas. The wear curves'
-interpolation and the reference check stay per profile.
+per-call cost some three hundred times per profile; here the steps where that pays run once
+per chunk over the profiles held as rows of one array (:mod:`.ragged`): the rigid alignment
+(:func:`.alignment_batch.align_to_reference_batch`), the wear areas
+(:func:`.wear_curves.wear_areas_rows`) and Sd/Sh/qR
+(:func:`wearcast.physics.profiles.parameters.flange_parameters_rows`). Each rule is written
+once and shared with the per-profile functions; the cleaning
+(:func:`.cleaning.clean_profile`), the wear curves' interpolation and the reference check run
+profile by profile.
 
 The results are those of ``process_profile`` to floating-point round-off
 (tests/statistics/test_processing_batch.py compares them profile by profile); a profile the
@@ -26,7 +29,6 @@ from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import AlignedProfile, ReferenceHeight, align_to_reference
 from wearcast.statistics.alignment_batch import align_to_reference_batch
 from wearcast.statistics.cleaning import CleanedProfile, clean_profile, resample_profile
-from wearcast.statistics.cleaning_batch import clean_profiles_batch
 from wearcast.statistics.processing import ProcessedProfile
 from wearcast.statistics.profile_parameters import FlangeParameters
 from wearcast.statistics.ragged import pack
@@ -95,14 +97,12 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
     out: list[ProcessedProfile | ValueError] = []
     cleaned: list[CleanedProfile] = []
     where: list[int] = []
-    fast = clean_profiles_batch([(np.asarray(y), np.asarray(z)) for y, z in profiles])
-    for (y, z), c in zip(profiles, fast, strict=True):
-        if c is None:
-            try:
-                c = clean_profile(y, z)
-            except ValueError as exc:
-                out.append(exc)
-                continue
+    for y, z in profiles:
+        try:
+            c = clean_profile(y, z)
+        except ValueError as exc:
+            out.append(exc)
+            continue
         where.append(len(out))
         out.append(exc_placeholder)
         cleaned.append(c)
