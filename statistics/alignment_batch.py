@@ -1,14 +1,18 @@
 """The rigid alignment of :func:`.alignment.align_to_reference`, for many profiles at once.
 
-Seed 000 §IV.A eq. (2) solved by Gauss–Newton with Huber reweighting, exactly as
-:func:`wearcast.statistics.alignment.align_to_reference` does it for one profile (same fit
-windows, same point selection, same weights, same 3x3 solve, same stopping rule), but each
-step runs once over a chunk of profiles held as padded rows (:mod:`.ragged`): numpy's
-per-call cost is paid once per chunk instead of once per profile. Each profile keeps its own
-iteration count (a converged row is frozen while the others go on). The results equal the
-per-profile ones to floating-point round-off (sums are taken in another order); a profile
-the batch cannot fit (too few points, a singular system) gets ``None``, and the caller runs
-the per-profile function on it (which raises its ``ValueError``).
+Seed 000 §IV.A eq. (2) solved by Gauss–Newton with Huber reweighting. The fit's rules are
+written once, in :mod:`.alignment`, as functions of one profile's points or of padded rows
+(``fit_mask``, ``rotate``, ``on_reference``, ``residuals_and_jacobian``, ``huber_weights``,
+``solve3``, ``converged``, ``normal_distances``); ``align_to_reference`` calls them on its
+profile, this module once per step on a chunk of profiles held as padded rows
+(:mod:`.ragged`), so numpy's per-call cost is paid once per chunk instead of once per
+profile. What is this module's own is the bookkeeping: the rows' padding and compaction, the
+reference looked up by index (:mod:`.table_interp`, the numbers of ``np.interp``), each
+profile's own iteration count (a converged row is frozen while the others go on) and the
+normal equations summed row by row. The results equal the per-profile ones to floating-point
+round-off (the normal equations' sums are taken in another order); a profile the batch cannot
+fit (too few points, a singular system) gets ``None``, and the caller runs the per-profile
+function on it (which raises its ``ValueError``).
 """
 
 from __future__ import annotations
@@ -20,37 +24,21 @@ from numpy.typing import NDArray
 
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import (
-    _MAX_SLOPE,
     FIT_WINDOWS_MM,
-    HUBER_C,
-    MAD_TO_SIGMA,
-    MIN_SCALE_MM,
-    MIN_WINDOW_POINTS,
     AlignedProfile,
     ReferenceHeight,
+    converged,
+    fit_mask,
+    huber_weights,
+    normal_distances,
+    on_reference,
     reference_table,
+    residuals_and_jacobian,
+    rotate,
+    solve3,
 )
-from wearcast.statistics.ragged import compact, pack, upper_median
+from wearcast.statistics.ragged import compact, pack
 from wearcast.statistics.table_interp import reference_even_table
-
-
-def _solve3_rows(a00: NDArray, a01: NDArray, a02: NDArray, a11: NDArray, a12: NDArray,
-                 a22: NDArray, b0: NDArray, b1: NDArray, b2: NDArray
-                 ) -> tuple[NDArray, NDArray, NDArray, NDArray[np.bool_]]:
-    """Cramer's rule of ``alignment._solve3`` for symmetric 3x3 systems, row by row;
-    also the rows that are singular (by the same test)."""
-    a10, a20, a21 = a01, a02, a12
-    c00 = a11 * a22 - a12 * a21
-    c01 = a12 * a20 - a10 * a22
-    c02 = a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    scale = np.abs(a00 * a11 * a22) + 1e-300
-    singular = ~np.isfinite(det) | (np.abs(det) < 1e-12 * scale)
-    det = np.where(singular, 1.0, det)
-    x0 = (b0 * c00 + a01 * (b2 * a12 - b1 * a22) + a02 * (b1 * a21 - b2 * a11)) / det
-    x1 = (a00 * (b1 * a22 - b2 * a12) + b0 * c01 + a02 * (b2 * a10 - b1 * a20)) / det
-    x2 = (a00 * (b2 * a11 - b1 * a21) + a01 * (b1 * a20 - b2 * a10) + b0 * c02) / det
-    return x0, x1, x2, singular
 
 
 def align_to_reference_batch(
@@ -87,11 +75,8 @@ def align_to_reference_batch(
     y_all, valid = pack([np.asarray(y, dtype=float) for y, _ in profiles], np.nan)
     z_all, _ = pack([np.asarray(z, dtype=float) for _, z in profiles], np.nan)
 
-    # the fit points of alignment._fit_mask, moved to the left of each row
-    inside = valid & (y_all >= y_lo) & (y_all <= y_hi)
-    in_window = [valid & (y_all >= lo) & (y_all <= hi) for lo, hi in windows_mm]
-    use_windows = np.logical_and.reduce([w.sum(axis=1) >= MIN_WINDOW_POINTS for w in in_window])
-    fit = np.where(use_windows[:, None], np.logical_or.reduce(in_window) & inside, inside)
+    # the fit points (alignment.fit_mask), moved to the left of each row
+    fit, use_windows = fit_mask(y_all, y_lo, y_hi, windows_mm, valid)
     (yf_all, zf_all), used = compact(fit, y_all, z_all)
 
     failed = used.sum(axis=1) < 3
@@ -105,8 +90,7 @@ def align_to_reference_batch(
         c = np.cos(theta[rows])[:, None]
         s = np.sin(theta[rows])[:, None]
         yf, zf, v = yf_all[rows], zf_all[rows], used[rows]
-        yr = c * yf - s * zf
-        zr = s * yf + c * zf
+        yr, zr = rotate(yf, zf, c, s)
         yp = yr + dy[rows][:, None]
         need = (check[rows] | (np.where(v, yp, np.inf).min(axis=1) <= y_lo)
                 | (np.where(v, yp, -np.inf).max(axis=1) >= y_hi))
@@ -114,7 +98,7 @@ def align_to_reference_batch(
         if need.any():
             # keep points inside the reference's range and off its near-vertical parts
             slope = even.interp(yp[need], at[need], 1)
-            good = v[need] & (yp[need] > y_lo) & (yp[need] < y_hi) & (np.abs(slope) < _MAX_SLOPE)
+            good = v[need] & on_reference(yp[need], slope, y_lo, y_hi)
             v[need] = good
             used[rows[need]] = good
             check[rows[need]] = False
@@ -128,23 +112,20 @@ def align_to_reference_batch(
                                                  zr[keep], yp[keep], v[keep], at[keep])
                 if rows.size == 0:
                     break
-        z_ref = even.interp(yp, at, 0)
-        slope = even.interp(yp, at, 1)
-        norm = 1.0 / np.sqrt(1.0 + slope * slope)
-        residual = (zr + dz[rows][:, None] - z_ref) * norm
-        j0, j1, j2 = -slope * norm, norm, (yr + slope * zr) * norm
+        residual, j0, j1, j2 = residuals_and_jacobian(yr, zr, dz[rows][:, None],
+                                                      even.interp(yp, at, 0),
+                                                      even.interp(yp, at, 1))
         if robust and iteration >= 1:
-            abs_r = np.abs(residual)
-            cutoff = HUBER_C * np.maximum(MAD_TO_SIGMA * upper_median(abs_r, v), MIN_SCALE_MM)
-            w = np.where(v, np.minimum(1.0, cutoff[:, None] / np.maximum(abs_r, 1e-300)), 0.0)
+            w = huber_weights(np.abs(residual), v)
         else:
             w = v.astype(float)
         w0, w1, w2 = j0 * w, j1 * w, j2 * w
-        x0, x1, x2, singular = _solve3_rows(
-            (w0 * j0).sum(axis=1), (w0 * j1).sum(axis=1), (w0 * j2).sum(axis=1),
-            (w1 * j1).sum(axis=1), (w1 * j2).sum(axis=1), (w2 * j2).sum(axis=1),
-            -(w0 * residual).sum(axis=1), -(w1 * residual).sum(axis=1),
+        a01, a02, a12 = (w0 * j1).sum(axis=1), (w0 * j2).sum(axis=1), (w1 * j2).sum(axis=1)
+        x0, x1, x2, regular = solve3(
+            (w0 * j0).sum(axis=1), a01, a02, a01, (w1 * j1).sum(axis=1), a12, a02, a12,
+            (w2 * j2).sum(axis=1), -(w0 * residual).sum(axis=1), -(w1 * residual).sum(axis=1),
             -(w2 * residual).sum(axis=1))
+        singular = ~regular
         if singular.any():
             failed[rows[singular]] = True
             active[rows[singular]] = False
@@ -153,20 +134,20 @@ def align_to_reference_batch(
         dz[rows[ok]] += x1[ok]
         theta[rows[ok]] += x2[ok]
         if iteration >= 2:
-            done = ok & (np.abs(x0) + np.abs(x1) + 100.0 * np.abs(x2) < tolerance)
+            done = ok & converged(x0, x1, x2, tolerance)
             active[rows[done]] = False
 
     c_all = np.cos(theta)[:, None]
     s_all = np.sin(theta)[:, None]
-    y_al = c_all * y_all - s_all * z_all + dy[:, None]
-    z_al = s_all * y_all + c_all * z_all + dz[:, None]
+    y_al, z_al = rotate(y_all, z_all, c_all, s_all)
+    y_al, z_al = y_al + dy[:, None], z_al + dz[:, None]
     # final residual at the solution, over the points the fit kept
-    yp = c_all * yf_all - s_all * zf_all + dy[:, None]
+    yr, zr = rotate(yf_all, zf_all, c_all, s_all)
+    yp = yr + dy[:, None]
     at = even.locate(yp)
-    z_ref = even.interp(yp, at, 0, left=np.nan, right=np.nan)
-    slope = even.interp(yp, at, 1)
-    good = used & np.isfinite(z_ref) & (np.abs(slope) < _MAX_SLOPE)
-    r = (s_all * yf_all + c_all * zf_all + dz[:, None] - z_ref) / np.sqrt(1.0 + slope ** 2)
+    r, good = normal_distances(zr, dz[:, None], even.interp(yp, at, 0, left=np.nan, right=np.nan),
+                               even.interp(yp, at, 1))
+    good &= used
     n_good = good.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         rms = np.sqrt(np.where(good, r * r, 0.0).sum(axis=1) / n_good)

@@ -2,11 +2,14 @@
 
 The import processes profiles by the hundred (docs/conventions.md "The hybrid model" steps
 1–2 per measurement: seed 001 §3.1, seed 000 §IV.A). One call per profile pays numpy's
-per-call cost some three hundred times per profile; here the steps that dominate run once per
-chunk over the profiles held as rows of one array (:mod:`.ragged`): the cleaning of regular
-profiles (:func:`.cleaning_batch.clean_profiles_batch`; the others one by one), the rigid
-alignment (:func:`.alignment_batch.align_to_reference_batch`), the wear areas. The wear curves'
-interpolation and the reference check stay per profile.
+per-call cost some three hundred times per profile; here the steps where that pays run once
+per chunk over the profiles held as rows of one array (:mod:`.ragged`): the rigid alignment
+(:func:`.alignment_batch.align_to_reference_batch`), the wear areas
+(:func:`.wear_curves.wear_areas_rows`) and Sd/Sh/qR
+(:func:`wearcast.physics.profiles.parameters.flange_parameters_rows`). Each rule is written
+once and shared with the per-profile functions; the cleaning
+(:func:`.cleaning.clean_profile`), the wear curves' interpolation and the reference check run
+profile by profile.
 
 The results are those of ``process_profile`` to floating-point round-off
 (tests/statistics/test_processing_batch.py compares them profile by profile); a profile the
@@ -25,8 +28,7 @@ from wearcast.physics.profiles.parameters import flange_parameters_rows
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import AlignedProfile, ReferenceHeight, align_to_reference
 from wearcast.statistics.alignment_batch import align_to_reference_batch
-from wearcast.statistics.cleaning import CleanedProfile, clean_profile
-from wearcast.statistics.cleaning_batch import clean_profiles_batch
+from wearcast.statistics.cleaning import CleanedProfile, clean_profile, resample_profile
 from wearcast.statistics.processing import ProcessedProfile
 from wearcast.statistics.profile_parameters import FlangeParameters
 from wearcast.statistics.ragged import pack
@@ -36,34 +38,8 @@ from wearcast.statistics.wear_curves import (
     DEFAULT_SPLIT_Y_MM,
     WearAreas,
     reference_on_grid,
+    wear_areas_rows,
 )
-
-
-def wear_areas_rows(grid_y_mm: NDArray[np.float64], wear_mm: NDArray[np.float64],
-                    split_y_mm: float = DEFAULT_SPLIT_Y_MM
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`.wear_curves.wear_areas_mm2` of each row of ``wear_mm`` (M, g) [mm] on the
-    ascending grid (g,) [mm]: flange and tread areas (M,) [mm²] (trapezoids, NaN intervals
-    left out, the interval straddling the split cut there)."""
-    m, g = wear_mm.shape
-    if g < 2:
-        return np.zeros(m), np.zeros(m)
-    dy = np.diff(grid_y_mm)
-    segment = 0.5 * (wear_mm[:, 1:] + wear_mm[:, :-1]) * dy
-    n_flange = max(int(np.searchsorted(grid_y_mm, split_y_mm, side="right")) - 1, -1)
-    cut = max(n_flange, 0)
-    flange = np.nansum(segment[:, :cut], axis=1)
-    tread = np.nansum(segment[:, cut:], axis=1)
-    if 0 <= n_flange < g - 1 and grid_y_mm[n_flange] < split_y_mm:
-        i = n_flange
-        y0, y1 = float(grid_y_mm[i]), float(grid_y_mm[i + 1])
-        w0, w1 = wear_mm[:, i], wear_mm[:, i + 1]
-        both = np.isfinite(w0) & np.isfinite(w1)
-        w_split = w0 + (split_y_mm - y0) * (w1 - w0) / (y1 - y0)
-        left = np.where(both, 0.5 * (w0 + w_split) * (split_y_mm - y0), 0.0)
-        flange = flange + left
-        tread = tread - left
-    return flange, tread
 
 
 def _wear_rows(aligned: Sequence[AlignedProfile], grid: NDArray[np.float64],
@@ -73,8 +49,7 @@ def _wear_rows(aligned: Sequence[AlignedProfile], grid: NDArray[np.float64],
     z_ref = reference_on_grid(grid, reference_height)
     out = np.empty((len(aligned), grid.size))
     for row, a in zip(out, aligned, strict=True):
-        row[:] = np.interp(grid, a.y_mm, a.z_mm)
-        row[(grid < a.y_mm[0]) | (grid > a.y_mm[-1])] = np.nan
+        row[:] = resample_profile(a.y_mm, a.z_mm, grid)
     return z_ref - out
 
 
@@ -122,14 +97,12 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
     out: list[ProcessedProfile | ValueError] = []
     cleaned: list[CleanedProfile] = []
     where: list[int] = []
-    fast = clean_profiles_batch([(np.asarray(y), np.asarray(z)) for y, z in profiles])
-    for (y, z), c in zip(profiles, fast, strict=True):
-        if c is None:
-            try:
-                c = clean_profile(y, z)
-            except ValueError as exc:
-                out.append(exc)
-                continue
+    for y, z in profiles:
+        try:
+            c = clean_profile(y, z)
+        except ValueError as exc:
+            out.append(exc)
+            continue
         where.append(len(out))
         out.append(exc_placeholder)
         cleaned.append(c)

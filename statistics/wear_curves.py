@@ -8,7 +8,6 @@ the averaged wear curves have their minimum; the wear area of a region is A = �
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,7 +85,7 @@ def wear_areas_mm2(
     wear_mm: ArrayLike,
     split_y_mm: float = DEFAULT_SPLIT_Y_MM,
 ) -> WearAreas:
-    """Flange and tread wear areas of a wear curve.
+    """Flange and tread wear areas of a wear curve (:func:`wear_areas_rows` of one row).
 
     Parameters
     ----------
@@ -96,29 +95,44 @@ def wear_areas_mm2(
 
     Returns
     -------
-    WearAreas with ∫ w dy [mm²] by the trapezoid rule; intervals with a NaN end are left
-    out (NaN-aware). An interval straddling the split is cut there, w at the split taken by
-    linear interpolation, so that flange + tread equals the integral over the whole grid.
+    WearAreas with ∫ w dy [mm²] (:func:`wear_areas_rows`).
     """
     y = np.asarray(grid_y_mm, dtype=float)
     w = np.asarray(wear_mm, dtype=float)
     if y.shape != w.shape:
         raise ValueError(f"grid_y_mm and wear_mm differ in length ({y.size} vs {w.size})")
-    if y.size < 2:
-        return WearAreas(flange_mm2=0.0, tread_mm2=0.0)
-    dy = np.diff(y)
-    segment = 0.5 * (w[1:] + w[:-1]) * dy  # NaN where an end is NaN
+    flange, tread = wear_areas_rows(y, w[None, :], split_y_mm)
+    return WearAreas(flange_mm2=float(flange[0]), tread_mm2=float(tread[0]))
+
+
+def wear_areas_rows(grid_y_mm: NDArray[np.float64], wear_mm: NDArray[np.float64],
+                    split_y_mm: float = DEFAULT_SPLIT_Y_MM
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Flange and tread wear areas (M,) [mm²] of each row of ``wear_mm`` (M, g) [mm] on the
+    ascending grid (g,) [mm] (seed 001 §3.1: A = ∫ w dy over y < split and y >= split).
+
+    The trapezoid rule; intervals with a NaN end are left out (NaN-aware). An interval
+    straddling the split is cut there, w at the split taken by linear interpolation, so that
+    flange + tread equals the integral over the whole grid.
+    """
+    m, g = wear_mm.shape
+    if g < 2:
+        return np.zeros(m), np.zeros(m)
+    dy = np.diff(grid_y_mm)
+    segment = 0.5 * (wear_mm[:, 1:] + wear_mm[:, :-1]) * dy  # NaN where an end is NaN
     # intervals [y_i, y_i+1]: flange if y_i+1 <= split, tread if y_i >= split, else straddling
-    n_flange = int(np.searchsorted(y, split_y_mm, side="right")) - 1  # intervals before split
-    flange = float(np.nansum(segment[: max(n_flange, 0)]))
-    tread = float(np.nansum(segment[max(n_flange, 0) :]))
-    if 0 <= n_flange < y.size - 1 and y[n_flange] < split_y_mm:
+    n_flange = max(int(np.searchsorted(grid_y_mm, split_y_mm, side="right")) - 1, -1)
+    cut = max(n_flange, 0)
+    flange = np.nansum(segment[:, :cut], axis=1)
+    tread = np.nansum(segment[:, cut:], axis=1)
+    if 0 <= n_flange < g - 1 and grid_y_mm[n_flange] < split_y_mm:
         # the interval containing the split: cut it, w at the split by linear interpolation
         i = n_flange
-        y0, y1, w0, w1 = float(y[i]), float(y[i + 1]), float(w[i]), float(w[i + 1])
-        if math.isfinite(w0) and math.isfinite(w1):
-            w_split = w0 + (split_y_mm - y0) * (w1 - w0) / (y1 - y0)
-            left = 0.5 * (w0 + w_split) * (split_y_mm - y0)
-            flange += left
-            tread -= left
-    return WearAreas(flange_mm2=flange, tread_mm2=tread)
+        y0, y1 = float(grid_y_mm[i]), float(grid_y_mm[i + 1])
+        w0, w1 = wear_mm[:, i], wear_mm[:, i + 1]
+        both = np.isfinite(w0) & np.isfinite(w1)
+        w_split = w0 + (split_y_mm - y0) * (w1 - w0) / (y1 - y0)
+        left = np.where(both, 0.5 * (w0 + w_split) * (split_y_mm - y0), 0.0)
+        flange = flange + left
+        tread = tread - left
+    return flange, tread

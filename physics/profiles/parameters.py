@@ -20,6 +20,13 @@ instrument do: tread wear at y = 0 raises Sh and lifts the Sd point up the flank
 anywhere left of y = -25 mm, chord crossings) is the convention the loop used before; it is
 the same :func:`flange_parameters` with other options, kept for comparisons (e.g. to show that
 wear never thickens the flange in the new profile's frame).
+
+The definitions are written once: the heights of the Sd and qR points (``_point_heights``),
+Sd/Sh/qR from the flank points (``_sd_sh_qr``) and the flank crossing (``_bracket_crossing``;
+searched along one profile by ``_flank_crossing``, along many rows, on a common grid or on
+rows of their own, by ``_flank_crossings``). :func:`flange_parameters` (one profile),
+:func:`flange_parameters_batch` (many on one grid) and :func:`flange_parameters_rows` (many of
+different lengths) use them and give the same numbers.
 """
 
 from __future__ import annotations
@@ -50,6 +57,18 @@ class FlangeParameters:
     sd_mm: float
     sh_mm: float
     qr_mm: float
+
+
+def _point_heights(z_tape: Any, z_tip: Any) -> tuple[Any, Any]:
+    """Heights [mm] of the Sd point (``SD_HEIGHT_MM`` above the tape-circle height) and of the
+    qR point (``QR_DEPTH_MM`` below the flange tip)."""
+    return z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM
+
+
+def _sd_sh_qr(y_sd: Any, y_qr: Any, z_tip: Any, z_tape: Any) -> tuple[Any, Any, Any]:
+    """Sd, Sh, qR [mm] (module docstring) from the flank points y_sd, y_qr [mm] and the
+    heights of the tip and the tape circle [mm]."""
+    return y_sd - BACK_FACE_Y_MM, z_tip - z_tape, y_sd - y_qr
 
 
 def _bracket_crossing(y0: Any, y1: Any, y2: Any, z0: Any, z1: Any, z2: Any, level: Any,
@@ -143,11 +162,11 @@ def flange_parameters(
     k = lo + int(np.argmax(z[lo:hi]))
     z_tip = float(z[k])  # sampled maximum: off by <= h^2/(8 R) = 0.003 mm (h 0.5, R 12)
     quadratic = interpolation == "quadratic"
-    y_sd = _flank_crossing(y, z, k, z_tape + SD_HEIGHT_MM, quadratic)
-    y_qr = _flank_crossing(y, z, k, z_tip - QR_DEPTH_MM, quadratic)
-    return FlangeParameters(
-        sd_mm=y_sd - BACK_FACE_Y_MM, sh_mm=z_tip - z_tape, qr_mm=y_sd - y_qr
-    )
+    sd_level, qr_level = _point_heights(z_tape, z_tip)
+    y_sd = _flank_crossing(y, z, k, sd_level, quadratic)
+    y_qr = _flank_crossing(y, z, k, qr_level, quadratic)
+    sd, sh, qr = _sd_sh_qr(y_sd, y_qr, z_tip, z_tape)
+    return FlangeParameters(sd_mm=sd, sh_mm=sh, qr_mm=qr)
 
 
 def nominal_frame_flange_parameters(y_mm: ArrayLike, z_mm: ArrayLike) -> FlangeParameters:
@@ -175,32 +194,43 @@ class FlangeParameterArrays:
         return np.column_stack([self.sd_mm, self.sh_mm, self.qr_mm])
 
 
-def _flank_crossings(y: NDArray, z: NDArray, start: NDArray, levels: NDArray) -> NDArray:
-    """Vectorised :func:`_flank_crossing`: rows of ``z`` (M, g) [mm], their start indices
-    ``start`` (M,) and L levels per row ``levels`` (M, L) [mm]; returns y (M, L) [mm].
+def _flank_crossings(y: NDArray, z: NDArray, start: NDArray, levels: NDArray,
+                     n: NDArray | None = None) -> NDArray:
+    """Vectorised :func:`_flank_crossing`: rows of ``z`` (M, g) [mm] on the common grid ``y``
+    (g,) [mm] or on their own rows ``y`` (M, g) [mm], their start indices ``start`` (M,) and
+    L levels per row ``levels`` (M, L) [mm]; ``n`` (M,) the number of points of each row (the
+    rest padding; None: all g). Returns y (M, L) [mm].
 
-    Same rule as the scalar version, row by row and level by level: the first grid point at
-    or after ``start`` below the level, then the quadratic through the bracketing points and
+    Same rule as the scalar version, row by row and level by level: the first point at or
+    after ``start`` below the level, then the quadratic through the bracketing points and
     the next one, with the same fall-backs to the chord. Only the columns from the smallest
     start on are searched.
     """
-    g = z.shape[1]
+    m, g = z.shape
     s0 = int(start.min()) if start.size else 0
-    zs = z[:, s0:]
-    below = zs[:, None, :] < levels[:, :, None]
+    cols = np.arange(s0, g)
+    below = z[:, None, s0:] < levels[:, :, None]
     if not (start == s0).all():
-        below &= (np.arange(s0, g) >= start[:, None])[:, None, :]
+        below &= (cols >= start[:, None])[:, None, :]
+    if n is not None:
+        below &= (cols < n[:, None])[:, None, :]
     found = below.any(axis=2)
     k = below.argmax(axis=2) + s0
     at_start = k == start[:, None]
     k1 = np.maximum(k, 1)
     k2 = np.minimum(k1 + 1, g - 1)
-    y0, y1, y2 = y[k1 - 1], y[k1], y[k2]
+    row = (np.arange(m) * g)[:, None]
     flat = z.reshape(-1)
-    row = (np.arange(z.shape[0]) * g)[:, None]
     z0, z1, z2 = flat[row + (k1 - 1)], flat[row + k1], flat[row + k2]
-    t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels, k1 + 1 < g)
-    out = np.where(at_start, y[k], y0 + t)
+    if y.ndim == 1:
+        y0, y1, y2, y_k = y[k1 - 1], y[k1], y[k2], y[k]
+    else:
+        flat_y = y.reshape(-1)
+        y0, y1, y2, y_k = (flat_y[row + (k1 - 1)], flat_y[row + k1], flat_y[row + k2],
+                           flat_y[row + k])
+    t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels,
+                          k1 + 1 < (g if n is None else n[:, None]))
+    out = np.where(at_start, y_k, y0 + t)
     return np.where(found, out, np.nan)
 
 
@@ -239,15 +269,8 @@ class BatchGrid:
             z_tape = (z[:, j + 1] - z[:, j]) * self.tape_w + z[:, j]
         k = self.tip_lo + np.argmax(z[:, self.tip_lo:self.tip_hi], axis=1)
         z_tip = z[np.arange(n), k]
-        levels = np.empty((n, 2))
-        levels[:, 0] = z_tape + SD_HEIGHT_MM
-        levels[:, 1] = z_tip - QR_DEPTH_MM
-        both = _flank_crossings(self.y_mm, z, k, levels)
-        out = np.empty((n, 3))
-        out[:, 0] = both[:, 0] - BACK_FACE_Y_MM
-        out[:, 1] = z_tip - z_tape
-        out[:, 2] = both[:, 0] - both[:, 1]
-        return out
+        both = _flank_crossings(self.y_mm, z, k, np.column_stack(_point_heights(z_tape, z_tip)))
+        return np.column_stack(_sd_sh_qr(both[:, 0], both[:, 1], z_tip, z_tape))
 
 
 def flange_parameters_batch(
@@ -331,22 +354,10 @@ def flange_parameters_rows(
     in_tip = (cols >= lo[:, None]) & (cols < hi[:, None])
     k = np.argmax(np.where(in_tip, z_mm, -np.inf), axis=1)
     z_tip = z_mm[rows, k]
-    levels = np.column_stack((z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM))
-    crossing = np.empty((m, 2))
-    after = (cols >= k[:, None]) & valid
-    for c in range(2):
-        below = after & (z_mm < levels[:, c:c + 1])
-        found = below.any(axis=1)
-        kk = np.argmax(below, axis=1)
-        k1 = np.maximum(kk, 1)
-        k2 = np.minimum(k1 + 1, width - 1)
-        y0, y1, y2 = y_mm[rows, k1 - 1], y_mm[rows, k1], y_mm[rows, k2]
-        z0, z1, z2 = z_mm[rows, k1 - 1], z_mm[rows, k1], z_mm[rows, k2]
-        t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels[:, c], k1 + 1 < n)
-        at = np.where(kk == k, y_mm[rows, k], y0 + t)
-        crossing[:, c] = np.where(found, at, np.nan)
-    y_sd, y_qr = crossing[:, 0], crossing[:, 1]
-    out[usable, 0] = (y_sd - BACK_FACE_Y_MM)[usable]
-    out[usable, 1] = (z_tip - z_tape)[usable]
-    out[usable, 2] = (y_sd - y_qr)[usable]
+    levels = np.column_stack(_point_heights(z_tape, z_tip))
+    crossing = _flank_crossings(y_mm, z_mm, k, levels, n)
+    sd, sh, qr = _sd_sh_qr(crossing[:, 0], crossing[:, 1], z_tip, z_tape)
+    out[usable, 0] = sd[usable]
+    out[usable, 1] = sh[usable]
+    out[usable, 2] = qr[usable]
     return out
