@@ -322,12 +322,45 @@ def measured_rail(session: Session, rail_id: int, field: str = "rail_id") -> Mea
         raise Unprocessable(field, str(exc).removeprefix("rail_id: ")) from exc
 
 
+#: The request fields that name a stored rail, in the order of :func:`with_rails`' rails.
+RAIL_FIELDS = ("rail_id", "high_rail_id", "low_rail_id")
+
+
+def requested_rails(session: Session, body: Any
+                    ) -> tuple[MeasuredRail | None, MeasuredRail | None, MeasuredRail | None]:
+    """The stored rails a physics request names (``rail_id``, ``high_rail_id``,
+    ``low_rail_id``; None where not given): 404 naming the field for an unknown id, 422 when
+    two of them state different laying inclinations (a track has one)."""
+    rails = tuple(None if getattr(body, f) is None else measured_rail(session, getattr(body, f), f)
+                  for f in RAIL_FIELDS)
+    stated = [(f, r.inclination) for f, r in zip(RAIL_FIELDS, rails, strict=True)
+              if r is not None and r.inclination is not None]
+    for field, inclination in stated[1:]:
+        first_field, first = stated[0]
+        if abs(inclination - first) > 1e-9:
+            raise Unprocessable(field, f"the rail states inclination {inclination:g} where "
+                                f"{first_field}'s states {first:g}: the rails of one track are "
+                                "laid at one inclination")
+    return rails[0], rails[1], rails[2]
+
+
+def with_rails(vehicle: Any, rail: MeasuredRail | None, high: MeasuredRail | None = None,
+               low: MeasuredRail | None = None) -> Any:
+    """The vehicle on measured rails: ``rail`` as its rail profile (tangent track, and curves
+    where no high or low rail is given), ``high`` / ``low`` as the outer / inner rail of every
+    curve (``BogieVehicle.high_rail_profile`` / ``low_rail_profile``), laid at the inclination
+    they state (:func:`requested_rails` checked that they agree)."""
+    changes: dict[str, Any] = {}
+    for key, given in (("rail_profile", rail), ("high_rail_profile", high),
+                       ("low_rail_profile", low)):
+        if given is not None:
+            changes[key] = given
+            if given.inclination is not None:
+                changes["rail_inclination"] = given.inclination
+    return vehicle.with_(**changes) if changes else vehicle
+
+
 def with_rail(vehicle: Any, rail: MeasuredRail | None) -> Any:
     """The vehicle with the measured rail as its rail profile (and the rail's stated
     inclination, when it has one)."""
-    if rail is None:
-        return vehicle
-    changes: dict[str, Any] = {"rail_profile": rail}
-    if rail.inclination is not None:
-        changes["rail_inclination"] = rail.inclination
-    return vehicle.with_(**changes)
+    return with_rails(vehicle, rail)

@@ -75,10 +75,11 @@ def simulation_arguments(spec: dict[str, Any]) -> dict[str, Any]:
     except ValueError as exc:
         raise ValueError(f"classes: {exc}") from exc
     vehicle = vehicle_preset(spec["vehicle"], spec.get("bogie_type", "trailer"))
-    if spec.get("resolved_rail"):  # a measured rail in place of the preset's nominal one
-        from wearcast.service.rail_store import measured_rail_from_spec, with_rail
+    from wearcast.service.rail_store import measured_rail_from_spec, with_rails
 
-        vehicle = with_rail(vehicle, measured_rail_from_spec(spec["resolved_rail"]))
+    vehicle = with_rails(vehicle, *(  # measured rails in place of the preset's nominal one
+        measured_rail_from_spec(spec[key]) if spec.get(key) else None
+        for key in ("resolved_rail", "resolved_high_rail", "resolved_low_rail")))
     initial = None
     if spec.get("resolved_wheel"):  # the wheel starts from a stored measurement
         resolved = spec["resolved_wheel"]
@@ -97,10 +98,13 @@ def create_simulation(session: Session, body: SimulationIn) -> db.Simulation:
     unprocessable_law(body)
     spec = body.model_dump(mode="json")
     spec["resolved_classes"] = resolve_classes(session, body)
-    if body.rail_id is not None:
-        from wearcast.service.rail_store import rail_spec
+    from wearcast.service.rail_store import RAIL_FIELDS, rail_spec, requested_rails
 
-        spec["resolved_rail"] = rail_spec(session, body.rail_id)
+    requested_rails(session, body)  # 404 / 422 naming the field
+    for field in RAIL_FIELDS:
+        if getattr(body, field) is not None:
+            key = "resolved_" + field.removesuffix("_id")
+            spec[key] = rail_spec(session, getattr(body, field), field)
     from wearcast.service.measured_wheel_source import requested_wheel
 
     measured = requested_wheel(session, body)

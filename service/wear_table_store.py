@@ -232,8 +232,7 @@ def check_compute_request(session: Session, body: WearTableComputeIn) -> None:
     from wearcast.service.measured_wheel_source import requested_wheel
 
     _presets(body.vehicle, body.friction)
-    if body.rail_id is not None:
-        rail_store.measured_rail(session, body.rail_id)
+    rail_store.requested_rails(session, body)
     requested_wheel(session, body)
     _classes(session, body)
 
@@ -250,15 +249,23 @@ def compute_table_frames(session: Session, body: WearTableComputeIn
 
     motor, trailer, label = _presets(body.vehicle, body.friction)
     rail_info = None
-    if body.rail_id is not None:  # a measured rail in place of the preset's nominal one
-        from wearcast.service import rail_store
+    from wearcast.service import rail_store
 
-        rail = rail_store.measured_rail(session, body.rail_id)
-        motor, trailer = rail_store.with_rail(motor, rail), rail_store.with_rail(trailer, rail)
-        label = f"{label}, {rail}"
-        rail_info = {"rail_id": body.rail_id, "name": rail.name, "kind": rail.kind,
-                     "inclination": motor.rail_inclination,
+    rails = rail_store.requested_rails(session, body)  # measured rails for the nominal one
+    if any(r is not None for r in rails):
+        motor, trailer = (rail_store.with_rails(v, *rails) for v in (motor, trailer))
+        rail_info = {"inclination": motor.rail_inclination,
                      "placement": "gauge point (14 mm below its top) at the track gauge"}
+        for field, role, rail in zip(rail_store.RAIL_FIELDS, ("", "high ", "low "), rails,
+                                     strict=True):
+            if rail is None:
+                continue
+            label = f"{label}, {role}{rail}"
+            entry = {"rail_id": getattr(body, field), "name": rail.name, "kind": rail.kind}
+            if field == "rail_id":
+                rail_info.update(entry)
+            else:
+                rail_info[field.removesuffix("_id")] = entry
     wheel_info = None
     from wearcast.service.measured_wheel_source import requested_wheel
 

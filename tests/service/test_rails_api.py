@@ -188,3 +188,64 @@ def test_measured_rail_in_a_wear_table_and_a_simulation(tmp_path: Path,
     assert km["measured"] < 0.5 * km["nominal"]
     assert np.max(np.abs(worn["measured"] - worn["nominal"])) > 0.05
     assert client.post("/v1/simulations", json={**tiny, "rail_id": 999}).status_code == 404
+
+
+def test_high_and_low_measured_rails_of_their_own(tmp_path: Path, reference_dir: Path) -> None:
+    """``high_rail_id`` / ``low_rail_id``: the outer and inner rail of every curve (the curving
+    contact per side), tangent track on ``rail_id`` or the nominal rail."""
+    client = sqlite_client(tmp_path)
+    data = (reference_dir / "miniprof" / "avg_low2.ban").read_bytes()
+    rail_id = _import(client, "avg_low2.ban", data).json()["created"][0]["id"]
+    request = {"vehicle": "manchester", "radii": [{"radius_m": 1000}]}
+
+    def table(name: str, **rails: int) -> tuple[dict, dict]:
+        r = client.post("/v1/wear-tables/compute", json={"name": name, **request, **rails})
+        assert r.status_code == 201, r.text
+        body = r.json()
+        return body, {(x["radius_m"], x["bogie_type"], x["wheelset"], x["rail"], x["region"],
+                       x["measure"]): x["value"] for x in body["rows"]}
+
+    _, nominal = table("nominal")
+    _, everywhere = table("everywhere", rail_id=rail_id)
+    pair_body, pair = table("pair", high_rail_id=rail_id, low_rail_id=rail_id)
+    high_body, high_only = table("high", high_rail_id=rail_id)
+    assert pair_body["spec"]["rail"]["high_rail"]["rail_id"] == rail_id
+    assert pair_body["spec"]["rail"]["low_rail"]["rail_id"] == rail_id
+    assert "rail_id" not in pair_body["spec"]["rail"]  # tangent track: the nominal rail
+    assert "high measured rail avg_low2" in high_body["source"]
+    curve = [k for k in nominal if k[0] is not None]
+    tangent = [k for k in nominal if k[0] is None]
+    assert curve and tangent
+    # the same measured rail on both sides of the curve: the curve rows of the table that
+    # lays it everywhere; tangent track keeps the nominal rail's rows
+    assert {k: pair[k] for k in curve} == pytest.approx({k: everywhere[k] for k in curve},
+                                                        rel=1e-9, abs=1e-12)
+    assert {k: pair[k] for k in tangent} == pytest.approx({k: nominal[k] for k in tangent},
+                                                          rel=1e-9, abs=1e-12)
+    # the worn head as the high rail alone brings the leading high-rail wheel onto its
+    # flange at 1000 m (test above), and the table differs from both single-rail ones
+    key = (1000.0, "trailer", "leading", "high", "flange", "t_gamma")
+    assert nominal[key] == 0.0 and high_only[key] > 10.0
+    assert any(high_only[k] != pytest.approx(everywhere[k], rel=1e-6) for k in curve)
+    # an unknown rail is a 404 naming its field, for tables and simulations
+    for path, body in (("/v1/wear-tables/compute", {"name": "x", **request}),
+                       ("/v1/simulations", {"vehicle": "metro_b", "classes": [
+                           {"radius_m": None, "speed_kmh": 70, "share": 1.0}]})):
+        for field in ("high_rail_id", "low_rail_id"):
+            r = client.post(path, json={**body, field: 999})
+            assert r.status_code == 404, r.text
+            assert [e["field"] for e in r.json()["errors"]] == [field]
+    # a short simulation on the measured high rail: the spec records it, the wheel wears
+    tiny = {"vehicle": "metro_b", "classes": [
+        {"radius_m": None, "speed_kmh": 70, "share": 0.6},
+        {"radius_m": 500, "cant_mm": 60, "speed_kmh": 60, "direction": "left", "share": 0.4}],
+        "steps": {"mode": "adaptive", "count": 1, "depth_per_step_mm": 0.1}}
+    r = client.post("/v1/simulations", json={**tiny, "high_rail_id": rail_id})
+    assert r.status_code == 202, r.text
+    done = wait_for_job(client, f"/v1/simulations/{r.json()['id']}", 120.0)
+    assert done["status"] == "done", done
+    assert done["spec"]["resolved_high_rail"]["rail_id"] == rail_id
+    assert "resolved_rail" not in done["spec"] and "resolved_low_rail" not in done["spec"]
+    worn = np.asarray(done["result"]["profiles_mm"][-1]) - np.asarray(
+        done["result"]["profiles_mm"][0])
+    assert np.all(np.isfinite(worn)) and worn.min() < 0
