@@ -378,31 +378,37 @@ def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLi
     out = b.copy()
     step = 0.05
     local = np.arange(-search_mm, search_mm + 1e-9, step)
-    for idx in zip(*np.nonzero((n > 1.0) & (a > 0) & (b > 0)), strict=True):
-        y = yw[idx] + local
-        # rail_y is the rail-envelope coordinate of the contact (ContactTable.candidates:
-        # rail_y = y + offset + shift, the coordinate build_contact_table samples the rail at)
-        y_rail = y + (yr[idx] - yw[idx])
-        gap = -np.interp(y, yg, zg) - np.interp(y_rail, ry, rz, left=np.nan, right=np.nan)
-        gap = np.where(np.isfinite(gap), gap, np.inf)
-        centre = int(np.argmin(np.abs(local)))
-        lo_win = max(0, centre - int(round(1.0 / step)))
-        hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
-        g_min = float(np.min(gap[lo_win:hi_win]))
-        delta = 3.0 * n[idx] / (4.0 * e_star * np.sqrt(a[idx] * b[idx]))
-        inside = gap <= g_min + KIK_PIOTROWSKI_EPSILON * delta
-        # connected run through the contact point
-        j0 = lo_win + int(np.argmin(gap[lo_win:hi_win]))
-        left = j0
-        while left > 0 and inside[left - 1]:
-            left -= 1
-        right = j0
-        while right < local.size - 1 and inside[right + 1]:
-            right += 1
-        width_y = (right - left + 1) * step
-        slope = np.interp(yw[idx], yg, np.gradient(zg, yg))
-        half_arc = 0.5 * width_y * np.sqrt(1.0 + slope * slope)
-        out[idx] = max(b[idx], half_arc)
+    loaded = np.nonzero((n > 1.0) & (a > 0) & (b > 0))
+    if loaded[0].size == 0:
+        return out
+    # all loaded patches at once, row by row the arithmetic of one patch (the same numbers)
+    yw_p, yr_p, n_p, a_p, b_p = (v[loaded] for v in (yw, yr, n, a, b))
+    y = yw_p[:, None] + local[None, :]
+    # rail_y is the rail-envelope coordinate of the contact (ContactTable.candidates:
+    # rail_y = y + offset + shift, the coordinate build_contact_table samples the rail at)
+    y_rail = y + (yr_p - yw_p)[:, None]
+    gap = -np.interp(y, yg, zg) - np.interp(y_rail, ry, rz, left=np.nan, right=np.nan)
+    gap = np.where(np.isfinite(gap), gap, np.inf)
+    centre = int(np.argmin(np.abs(local)))
+    lo_win = max(0, centre - int(round(1.0 / step)))
+    hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
+    g_min = np.min(gap[:, lo_win:hi_win], axis=1)
+    delta = 3.0 * n_p / (4.0 * e_star * np.sqrt(a_p * b_p))
+    inside = gap <= (g_min + KIK_PIOTROWSKI_EPSILON * delta)[:, None]
+    # the connected run of inside points through the smallest gap near the contact point
+    j0 = lo_win + np.argmin(gap[:, lo_win:hi_win], axis=1)
+    cols = np.arange(local.size)[None, :]
+    rows = np.arange(j0.size)
+    last_out = np.maximum.accumulate(np.where(inside, -1, cols), axis=1)
+    left = np.where(j0 > 0, last_out[rows, np.maximum(j0 - 1, 0)], -1) + 1
+    first_out = np.minimum.accumulate(np.where(inside, local.size, cols)[:, ::-1],
+                                      axis=1)[:, ::-1]
+    right = np.where(j0 < local.size - 1, first_out[rows, np.minimum(j0 + 1, local.size - 1)],
+                     local.size) - 1
+    width_y = (right - left + 1) * step
+    slope = np.interp(yw_p, yg, np.gradient(zg, yg))
+    half_arc = 0.5 * width_y * np.sqrt(1.0 + slope * slope)
+    out[loaded] = np.where(half_arc > b_p, half_arc, b_p)
     return out
 
 

@@ -66,6 +66,32 @@ def law_coefficients(law: WearLaw) -> NDArray[np.float64]:
     return law.archard.effective_coefficients if law.name == "archard_kth" else np.ones(1)
 
 
+def _global_volume_and_shape(c: ClassContacts, law: WearLaw, y_grid_mm: NDArray
+                             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Global application's factors: each patch's worn volume basis per metre rolled
+    (n_class, n_slot, n_basis) [mm^3/m] and its semi-elliptic normal depth per unit volume
+    (n_class, n_slot, n) [mm/mm^3] (seed 004 eqs. 3-5, ``semi_elliptic_depth``)."""
+    safe_b = np.where(c.in_contact, c.b_mm, 1.0)
+    safe_r = np.where(c.in_contact, c.rolling_radius_m * 1000.0, 1.0)
+    vol = contact_volume_basis(c, law)
+    shape = semi_elliptic_depth(y_grid_mm, c.wheel_y_mm, safe_b, 1.0, safe_r,
+                                c.contact_angle_rad)
+    return vol, shape
+
+
+def wheel_depth_basis_by_slot(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray
+                              ) -> NDArray[np.float64]:
+    """Global application of :func:`wheel_depth_basis` per patch slot: (n_slot, n_class,
+    n_basis, n) [mm/m], slot s the depth of the slot-s patches alone -- bit for bit
+    ``wheel_depth_basis`` of the contacts with only slot s in contact (the basis is additive
+    in patches; the other slots' volumes are 0 there), from one volume basis and one
+    semi-elliptic spread of all patches instead of one per slot."""
+    wheel_share, _ = wheel_rail_split(law)
+    vol, shape = _global_volume_and_shape(contacts, law, y_grid_mm)
+    return np.stack([wheel_share * (vol[:, s, :, None] * shape[:, s, None, :])
+                     for s in range(vol.shape[1])])
+
+
 def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
                       application: str = "global", fastsim_grid: int = 20,
                       friction: float = 0.35) -> NDArray[np.float64]:
@@ -80,13 +106,9 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
     wheel_share, _ = wheel_rail_split(law)
     c = contacts
     n_class = c.normal_force_n.shape[0]
-    safe_b = np.where(c.in_contact, c.b_mm, 1.0)
     radius_mm = c.rolling_radius_m * 1000.0
     if application == "global":
-        vol = contact_volume_basis(c, law)                     # (n_class, 2, nb) per m
-        safe_r = np.where(c.in_contact, radius_mm, 1.0)
-        shape = semi_elliptic_depth(y_grid_mm, c.wheel_y_mm, safe_b, 1.0,
-                                    safe_r, c.contact_angle_rad)  # (n_class, n_slot, n)
+        vol, shape = _global_volume_and_shape(c, law, y_grid_mm)
         return wheel_share * np.einsum("csb,csn->cbn", vol, shape)
     if application != "local":
         raise ValueError(f"application must be 'global' or 'local', got {application!r}")

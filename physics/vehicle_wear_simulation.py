@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.patch_wear import wheel_depth_basis_by_slot
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.step_convergence import DEFAULT_TOLERANCE, StepConvergence, converge_steps
@@ -186,13 +187,19 @@ def _wheel_rates(contacts: dict[tuple[int, str], ClassContacts], law: WearLaw, y
 def _scaled_basis(c: ClassContacts, law: WearLaw, y: NDArray, application: str,
                   fastsim_grid: int, friction: float, factor: NDArray) -> NDArray:
     """wheel_depth_basis with each patch's contribution multiplied by ``factor`` (n_class,
-    n_slot): the patches are split into per-slot contacts (the basis is additive in patches)."""
+    n_slot): the patches are split into per-slot contacts (the basis is additive in patches);
+    global application: all slots' parts from one spread (``wheel_depth_basis_by_slot``, the
+    same numbers)."""
+    by_slot = (wheel_depth_basis_by_slot(c, law, y) if application == "global" else None)
     total = None
     for slot in range(c.normal_force_n.shape[1]):
-        only = np.zeros_like(c.in_contact)
-        only[:, slot] = c.in_contact[:, slot]
-        part = wheel_depth_basis(replace(c, in_contact=only), law, y, application, fastsim_grid,
-                                 friction)
+        if by_slot is not None:
+            part = by_slot[slot]
+        else:
+            only = np.zeros_like(c.in_contact)
+            only[:, slot] = c.in_contact[:, slot]
+            part = wheel_depth_basis(replace(c, in_contact=only), law, y, application,
+                                     fastsim_grid, friction)
         part = part * factor[:, slot][:, None, None]
         total = part if total is None else total + part
     assert total is not None

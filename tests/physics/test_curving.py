@@ -263,6 +263,77 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
         class_contacts(veh, classes, y, z, patch_width="ellipse")
 
 
+def _half_width_one_patch_at_a_time(yg, zg, rail, inclination, yw, yr, n, a, b,
+                                    search_mm=12.0):
+    """conformal_half_width_mm as written before it took all patches at once: a loop over
+    the loaded patches (the reference the batched version must equal bit for bit)."""
+    from wearcast.physics.contact.hertz import effective_modulus_mpa
+    from wearcast.physics.curving_table import KIK_PIOTROWSKI_EPSILON, _rail_envelope
+
+    yw, yr, n, a, b = np.broadcast_arrays(*(np.asarray(v, dtype=float)
+                                            for v in (yw, yr, n, a, b)))
+    ry, rz, _ = _rail_envelope(rail, inclination)
+    e_star = effective_modulus_mpa()
+    out = b.copy()
+    step = 0.05
+    local = np.arange(-search_mm, search_mm + 1e-9, step)
+    for idx in zip(*np.nonzero((n > 1.0) & (a > 0) & (b > 0)), strict=True):
+        y = yw[idx] + local
+        gap = -np.interp(y, yg, zg) - np.interp(y + (yr[idx] - yw[idx]), ry, rz,
+                                                left=np.nan, right=np.nan)
+        gap = np.where(np.isfinite(gap), gap, np.inf)
+        centre = int(np.argmin(np.abs(local)))
+        lo_win = max(0, centre - int(round(1.0 / step)))
+        hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
+        g_min = float(np.min(gap[lo_win:hi_win]))
+        delta = 3.0 * n[idx] / (4.0 * e_star * np.sqrt(a[idx] * b[idx]))
+        inside = gap <= g_min + KIK_PIOTROWSKI_EPSILON * delta
+        j0 = lo_win + int(np.argmin(gap[lo_win:hi_win]))
+        left = j0
+        while left > 0 and inside[left - 1]:
+            left -= 1
+        right = j0
+        while right < local.size - 1 and inside[right + 1]:
+            right += 1
+        slope = np.interp(yw[idx], yg, np.gradient(zg, yg))
+        out[idx] = max(b[idx], 0.5 * (right - left + 1) * step * np.sqrt(1.0 + slope * slope))
+    return out
+
+
+def test_kik_piotrowski_width_of_all_patches_at_once_equals_one_at_a_time():
+    # conformal_half_width_mm takes every loaded patch in one batch: the same numbers, bit for
+    # bit, as the loop over the patches, on the loop's contacts (flange root and tread, 4
+    # wheels, a tangent and two curves) and on random patches (some unloaded, some whose
+    # search range leaves the rail: an infinite gap)
+    from wearcast.physics.class_contacts import class_contacts_all_wheels
+    from wearcast.physics.curving_table import conformal_half_width_mm
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+    from wearcast.physics.vocabulary import CurveClass
+
+    y = np.linspace(-70.0, 60.0, 651)
+    z = s1002_height_mm(y)
+    veh = vehicle_preset("minuetto")
+    classes = [CurveClass(162.0, 131.0, 60.0, "left", 0.4), CurveClass(300.0, 80.0, 60.0,
+                                                                       "right", 0.3),
+               CurveClass(None, share=0.3)]
+    contacts, _ = class_contacts_all_wheels(veh, classes, y, z)
+    rail, inc = veh.rail_profile, veh.rail_inclination
+    for c in contacts.values():
+        args = (c.wheel_y_mm, c.rail_y_mm, np.where(c.in_contact, c.normal_force_n, 0.0),
+                c.a_mm, c.b_mm)
+        want = _half_width_one_patch_at_a_time(y, z, rail, inc, *args)
+        assert np.array_equal(conformal_half_width_mm(y, z, rail, inc, *args), want)
+    rng = np.random.default_rng(3)
+    shape = (40, 6)
+    yw = rng.uniform(-45.0, 40.0, shape)
+    args = (yw, yw + rng.uniform(-3.0, 3.0, shape) - 15.0,
+            np.where(rng.random(shape) < 0.2, 0.0, rng.uniform(100.0, 6e4, shape)),
+            rng.uniform(0.2, 8.0, shape), rng.uniform(0.05, 6.0, shape))
+    want = _half_width_one_patch_at_a_time(y, z, rail, inc, *args)
+    assert np.array_equal(conformal_half_width_mm(y, z, rail, inc, *args), want)
+    assert np.any(want > args[4])  # some patches widened beyond Hertz
+
+
 def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
     # The wear loop's fallback: a case that does not converge comes back as None and the others
     # are solved in the same batch (the old path re-solved the whole batch per failure).

@@ -207,6 +207,45 @@ def test_runs_sharing_a_contact_cache_solve_the_new_profile_once(monkeypatch):
     np.testing.assert_array_equal(cached.profiles_mm, fresh.profiles_mm)
 
 
+@pytest.mark.parametrize("law", ["usfd", "archard_kth"])
+def test_flange_factor_basis_from_one_spread_equals_the_per_slot_solves(law):
+    # The flange-factor wear (_scaled_basis) takes every slot's depth from one volume basis
+    # and one semi-elliptic spread (wheel_depth_basis_by_slot): bit for bit the depth of
+    # wheel_depth_basis on the contacts with only that slot in contact, as it was computed.
+    from dataclasses import replace
+
+    from wearcast.physics import vehicle_wear_simulation as vws
+    from wearcast.physics.patch_wear import wheel_depth_basis, wheel_depth_basis_by_slot
+    from wearcast.physics.profiles.s1002 import s1002_height_mm
+    from wearcast.physics.wear_laws import WearLaw
+
+    bogie = vehicle_bogies("metro_b")[0][0]
+    lo, hi, h = vws.WHEEL_GRID_MM
+    y = np.linspace(lo, hi, int(round((hi - lo) / h)) + 1)
+    sharp = [*ROUTE, CurveClass(150.0, 60.0, None, "left", 0.1)]
+    contacts, _ = vws.class_contacts_all_wheels(bogie, sharp, y, s1002_height_mm(y))
+    wl = WearLaw(name=law)
+    # flange patches (the factor acts) and a two-point contact (several slots) among them
+    assert any(np.any(c.in_contact & (c.contact_angle_rad > vws.FLANGE_ANGLE_RAD))
+               for c in contacts.values())
+    assert any(np.any(c.in_contact.sum(axis=1) > 1) for c in contacts.values())
+    factor_of = {}
+    for wheel, c in contacts.items():
+        by_slot = wheel_depth_basis_by_slot(c, wl, y)
+        for slot in range(c.in_contact.shape[1]):
+            only = np.zeros_like(c.in_contact)
+            only[:, slot] = c.in_contact[:, slot]
+            np.testing.assert_array_equal(
+                by_slot[slot], wheel_depth_basis(replace(c, in_contact=only), wl, y))
+        factor_of[wheel] = np.where(c.contact_angle_rad > vws.FLANGE_ANGLE_RAD, 0.5, 1.0)
+        scaled = vws._scaled_basis(c, wl, y, "global", 20, bogie.friction, factor_of[wheel])
+        local = vws._scaled_basis(c, wl, y, "local", 20, bogie.friction, factor_of[wheel])
+        assert np.all(np.isfinite(local)) and scaled.shape == local.shape
+        np.testing.assert_array_equal(scaled, sum(
+            by_slot[s] * factor_of[wheel][:, s][:, None, None]
+            for s in range(c.in_contact.shape[1])))
+
+
 def test_a_non_finite_contact_is_named_before_it_reaches_a_profile(monkeypatch):
     # A contact update whose patch is not finite (e.g. a NaN semi-axis of a failed solve)
     # must stop the run naming the wheels and the reason, not hand a NaN step to every wheel.
