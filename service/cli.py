@@ -25,7 +25,7 @@ from sqlalchemy.orm import Session
 from wearcast.service.db import Database
 from wearcast.service.errors import ApiError
 from wearcast.service.id_text import decimal_id
-from wearcast.service.rail_cli import RailIdOption
+from wearcast.service.rail_cli import HighRailIdOption, LowRailIdOption, RailIdOption
 from wearcast.service.settings import Settings
 
 app = typer.Typer(help="wearcast: wheel-profile wear and reprofiling-mileage prediction",
@@ -256,7 +256,8 @@ def wear_table_compute(
         friction: Annotated[float | None, typer.Option(help="wheel-rail friction")] = None,
         csv: Annotated[Path | None, typer.Option(help="also write the table here (CSV)")]
         = None,
-        rail_id: RailIdOption = None) -> None:
+        rail_id: RailIdOption = None, high_rail_id: HighRailIdOption = None,
+        low_rail_id: LowRailIdOption = None) -> None:
     """Compute a curve-radius wear table with the physics core (quasi-static curving)."""
     from wearcast.service import wear_table_store
     from wearcast.service.wear_table_schemas import WearTableComputeIn
@@ -267,7 +268,7 @@ def wear_table_compute(
         "route_id": None if route_id is None else _route_ref(route_id),
         "radii": None if not radius else [_radius(r) for r in radius],
         "unbalanced_acceleration_m_s2": unbalanced_acceleration, "friction": friction,
-        "rail_id": rail_id})
+        "rail_id": rail_id, "high_rail_id": high_rail_id, "low_rail_id": low_rail_id})
     with _session() as (_, session), console.status("solving the curving equilibria"):
         row = wear_table_store.compute_wear_table(session, body)
         if csv is not None:

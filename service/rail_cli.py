@@ -13,6 +13,10 @@ from rich.table import Table
 
 RailIdOption = Annotated[int | None, typer.Option("--rail-id", help=(
     "stored measured rail (wearcast rails) in place of the nominal rail, both sides"))]
+HighRailIdOption = Annotated[int | None, typer.Option("--high-rail-id", help=(
+    "stored measured rail as the high (outer) rail of every curve"))]
+LowRailIdOption = Annotated[int | None, typer.Option("--low-rail-id", help=(
+    "stored measured rail as the low (inner) rail of every curve"))]
 
 
 def rail_import(

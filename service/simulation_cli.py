@@ -12,7 +12,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from wearcast.service.rail_cli import RailIdOption
+from wearcast.service.rail_cli import HighRailIdOption, LowRailIdOption, RailIdOption
 
 # Options shared by the wear-loop jobs (simulate, fit-coefficients).
 VehicleOption = Annotated[str, typer.Option(help="vehicle preset (aln663, manchester, metro_b, "
@@ -41,7 +41,8 @@ def simulate(
         axle: Annotated[int, typer.Option(help="tracked wheel's axle (1 leads)")] = 1,
         side: Annotated[str, typer.Option(help="tracked wheel's side")] = "right",
         out: Annotated[Path | None, typer.Option(help="write the result (JSON) here")] = None,
-        rail_id: RailIdOption = None) -> None:
+        rail_id: RailIdOption = None, high_rail_id: HighRailIdOption = None,
+        low_rail_id: LowRailIdOption = None) -> None:
     """Run the wear loop in process with a progress bar; the job is stored like an API one."""
     from wearcast.service import simulation_store
     from wearcast.service.cli import _num, _route_ref, _session, _validated, console, err
@@ -52,6 +53,7 @@ def simulate(
         "classes": None if not curve else [_loop_class(c) for c in curve], "law": law,
         "application": application, "patch_width": patch_width, "bogie_type": bogie_type,
         "axle": axle, "side": side, "rail_id": rail_id,
+        "high_rail_id": high_rail_id, "low_rail_id": low_rail_id,
         "steps": {"mode": "fixed" if step_km is not None else "adaptive", "count": steps,
                   "step_km": step_km, "depth_per_step_mm": depth_per_step_mm}})
     with _session() as (database, session):

@@ -52,3 +52,12 @@ def test_cli_rail_walk_through(datadir: Path, reference_dir: Path) -> None:
     missing = runner.invoke(app, ["wear-table-compute", "--name", "x", "--vehicle",
                                   "manchester", "--radius", "1000", "--rail-id", "9"])
     assert missing.exit_code == 2 and "rail_id" in missing.output
+    for flag, field in (("--high-rail-id", "high_rail_id"), ("--low-rail-id", "low_rail_id")):
+        missing = runner.invoke(app, ["wear-table-compute", "--name", "x", "--vehicle",
+                                      "manchester", "--radius", "1000", flag, "9"])
+        assert missing.exit_code == 2 and field in missing.output, missing.output
+    rail_id = str(body["created"][0]["id"])
+    high = runner.invoke(app, ["wear-table-compute", "--name", "high", "--vehicle",
+                               "manchester", "--radius", "1000", "--high-rail-id", rail_id])
+    assert high.exit_code == 0, high.output
+    assert _json(high.stdout)["spec"]["rail"]["high_rail"]["rail_id"] == int(rail_id)
