@@ -65,6 +65,7 @@ from wearcast.statistics.causes_route import (
     RunningDirection,
     WearMeasure,
     shape_coefficients,
+    signature_coefficients,
 )
 from wearcast.statistics.residuals import life_ids
 
@@ -348,4 +349,4 @@ __all__ = ["CATALOGUE", "CAUSE_CODES", "OMEGA_PER_DAY", "Array", "Cause", "Compo
            "CurveAsymmetry", "FinderData", "Mask", "NullArea", "ProfileMisalignment",
            "RunningDirection", "SeasonalFriction", "WearMeasure", "_interval",
            "cause_by_code", "cluster_covariance", "life_ids", "lubrication_flags",
-           "season_features", "shape_coefficients", "solve"]
+           "season_features", "shape_coefficients", "signature_coefficients", "solve"]
