@@ -18,7 +18,10 @@ oracle t exceeds 1.645 (one-sided 5 %, a single test) and 2.5 (about the max-T c
 over the catalogue at the finder's alpha 0.04). The form oracle knows the form but not the
 amplitude and phase, as the finder: the Wald test (2 df, wheel-clustered) of the finder's own
 wear-weighted (cos, sin) features within the wheels, at 5 % and at 0.04 / 9 (Bonferroni over
-the nine causes, a bound on the finder's max-T level).
+the nine causes, a bound on the finder's max-T level). It is a reference, not a bound on the
+finder: its wheel fixed effects also remove the part of the season that differs between
+wheels (the finder's random-effects fit keeps some of it; loop seed 110 is named by the
+finder at form-oracle p 0.10).
 
 A cell the oracle cannot separate from the null in >= 95 % of seeds at 5 % is not detectable
 at that strength with that data by any test; the finder, which must also estimate the form

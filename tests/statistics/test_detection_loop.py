@@ -83,7 +83,7 @@ def test_loop_weak_season_is_named_in_the_vehicle_metric():
     # the detection table's half strength (+/-10 %) on a seed the finder missed when the
     # season was scored in the rows' own metric (adjusted p 0.085): scored after a random
     # log-scale per vehicle, as a contrast within the cars, it is named. At this strength the
-    # finder names the season on about a third of the seeds; an oracle that knows the
+    # finder names the season on 5 of 20 seeds (100-119); an oracle that knows the
     # injected effect reaches t > 2.5 on 15 of 20 (``benchmarks/seasonal_oracle.py``)
     d = diagnosed("seasonal_friction_0.1", 100)
     assert d.verdict == "seasonal_friction", findings_summary(d)
