@@ -6,7 +6,8 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
-         [--shape-weighting area|none] [--score-metric ols|gls|gls_vehicle]
+         [--shape-weighting area|none] [--shape-growth life|none]
+         [--score-metric ols|gls|gls_vehicle]
          [--margin-metric ols|test]
          [--random-effects-levels vehicle_wheel|wheel] [--traction-fit gls|ols]
 (3-6 s per dataset with 1-2 free cores, 20-40 s on a loaded machine; the loop generator's
@@ -54,6 +55,7 @@ from wearcast.statistics import cause_base as cb
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import finder_shape_growth as fsg
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
@@ -294,6 +296,10 @@ def main() -> None:
                     help="precision weights of the wear-curve (instrument) cause's rows: a "
                          "variance function of the predicted worn area, or none "
                          "(finder_shape_weights.SHAPE_WEIGHTING)")
+    ap.add_argument("--shape-growth", default=fsg.SHAPE_GROWTH, choices=("life", "none"),
+                    help="wear-curve (instrument) cause: each wheel life's shape coefficients "
+                         "less their growth with the worn area, or as measured "
+                         "(finder_shape_growth.SHAPE_GROWTH)")
     ap.add_argument("--score-metric", default=fs.SCORE_METRIC,
                     choices=("ols", "gls", "gls_vehicle"),
                     help="held-out error of the finder's tests: weighted squared residuals, "
@@ -322,6 +328,7 @@ def main() -> None:
     fs.NUISANCE_OF_MARGIN = args.margin_nuisance
     cb.NOISE_WEIGHTING = args.noise_weighting
     fsw.SHAPE_WEIGHTING = args.shape_weighting
+    fsg.SHAPE_GROWTH = args.shape_growth
     fs.SCORE_METRIC = args.score_metric
     fs.MARGIN_METRIC = args.margin_metric
     fre.LEVELS = args.random_effects_levels

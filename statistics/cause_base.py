@@ -117,6 +117,16 @@ class FinderData:
             self.cache["season"] = season_features(self.frame, self.mileage_km)
         return self.cache["season"]  # type: ignore[no-any-return]
 
+    def season_by_region(self) -> Array | None:
+        """(n, region, 2) season features weighted by the baseline's predicted wear area of
+        each region (``causes_calendar.accrual_season_features``), computed once."""
+        if "season_by_region" not in self.cache:
+            from wearcast.statistics.causes_calendar import accrual_season_features
+
+            self.cache["season_by_region"] = accrual_season_features(
+                self.frame, self.mileage_km, np.clip(self.base, 0.0, None))
+        return self.cache["season_by_region"]  # type: ignore[no-any-return]
+
 
 # noise model of the rows' weights (``FinderData.set_robust_weights``): "area" (a robust
 # variance function of the predicted area per region), "region" (one scale per region) or

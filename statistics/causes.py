@@ -57,6 +57,7 @@ from wearcast.statistics.cause_base import (
 from wearcast.statistics.causes_calendar import (
     OMEGA_PER_DAY,
     SeasonalFriction,
+    accrual_season_features,
     season_features,
 )
 from wearcast.statistics.causes_route import (
@@ -65,6 +66,7 @@ from wearcast.statistics.causes_route import (
     RunningDirection,
     WearMeasure,
     shape_coefficients,
+    signature_coefficients,
 )
 from wearcast.statistics.residuals import life_ids
 
@@ -347,5 +349,6 @@ def cause_by_code(code: str) -> Cause:
 __all__ = ["CATALOGUE", "CAUSE_CODES", "OMEGA_PER_DAY", "Array", "Cause", "Composite",
            "CurveAsymmetry", "FinderData", "Mask", "NullArea", "ProfileMisalignment",
            "RunningDirection", "SeasonalFriction", "WearMeasure", "_interval",
+           "accrual_season_features",
            "cause_by_code", "cluster_covariance", "life_ids", "lubrication_flags",
-           "season_features", "shape_coefficients", "solve"]
+           "season_features", "shape_coefficients", "signature_coefficients", "solve"]

@@ -15,6 +15,8 @@ from numpy.typing import NDArray
 
 from wearcast.physics.vocabulary import WEAR_MEASURES
 from wearcast.statistics.cause_base import Cause, FinderData, Mask, _levels
+from wearcast.statistics.finder_shape_growth import without_wear_growth
+from wearcast.statistics.residuals import life_ids
 from wearcast.statistics.route_measure import weighted_measure
 
 Array = NDArray[np.float64]
@@ -299,7 +301,7 @@ class ProfileMisalignment(Cause):
         assert data.shape_res is not None
         est = copy.copy(self)
         inst = self.instruments(data)
-        coef = shape_coefficients(data)
+        coef = signature_coefficients(data)
         # the finder's precision weights of the rows when it set them (``diagnose``,
         # ``finder_shape_weights``), else plain means
         w = np.asarray(data.cache.get("shape_weights", np.ones(data.n)), dtype=float)
@@ -368,3 +370,16 @@ def shape_coefficients(data: FinderData) -> Array:
         coef, *_ = np.linalg.lstsq(data.basis.T, d.T, rcond=None)
         data.cache["shape_coefficients"] = np.asarray(coef.T)
     return np.array(data.cache["shape_coefficients"])
+
+
+def signature_coefficients(data: FinderData) -> Array:
+    """(n, 3) ``shape_coefficients`` less each wheel life's growth with its predicted worn area
+    (``finder_shape_growth``): what an instrument's signature, the same at every wear, is
+    estimated and tested on."""
+    if "signature_coefficients" not in data.cache:   # computed once per dataset
+        inst = data.column("instrument_id")
+        data.cache["signature_coefficients"] = without_wear_growth(
+            shape_coefficients(data), data.base.sum(axis=1),
+            life_ids(data.frame, data.mileage_km),
+            None if inst is None else inst.astype(str).to_numpy())
+    return np.array(data.cache["signature_coefficients"])

@@ -166,10 +166,12 @@ def _relative(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
 
 
 def _whitened_shape(data: cz.FinderData) -> NDArray[np.float64]:
-    """Shape coefficients scaled so that their squared norm is the curve-space error."""
+    """Signature coefficients (shape coefficients less each wheel life's growth with the
+    wear, ``finder_shape_growth``) scaled so that their squared norm is the curve-space
+    error."""
     gram = data.basis @ data.basis.T
     chol = np.linalg.cholesky(gram + 1e-12 * np.eye(gram.shape[0]))
-    return np.asarray(cz.shape_coefficients(data) @ chol)
+    return np.asarray(cz.signature_coefficients(data) @ chol)
 
 
 def _instrument_centred(coef: NDArray[np.float64], inst_codes: NDArray[np.int64]

@@ -108,6 +108,36 @@ def test_season_features_follow_each_interval_on_the_calendar():
         assert x[i, 1] == pytest.approx(np.mean(np.sin(w * days[:end])), abs=2e-3)
 
 
+def test_season_weighted_by_the_wear_each_interval_adds():
+    # the season multiplies the wear rate: each interval counts with the wear it added.
+    frame = pd.DataFrame({"wheel_id": ["w"] * 3,
+                          "measured_on": ["2021-03-01", "2021-04-15", "2021-12-31"]})
+    s = np.array([59.0, 104.0, 364.0])
+    # wear linear in mileage: the mileage-weighted features, in every column
+    x = cz.accrual_season_features(frame, s, np.column_stack([2.0 * s, 0.5 * s]))
+    mileage = cz.season_features(frame, s)
+    np.testing.assert_allclose(x[:, 0, :], mileage, atol=1e-12)
+    np.testing.assert_allclose(x[:, 1, :], mileage, atol=1e-12)
+    # a running-in wear: all of it in the first interval -> every later measurement carries
+    # the first interval's season only; the mileage weights would average it away
+    front = np.array([10.0, 10.0, 10.0])
+    y = cz.accrual_season_features(frame, s, front[:, None])[:, 0, :]
+    np.testing.assert_allclose(y, np.repeat(y[:1], 3, axis=0), atol=1e-12)
+    assert abs(mileage[2, 0] - y[2, 0]) > 0.3
+    # A = sum_i (1 + a cos_i + b sin_i) dA_i over the intervals, divided by A: for wear
+    # growing as sqrt(s) the features are the wear-weighted means of the interval means
+    grow = np.sqrt(s)
+    z = cz.accrual_season_features(frame, s, grow[:, None])[:, 0, :]
+    w = cz.OMEGA_PER_DAY
+    t0 = (pd.Timestamp("2021-01-01") - pd.Timestamp("1970-01-01")).days
+    days = t0 + np.arange(364) + 0.5
+    edges = np.concatenate([[0], s.astype(int)])
+    inc = np.diff(np.concatenate([[0.0], grow]))
+    cos_i = np.array([np.mean(np.cos(w * days[a:b]))
+                      for a, b in zip(edges[:-1], edges[1:], strict=True)])
+    assert z[2, 0] == pytest.approx(np.sum(inc * cos_i) / grow[2], abs=2e-3)
+
+
 def test_reprofiling_mid_series_starts_a_new_life():
     frame = pd.DataFrame({"wheel_id": ["w"] * 4, "measured_on": ["2021-01-10", "2021-03-01",
                                                                  "2021-05-01", "2021-07-01"]})
