@@ -26,12 +26,6 @@ class MeasuredProfilesIn(Strict):
     rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
         "both sides, placed by its gauge point"))
-    high_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
-        "a stored measured rail as the high (outer) rail of every curve, placed by its gauge "
-        "point; the low rail is low_rail_id, else rail_id, else the preset's nominal rail; "
-        "tangent track runs on rail_id (or the nominal rail)"))
-    low_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
-        "as high_rail_id, the low (inner) rail of every curve"))
     measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
         "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
@@ -49,3 +43,16 @@ class MeasuredProfilesIn(Strict):
             raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
                              f"{', '.join(given)})")
         return self
+
+
+class TrackRailsIn(MeasuredProfilesIn):
+    """:class:`MeasuredProfilesIn` with a high and a low rail of their own for the requests
+    that run a vehicle through curves (``POST /v1/wear-tables/compute``,
+    ``POST /v1/simulations``; not the one-wheel contact, which takes one rail)."""
+
+    high_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "a stored measured rail as the high (outer) rail of every curve, placed by its gauge "
+        "point; the low rail is low_rail_id, else rail_id, else the preset's nominal rail; "
+        "tangent track runs on rail_id (or the nominal rail)"))
+    low_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+        "as high_rail_id, the low (inner) rail of every curve"))

@@ -15,7 +15,7 @@ from wearcast.physics.vocabulary import (
     Side,
 )
 from wearcast.service.job_schemas import JobStatusOut
-from wearcast.service.profile_schemas import MeasuredProfilesIn
+from wearcast.service.profile_schemas import TrackRailsIn
 from wearcast.service.schema_base import Strict
 
 WearLawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
@@ -45,7 +45,7 @@ class SmoothingIn(Strict):
     window_mm: float | None = Field(default=None, gt=0, le=50)
 
 
-class SimulationIn(MeasuredProfilesIn):
+class SimulationIn(TrackRailsIn):
     """``POST /v1/simulations``: the wear loop of one wheel over a route's curve classes."""
 
     name: str | None = Field(default=None, max_length=200)

@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
-from wearcast.service.profile_schemas import MeasuredProfilesIn
+from wearcast.service.profile_schemas import TrackRailsIn
 from wearcast.service.schema_base import Strict
 
 
@@ -47,7 +47,7 @@ class RadiusIn(Strict):
     share: float | None = Field(default=None, ge=0, le=1, description="share of the route [-]")
 
 
-class WearTableComputeIn(MeasuredProfilesIn):
+class WearTableComputeIn(TrackRailsIn):
     """``POST /v1/wear-tables/compute``: a table from the physics core (quasi-static curving).
 
     ``vehicle`` is a preset name (motor and trailer variants) or ``{motor, trailer}`` preset

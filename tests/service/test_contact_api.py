@@ -56,6 +56,8 @@ def test_contact_files_are_read_from_the_request(client, reference_dir):
     ({"poses": [{"shift_mm": 0}], "rail_file": {"text": "x"}, "rail_id": 3}, "rail_id"),
     ({"poses": [{"shift_mm": 0}], "measurement_id": 12345}, "measurement_id"),
     ({"poses": [{"shift_mm": 0}], "normal_method": "magic"}, "normal_method"),
+    # one wheel's contact takes one rail: the curving requests' high/low rails are refused
+    ({"poses": [{"shift_mm": 0}], "high_rail_id": 1}, "high_rail_id"),
 ])
 def test_bad_requests_name_the_field(client, body, field):
     r = client.post("/v1/contact", json=body)
