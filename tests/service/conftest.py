@@ -25,6 +25,7 @@ from sqlalchemy.engine import make_url
 
 from wearcast.service.app import create_app
 from wearcast.service.db import scratch_database
+from wearcast.service.jobs import JobRunner
 from wearcast.service.settings import Settings
 
 DEFAULT_POSTGRES_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -67,6 +68,38 @@ def import_miniprof(client: Any, reference_dir: Path, name: str, manifest: str) 
         "manifest": ("manifest.csv", manifest.encode())})
 
 
+_started_runners: list[JobRunner] = []
+_runner_start = JobRunner.start
+
+
+def _recording_start(runner: JobRunner) -> None:
+    _started_runners.append(runner)
+    _runner_start(runner)
+
+
+def stop_runners_on(database_name: str, join_timeout_s: float = 5.0) -> None:
+    """Shut down every job runner started on the database ``database_name`` (a client used
+    without ``with`` never runs the app's shutdown, and ``submit`` starts the runner), waiting
+    up to ``join_timeout_s`` in all for their threads: no job sweep outlives the PostgreSQL
+    database it sweeps (a sweep on a dropped database logged "job sweep failed: ... does not
+    exist" at the end of a run). Runners on other databases (a module's shared client) keep
+    running."""
+    deadline = time.monotonic() + join_timeout_s
+    for runner in [r for r in _started_runners
+                   if r.database.engine.url.database == database_name]:
+        _started_runners.remove(runner)
+        runner.shutdown()
+        for thread in runner._threads:
+            thread.join(timeout=max(0.0, deadline - time.monotonic()))
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _runners_are_recorded() -> Iterator[None]:
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(JobRunner, "start", _recording_start)
+        yield
+
+
 def postgres_admin_url() -> str:
     url = os.environ.get("WEARCAST_TEST_POSTGRES_URL", DEFAULT_POSTGRES_URL)
     if url.startswith("postgresql://"):
@@ -86,7 +119,10 @@ def fresh_postgres_database() -> Iterator[str]:
         admin.dispose()
         pytest.skip(f"PostgreSQL not reachable at {url.render_as_string()}: {exc}")
     with scratch_database(admin, "wearcast_test") as database_url:
-        yield database_url
+        try:
+            yield database_url
+        finally:
+            stop_runners_on(make_url(database_url).database or "")  # before the drop
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
