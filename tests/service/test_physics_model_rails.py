@@ -16,6 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from tests.service.test_physics_models_api import MODEL, _load
+from wearcast.service import physics_model_store
 from wearcast.service.app import create_app
 from wearcast.service.settings import Settings
 
@@ -31,12 +32,22 @@ def _errors(r) -> list[str]:
 
 
 def test_a_physics_model_on_a_measured_high_rail(backend_url: str, tmp_path: Path,
-                                                 reference_dir: Path) -> None:
+                                                 reference_dir: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    runs: list[dict | None] = []  # the stored rails of every loop run made
+
+    def spy(*args, **kwargs):
+        runs.append(kwargs.get("track_rails"))
+        return loop(*args, **kwargs)
+
+    loop = physics_model_store.run_loop
+    monkeypatch.setattr(physics_model_store, "run_loop", spy)
     with TestClient(create_app(Settings(data_dir=tmp_path, database_url=backend_url))) as c:
-        _on_a_measured_high_rail(c, reference_dir)
+        _on_a_measured_high_rail(c, reference_dir, runs)
 
 
-def _on_a_measured_high_rail(client: TestClient, reference_dir: Path) -> None:
+def _on_a_measured_high_rail(client: TestClient, reference_dir: Path,
+                             runs: list[dict | None]) -> None:
     data = (reference_dir / "miniprof" / "avg_low2.ban").read_bytes()
     worn = _rail(client, data, "avg_low2.ban")
     _load(client, vehicles=2)
@@ -70,19 +81,35 @@ def _on_a_measured_high_rail(client: TestClient, reference_dir: Path) -> None:
         f"{nominal_m['physics']['wear_scale']:.4f}")
     assert all(v > 0 for v in (*on_nominal.values(), *on_worn.values()))
     assert abs(ratios["ft_mm"] - 1.0) > 0.02
+    # the stored run is the loop's on the stored rail, and not on the nominal rail
+    with client.app.state.database.session_factory() as session:  # type: ignore[attr-defined]
+        state = physics_model_store.load(session, high_m["id"]).state
+    assert [int(r["rail_id"]) for r in state["track_rails"].values()] == [worn]
+    args = (state["vehicle"], state["resolved_classes"], state["law"], state["simulation_spec"],
+            state["simulation"]["mileage_km"])
+    stored = np.asarray(state["series"]["sd_mm"])
+    again_on_rail = physics_model_store.run_loop(*args, track_rails=state["track_rails"])
+    assert np.asarray(again_on_rail.sd_mm) == pytest.approx(stored, abs=1e-9)
+    on_nominal_rail = physics_model_store.run_loop(*args)
+    assert np.max(np.abs(np.asarray(on_nominal_rail.sd_mm)[-1] - stored[-1])) > 1e-3
     # predict answers from the model's own run (on its rails)
     for model in (nominal_m, high_m):
         r = client.post(f"/v1/models/{model['id']}/predict", json={
             "bogie_type": "motor", "axle": 1, "side": "right", "mileage_km": [0, 1000]})
         assert r.status_code == 200, r.text
     # a diagnosis reruns the loop on the same rails; the rail-state cause is skipped
+    runs.clear()
     r = client.post(f"/v1/models/{high_m['id']}/diagnose", json={"causes": ["patch_model"]})
     assert r.status_code == 200, r.text
+    assert runs and all(t is not None and [int(v["rail_id"]) for v in t.values()] == [worn]
+                        for t in runs)
     assert "stored measured rails" in r.json()["skipped"]["rail_state"]
     assert r.json()["null_fit"]["wear_scale"] == pytest.approx(
         high_m["physics"]["wear_scale"], rel=1e-6)
+    runs.clear()
     r = client.post(f"/v1/models/{nominal_m['id']}/diagnose", json={"causes": ["patch_model"]})
     assert r.status_code == 200, r.text
+    assert runs and all(not t for t in runs)
     assert "rail_state" not in r.json()["skipped"]
 
 
