@@ -56,6 +56,10 @@ class PhysicsModelSummary(BaseModel):
         "the run: simulated mileage, steps, D_step, contact updates and fallbacks, elapsed_s, "
         "step_convergence, runs made"))
     warnings: list[str] = Field(default_factory=list)
+    rails: dict[str, Any] = Field(default_factory=dict, description=(
+        "the stored rails the run is on, per request field (rail_id, high_rail_id, "
+        "low_rail_id): rail_id, name, kind, stated inclination; empty: the preset's nominal "
+        "rail"))
 
 
 class ModelOut(BaseModel):

@@ -14,6 +14,8 @@ from typing import Annotated, Any
 
 import typer
 
+from wearcast.service.rail_cli import HighRailIdOption, LowRailIdOption, RailIdOption
+
 physics_app = typer.Typer(help="physics models: the whole-vehicle wear loop with a fitted "
                           "wear-coefficient scale", no_args_is_help=True)
 
@@ -62,7 +64,8 @@ def build(name: Annotated[str, typer.Option(help="model name")],
           simulation: Annotated[str | None, typer.Option(help=(
               'JSON simulation options, e.g. \'{"depth_per_step_mm": 0.8}\''))] = None,
           as_json: Annotated[bool, typer.Option("--json", help="print the model as JSON")]
-          = False) -> None:
+          = False, rail_id: RailIdOption = None, high_rail_id: HighRailIdOption = None,
+          low_rail_id: LowRailIdOption = None) -> None:
     """Build a physics model: the loop run, its wear scale fitted to the measurements."""
     from wearcast.service import cli, physics_model_store
     from wearcast.service.job_store import default_timeout, queue_job
@@ -72,7 +75,8 @@ def build(name: Annotated[str, typer.Option(help="model name")],
         "kind": "physics", "name": name, "vehicle": vehicle, "law": law,
         "route_id": cli._route_ref(route_id),
         "calibration": {"filter": cli._json_option(filter, "filter")},
-        "simulation": cli._json_option(simulation, "simulation")})
+        "simulation": cli._json_option(simulation, "simulation"), "rail_id": rail_id,
+        "high_rail_id": high_rail_id, "low_rail_id": low_rail_id})
     with cli._session() as (database, session):
         spec = physics_model_store.prepare(session, body)
         row = queue_job(session, body.name, spec, timeout_s=default_timeout())
@@ -89,6 +93,9 @@ def build(name: Annotated[str, typer.Option(help="model name")],
         f"{p['wear_scale_p90']:.4g}), RMS {p['rms_mm']:.3f} mm; run "
         f"{p['simulation']['mileage_km']:,.0f} km in {p['simulation']['steps']} steps, "
         f"{p['simulation']['elapsed_s']:.1f} s")
+    for field, rail in p["rails"].items():
+        cli.console.print(f"  {field.removesuffix('_id').replace('_', ' ')}: stored rail "
+                          f"{rail['rail_id']} ({rail['name']})")
     for e in p["errors"]["overall"]:
         cli.console.print(f"  {e['quantity']}: bias {e['bias_mm']:+.3f} mm, RMS "
                           f"{e['rms_mm']:.3f} mm over {e['n']} points")

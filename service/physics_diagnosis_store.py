@@ -80,7 +80,8 @@ def catalogue(state: dict[str, Any], segments: list[Any] | None = None) -> tuple
              "traction_torque_nm": opts.get("traction_torque_nm") or 0.0,
              "rail_tonnage_mt": sim_spec.get("rail_tonnage_mt") or 0.0}
     n_class = (int(sim_spec.get("curve_classes") or DEFAULT_N_CLASS) if segments else None)
-    return catalogue_for(_friction(state), nulls, _adhesion_torque_nm(state), n_class)
+    cat = catalogue_for(_friction(state), nulls, _adhesion_torque_nm(state), n_class)
+    return tuple(c for c in cat if c.name not in _skipped(segments, state))
 
 
 def _segments(session: Session, model: Any) -> list[Any] | None:
@@ -89,9 +90,17 @@ def _segments(session: Session, model: Any) -> list[Any] | None:
     return None if route is None or not route.segments else list(route.segments)
 
 
-def _skipped(segments: list[Any] | None) -> dict[str, str]:
+#: Why the rail-state cause is skipped for a model on stored rails.
+ON_STORED_RAILS = ("the model runs on stored measured rails (rail_id / high_rail_id / "
+                   "low_rail_id): the rail-step model wears the preset's nominal rail, not them")
+
+
+def _skipped(segments: list[Any] | None, state: dict[str, Any]) -> dict[str, str]:
     """Causes the model cannot be extended by, with the reason."""
-    return {} if segments else {"curve_classes": NO_SEGMENTS}
+    out = {} if segments else {"curve_classes": NO_SEGMENTS}
+    if state.get("track_rails"):
+        out["rail_state"] = ON_STORED_RAILS
+    return out
 
 
 def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> int:
@@ -102,7 +111,8 @@ def submit(session: Session, runner: Any, model_id: int, body: DiagnoseIn) -> in
             raise Unprocessable(field, "a physics model's diagnosis simulates the progression "
                                 "itself; this field is for hybrid models")
     segments = _segments(session, model)
-    names = [c.name for c in catalogue(model.state, segments)] + list(_skipped(segments))
+    names = [c.name for c in catalogue(model.state, segments)] + list(
+        _skipped(segments, model.state))
     if body.causes is not None:
         for i, code in enumerate(body.causes):
             if code not in names:
@@ -201,13 +211,14 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
         # the model's own run took: every catalogue run may take up to the request bound
         spec_run = {**state["simulation_spec"], "max_steps": MAX_STEPS_PER_RUN}
         sim = store.run_loop(state["vehicle"], classes, state["law"], spec_run, simulated_km,
-                             params, progress, contact_cache=contacts, rails=rails)
+                             params, progress, contact_cache=contacts, rails=rails,
+                             track_rails=state.get("track_rails"))
         done[0] += 1
         return sim
 
     measured = pd.DataFrame(spec["measured"])
     diagnosis = diagnose_physics(simulate, measured, catalogue=cat, seed=request.seed,
-                                 skipped=_skipped(segments))
+                                 skipped=_skipped(segments, state))
     saved, reason = None, None
     if request.save_as is not None:
         saved, reason = _save(factory, model, model_spec, diagnosis, request.save_as,
@@ -245,7 +256,8 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
         classes = rebinned_classes(segments, int(value))  # the extended model's classes
     new_spec = {**model_spec, "law": law, "simulation": sim_spec, "vehicle": state["vehicle"],
                 "route_db_id": model.route_id, "measured": spec["measured"],
-                "measurement_ids": spec["measurement_ids"]}
+                "measurement_ids": spec["measurement_ids"],
+                "track_rails": state.get("track_rails")}
     info = dict(state["simulation"])
     info.update(elapsed_s=float(getattr(sim, "elapsed_s", 0.0)),
                 steps=int(series.mileage_km.size - 1), runs=[])

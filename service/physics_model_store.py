@@ -30,7 +30,7 @@ import pandas as pd
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
-from wearcast.service import measurement_store, route_store
+from wearcast.service import measurement_store, rail_store, route_store
 from wearcast.service import models_db as db
 from wearcast.service.cache import LruCache
 from wearcast.service.db import SessionFactory, transaction
@@ -101,12 +101,46 @@ def options_of(simulation: dict[str, Any]) -> dict[str, Any]:
     return {k: simulation.get(k) for k in OPTION_FIELDS if simulation.get(k) is not None}
 
 
+def track_rails_of(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
+    """The stored rails a request names, checked as for ``POST /v1/simulations``
+    (``rail_store.requested_rails``: 404 naming the field, 422 for differing inclinations),
+    as the job's database-free ``rail_store.rail_spec`` per field ({} when none is named)."""
+    rail_store.requested_rails(session, body)
+    rails = {f: rail_store.rail_spec(session, getattr(body, f), f)
+             for f in rail_store.RAIL_FIELDS if getattr(body, f) is not None}
+    if rails and body.simulation.rail_tonnage_mt:
+        raise Unprocessable("simulation.rail_tonnage_mt", "the rail-step model wears the "
+                            "preset's nominal rail: give no rail_tonnage_mt with "
+                            f"{', '.join(rails)}")
+    return rails
+
+
+def rail_ids_of(track_rails: dict[str, Any] | None) -> dict[str, int]:
+    """The rail ids a model was built against ({field: id}, e.g. ``high_rail_id``)."""
+    return {f: int(spec["rail_id"]) for f, spec in (track_rails or {}).items()}
+
+
+def bogies_on_rails(vehicle: str, track_rails: dict[str, Any] | None) -> Any:
+    """The vehicle preset's name, or, with stored rails (:func:`track_rails_of`), its bogies
+    (``vehicle_bogies`` pairs) laid on them by ``rail_store.with_rails`` (rails, high / low
+    rail of every curve, their stated inclination): what ``simulate_vehicle_wear`` runs."""
+    if not track_rails:
+        return vehicle
+    from wearcast.physics.vehicle_wear_simulation import vehicle_bogies
+
+    rails = [None if track_rails.get(f) is None
+             else rail_store.measured_rail_from_spec(track_rails[f])
+             for f in rail_store.RAIL_FIELDS]
+    return [(rail_store.with_rails(b, *rails), n) for b, n in vehicle_bogies(vehicle)]
+
+
 def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
     """Validate a request completely; the job's spec (request, resolved route, measured)."""
     from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, vehicle_bogies
     from wearcast.physics.wear_loop import as_loop_classes
 
     route = _route_row(session, body)
+    track_rails = track_rails_of(session, body)
     classes = resolve_classes(session, SimpleNamespace(route_id=route.id))
     sim = body.simulation.model_dump()
     if sim.get("curve_classes") is not None:
@@ -121,7 +155,7 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
         raise Unprocessable("route_id", f"route {route.name!r}: {exc}") from exc
     try:
         VehicleWearOptions(**options_of(sim))
-        vehicle_bogies(body.vehicle, sim.get("friction"))
+        vehicle_bogies(bogies_on_rails(body.vehicle, track_rails), sim.get("friction"))
     except ValueError as exc:
         raise Unprocessable("simulation", str(exc)) from exc
     measured, ids = measured_series(session, dict(body.calibration.filter),
@@ -133,7 +167,7 @@ def prepare(session: Session, body: PhysicsModelIn) -> dict[str, Any]:
     spec = body.model_dump(mode="json")
     spec.update(kind=KIND, route_db_id=route.id, route_name=route.name,
                 resolved_classes=classes, measurement_ids=ids,
-                measured=measured.to_dict(orient="records"))
+                measured=measured.to_dict(orient="records"), track_rails=track_rails)
     return spec
 
 
@@ -158,7 +192,8 @@ def worn_rails(vehicle: str, classes: list[dict[str, Any]], law: str,
 def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: dict[str, Any],
              mileage_km: float, params: dict[str, Any] | None = None,
              progress: Any = None, continue_from: Any = None,
-             contact_cache: dict | None = None, rails: dict[float, Any] | None = None) -> Any:
+             contact_cache: dict | None = None, rails: dict[float, Any] | None = None,
+             track_rails: dict[str, Any] | None = None) -> Any:
     """One whole-vehicle run with a model's options, ``params`` (VehicleWearOptions fields,
     ``law`` or ``rail_tonnage_mt``) replacing them; ``continue_from`` an earlier run to go on
     from (not with ``step_convergence``, which runs anew); ``contact_cache`` shared by the runs
@@ -166,7 +201,9 @@ def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: 
 
     ``rail_tonnage_mt`` (of ``params`` or the model's ``simulation``) > 0: the run is on the
     rail worn to it (:func:`worn_rails` on ``classes``), looked up in / added to ``rails``
-    (the worn rails of one diagnosis, so each is computed once)."""
+    (the worn rails of one diagnosis, so each is computed once).
+
+    ``track_rails``: the model's stored rails (:func:`track_rails_of`), under every run."""
     from wearcast.physics.vehicle_wear_simulation import (
         VehicleWearOptions,
         simulate_vehicle_wear,
@@ -190,9 +227,10 @@ def run_loop(vehicle: str, classes: list[dict[str, Any]], law: str, simulation: 
               "contact_cache": contact_cache}
     route = as_loop_classes(classes)
     step = float(simulation.get("depth_per_step_mm", 0.8))
+    bogies = bogies_on_rails(vehicle, track_rails)
     if simulation.get("step_convergence"):
-        return simulate_vehicle_wear_converged(vehicle, route, first_step_mm=step, **kwargs)
-    return simulate_vehicle_wear(vehicle, route, depth_per_step_mm=step,
+        return simulate_vehicle_wear_converged(bogies, route, first_step_mm=step, **kwargs)
+    return simulate_vehicle_wear(bogies, route, depth_per_step_mm=step,
                                  continue_from=continue_from, **kwargs)
 
 
@@ -232,7 +270,8 @@ def build(spec: dict[str, Any], control: JobControl | None = None
                 control.progress(min(0.95, (attempt + km / total) / MAX_RUNS),
                                  f"run {attempt + 1}: {km:,.0f} of {total:,.0f} km")
         sim = run_loop(spec["vehicle"], spec["resolved_classes"], spec["law"], sim_spec,
-                       mileage, progress=progress, continue_from=sim, rails=rails)
+                       mileage, progress=progress, continue_from=sim, rails=rails,
+                       track_rails=spec.get("track_rails"))
         series = VehicleSeries.from_simulation(sim)
         calibration = calibrate_scale(series, measured)
         runs.append({"mileage_km": mileage, "steps": int(series.mileage_km.size - 1),
@@ -267,14 +306,14 @@ def state_of(spec: dict[str, Any], series: VehicleSeries, calibration: Any,
         "measured": spec["measured"], "simulation": info, "warnings": warnings,
         "extension": extension, "resolved_classes": spec["resolved_classes"],
         "measurement_ids": list(spec["measurement_ids"]),
-        "route_db_id": spec["route_db_id"]})
+        "route_db_id": spec["route_db_id"], "track_rails": spec.get("track_rails") or {}})
 
 
 def store_model(session: Session, name: str, spec: dict[str, Any], state: dict[str, Any],
                 ids: list[int], derived_from: int | None = None) -> db.Model:
     public: dict[str, Any] = {k: spec[k] for k in ("kind", "name", "vehicle", "route_id", "law",
                                    "calibration", "simulation") if k in spec}
-    public.update(kind="physics", name=name)
+    public.update(kind="physics", name=name, **rail_ids_of(state.get("track_rails")))
     if derived_from is not None:
         public["derived_from"] = derived_from
     row = db.Model(name=name, kind="physics", measure=None, running_mode=None,
@@ -329,13 +368,15 @@ def model_out(session: Session, row: db.Model) -> ModelOut:
                 "run_mileage_km": series.mileage_km.tolist(),
                 "ft_mm": series.mean("sd_mm").tolist(), "fh_mm": series.mean("sh_mm").tolist(),
                 "qr_mm": series.mean("qr_mm").tolist(), "wheels": list(series.wheels)},
-        errors=cal["errors"], simulation=state["simulation"], warnings=state["warnings"])
+        errors=cal["errors"], simulation=state["simulation"], warnings=state["warnings"],
+        rails={f: {k: r.get(k) for k in ("rail_id", "name", "kind", "inclination")}
+               for f, r in (state.get("track_rails") or {}).items()})
     return ModelOut(
         id=row.id, name=row.name, measure=None, running_mode=None, wear_table_id=None,
         route_id=row.route_id, calibration=row.spec.get("calibration", {}),
         n_calibration_measurements=int(n),
         summary={"vehicle": state["vehicle"], "law": state["law"], "wear_scale": c,
-                 "rms_mm": cal["rms_mm"]},
+                 "rms_mm": cal["rms_mm"], **rail_ids_of(state.get("track_rails"))},
         kind="physics", derived_from=row.spec.get("derived_from"),
         extension=state.get("extension"), physics=summary)
 

@@ -17,6 +17,7 @@ from pydantic import BaseModel, Discriminator, Field, JsonValue, Tag, field_vali
 from wearcast.physics.vehicles import preset_names
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.model_schemas import ModelIn
+from wearcast.service.profile_schemas import TrackRailIdsIn
 from wearcast.service.schema_base import Filter, Strict
 from wearcast.service.simulation_schemas import WearLawName
 
@@ -78,8 +79,11 @@ class PhysicsSimulationIn(Strict):
         "stored route's (7); the route must have been stored with its segments"))
 
 
-class PhysicsModelIn(Strict):
-    """``POST /v1/models`` with ``kind: "physics"``."""
+class PhysicsModelIn(TrackRailIdsIn):
+    """``POST /v1/models`` with ``kind: "physics"``: with ``rail_id`` / ``high_rail_id`` /
+    ``low_rail_id`` (:class:`TrackRailIdsIn`, the rules of ``POST /v1/simulations``) the run,
+    its calibration and every diagnosis run are on those stored rails (not with
+    ``simulation.rail_tonnage_mt``: the rail-step model wears the nominal rail)."""
 
     kind: Literal["physics"]
     name: str = Field(min_length=1, max_length=200)

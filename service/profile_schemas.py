@@ -19,13 +19,19 @@ class MeasuredProfileIn(Strict):
     reference_profile: str = "S1002"
 
 
-class MeasuredProfilesIn(Strict):
-    """The measured wheel and rail a physics request may use instead of the preset's S1002 on
-    its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
+class RailIdIn(Strict):
+    """The stored measured rail a physics request may lay in place of the preset's nominal
+    rail."""
 
     rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
         "both sides, placed by its gauge point"))
+
+
+class MeasuredProfilesIn(RailIdIn):
+    """The measured wheel and rail a physics request may use instead of the preset's S1002 on
+    its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
+
     measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
         "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
@@ -45,10 +51,11 @@ class MeasuredProfilesIn(Strict):
         return self
 
 
-class TrackRailsIn(MeasuredProfilesIn):
-    """:class:`MeasuredProfilesIn` with a high and a low rail of their own for the requests
-    that run a vehicle through curves (``POST /v1/wear-tables/compute``,
-    ``POST /v1/simulations``; not the one-wheel contact, which takes one rail)."""
+class TrackRailIdsIn(RailIdIn):
+    """:class:`RailIdIn` with a high and a low rail of their own, for the requests that run a
+    vehicle through curves (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``,
+    ``POST /v1/models`` with ``kind: "physics"``; not the one-wheel contact, which takes one
+    rail). ``service.rail_store.requested_rails`` resolves and checks all three."""
 
     high_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "a stored measured rail as the high (outer) rail of every curve, placed by its gauge "
@@ -56,3 +63,9 @@ class TrackRailsIn(MeasuredProfilesIn):
         "tangent track runs on rail_id (or the nominal rail)"))
     low_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
         "as high_rail_id, the low (inner) rail of every curve"))
+
+
+class TrackRailsIn(MeasuredProfilesIn, TrackRailIdsIn):
+    """:class:`MeasuredProfilesIn` with a high and a low rail of their own
+    (:class:`TrackRailIdsIn`) for the requests that run one wheel's evolution or a table
+    through curves (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""

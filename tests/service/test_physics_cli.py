@@ -107,5 +107,21 @@ def test_bad_input_exits_2_naming_the_field(loaded: CliRunner) -> None:
     assert "calibration.filter" in error("build", "--name", "x", "--route", "curvy",
                                          "--vehicle", "metro_b", "--filter",
                                          '{"vehicle_id": "none"}')
+    for flag, field in (("--rail-id", "rail_id"), ("--high-rail-id", "high_rail_id"),
+                        ("--low-rail-id", "low_rail_id")):
+        assert field in error("build", "--name", "x", "--route", "curvy", "--vehicle",
+                              "metro_b", flag, "999")
     assert "model_id" in error("diagnose", "999")
     assert "causes[0]" in error("diagnose", "1", "--cause", "traction")
+
+
+def test_build_on_a_measured_high_rail(loaded: CliRunner, reference_dir: Path) -> None:
+    r = loaded.invoke(app, ["rail-import", str(reference_dir / "miniprof" / "avg_low2.ban")])
+    assert r.exit_code == 0, r.output
+    body = json.loads(r.stdout[r.stdout.index("{"):])
+    rail_id = (body["created"] or body["duplicates"])[0]["id"]
+    r = loaded.invoke(app, ["physics", "build", "--name", "high", "--route", "curvy",
+                            "--vehicle", "metro_b", "--simulation", SIMULATION,
+                            "--high-rail-id", str(rail_id)])
+    assert r.exit_code == 0, r.output
+    assert f"high rail: stored rail {rail_id} (avg_low2.ban)" in r.output
