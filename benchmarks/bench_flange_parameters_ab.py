@@ -28,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_processing import synthetic_profiles  # noqa: E402
-from bench_processing_ab import _baseline_package, _seconds  # noqa: E402
+from bench_processing_ab import _baseline_package, interleaved  # noqa: E402
 
 GRIDS = {"0.5 mm (model)": np.linspace(-58.0, 50.0, 217),
          "0.1 mm": np.linspace(-70.0, 60.0, 1301), "0.336 mm": np.linspace(-60.3, 40.1, 300)}
@@ -87,28 +87,21 @@ def main(argv: list[str]) -> None:
         y = GRIDS["0.5 mm (model)"]
         z = _worn(y, 1000, 1)
         cases = {
-            "flange_parameters (per profile)": (
-                lambda m: [m.flange_parameters(c.y_mm, c.z_mm) for c in cleaned], 512),
-            "flange_parameters_rows (per profile)": (
-                lambda m: m.flange_parameters_rows(y_rows, z_rows, valid), 512),
-            "flange_parameters_batch 1000 x 217 (per row)": (
-                lambda m: m.flange_parameters_batch(y, z), 1000),
+            "flange_parameters": (
+                lambda m: [m.flange_parameters(c.y_mm, c.z_mm) for c in cleaned], 512,
+                "profile"),
+            "flange_parameters_rows": (
+                lambda m: m.flange_parameters_rows(y_rows, z_rows, valid), 512, "profile"),
+            "flange_parameters_batch (1000 x 217)": (
+                lambda m: m.flange_parameters_batch(y, z), 1000, "row"),
         }
         print(f"{args.pairs} interleaved pairs, process CPU time")
-        for name, (func, count) in cases.items():
+        for name, (func, count, unit) in cases.items():
             for m in (base, this):
                 func(m)  # compile / warm up
-            ratios, base_us = [], []
-            for _ in range(args.pairs):
-                a = _seconds(func, [base])
-                b = _seconds(func, [this])
-                ratios.append(b / a)
-                base_us.append(a / count * 1e6)
-            ratios.sort()
-            base_us.sort()
-            print(f"  {name:<46s} this/baseline median {ratios[len(ratios) // 2]:.3f} "
-                  f"(range {ratios[0]:.3f}-{ratios[-1]:.3f}); baseline "
-                  f"{base_us[len(base_us) // 2]:.1f} us")
+            print(f"  {name:<38s} " + interleaved(
+                lambda _, f=func: f(base), lambda _, f=func: f(this), [None], args.pairs,
+                count, unit))
 
 
 if __name__ == "__main__":
