@@ -63,6 +63,23 @@ def _seconds(func: Any, items: list) -> float:
     return time.process_time() - start
 
 
+def interleaved(func_base: Any, func_this: Any, items: list, pairs: int, count: int,
+                unit: str) -> str:
+    """Time ``func_base`` and ``func_this`` over ``items`` ``pairs`` times, each baseline
+    timing followed at once by this tree's; the median and range of the ratios and the
+    baseline's median time per one of ``count`` ``unit`` [us], as a line of text."""
+    ratios, base_us = [], []
+    for _ in range(pairs):
+        a = _seconds(func_base, items)
+        b = _seconds(func_this, items)
+        ratios.append(b / a)
+        base_us.append(a / count * 1e6)
+    ratios.sort()
+    base_us.sort()
+    return (f"this/baseline median {ratios[len(ratios) // 2]:.3f} (range {ratios[0]:.3f}-"
+            f"{ratios[-1]:.3f}); baseline {base_us[len(base_us) // 2]:.1f} us/{unit}")
+
+
 def main(argv: list[str]) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("baseline", help="checkout of the baseline (has physics/, statistics/)")
@@ -77,18 +94,8 @@ def main(argv: list[str]) -> None:
         this = _cases("wearcast", profiles, blocks)
         print(f"{args.pairs} interleaved pairs, 512 profiles of 400 points, process CPU time")
         for name, (func_base, items) in base.items():
-            func_this = this[name][0]
-            ratios, base_us = [], []
-            for _ in range(args.pairs):
-                a = _seconds(func_base, items)
-                b = _seconds(func_this, items)
-                ratios.append(b / a)
-                base_us.append(a / 512 * 1e6)
-            ratios.sort()
-            base_us.sort()
-            print(f"  {name:<38s} this/baseline median {ratios[len(ratios) // 2]:.3f} "
-                  f"(range {ratios[0]:.3f}-{ratios[-1]:.3f}); baseline "
-                  f"{base_us[len(base_us) // 2]:.0f} us/profile")
+            print(f"  {name:<38s} "
+                  + interleaved(func_base, this[name][0], items, args.pairs, 512, "profile"))
 
 
 if __name__ == "__main__":

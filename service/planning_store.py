@@ -42,6 +42,7 @@ from wearcast.statistics.maintenance.turning import (
     turning_options,
     wheel_life,
 )
+from wearcast.statistics.profile_parameters import tape_circle_height_mm
 
 M, W, V = db.Measurement, db.Wheel, db.Vehicle
 #: Limits so far away that only the one under study can be crossed [mm].
@@ -309,7 +310,7 @@ def wheel_detail(session: Session, wheel_id: str, fleet_id: str | None = None,
         assert y is not None and z is not None
         order = np.argsort(y)
         y, z = y[order], z[order]
-        z0 = float(np.interp(0.0, y, z))
+        z0 = tape_circle_height_mm(y, z)
         targets = _targets()
         grid = np.round(np.arange(max(y[0], -70.0), min(y[-1], 60.0), 0.5), 3)
         out["profile"] = {

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.profiles.parameters import tape_circle_height_mm
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import ReferenceHeight, reference_table
 
@@ -166,7 +167,7 @@ def place_on_datum(
     order = np.argsort(yf, kind="stable")
     ys, zs = yf[order], zf[order]
     if ys[0] <= 0.0 <= ys[-1]:
-        tape_z = float(np.interp(0.0, ys, zs))
+        tape_z = tape_circle_height_mm(ys, zs)
         if abs(tape_z) > TAPE_CIRCLE_TOLERANCE_MM:
             notes.append(f"tape circle at z = {tape_z:+.2f} mm, not 0: the file's vertical "
                          "datum is not the taperline")

@@ -15,7 +15,6 @@ from numpy.typing import ArrayLike, NDArray
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.profile_parameters import (
     BACK_FACE_Y_MM,
-    BatchGrid,
     flange_parameters_batch,
 )
 from wearcast.statistics.wear_states import interpolation_weights
@@ -80,15 +79,14 @@ class StateInterpolant:
 class ParameterKernel:
     """Per-model constants of :func:`parameters_at_areas` (no request data): the state
     interpolants of both regions on :attr:`HybridModel.parameter_columns`, the reference
-    heights there [mm], the columns' grid for the batched Sd/Sh/qR and the last lateral
-    position [mm] at which a flank point found on the columns is the whole grid's."""
+    heights there [mm] and the last lateral position [mm] at which a flank point found on
+    the columns is the whole grid's."""
 
     flange: StateInterpolant
     tread: StateInterpolant
     y_mm: NDArray
     reference_z_mm: NDArray
     y_safe_mm: float
-    grid: BatchGrid | None
     #: reference minus the flange pieces' offsets, (m_f + 1, c) [mm]
     _ref_minus_flange_offset: NDArray = field(repr=False)
 
@@ -110,7 +108,7 @@ class ParameterKernel:
         ref_minus = ref[None, :] - regions[0].offset_mm
         for a in (y, ref, ref_minus):
             a.setflags(write=False)
-        return cls(regions[0], regions[1], y, ref, y_safe, BatchGrid.build(y), ref_minus)
+        return cls(regions[0], regions[1], y, ref, y_safe, ref_minus)
 
     def profiles(self, flange_area_mm2: NDArray, tread_area_mm2: NDArray
                  ) -> tuple[NDArray, NDArray]:
@@ -228,10 +226,7 @@ def parameters_at_areas(model: HybridModel, flange_area_mm2: ArrayLike,
     fa = np.atleast_1d(np.asarray(flange_area_mm2, dtype=float)).ravel()
     ta = np.atleast_1d(np.asarray(tread_area_mm2, dtype=float)).ravel()
     z, extrapolated = kernel.profiles(fa, ta)
-    if kernel.grid is not None and np.isfinite(z).all():
-        params = kernel.grid.parameters(z)
-    else:
-        params = flange_parameters_batch(kernel.y_mm, z).stacked()
+    params = flange_parameters_batch(kernel.y_mm, z).stacked()
     y_sd = params[:, 0] + BACK_FACE_Y_MM
     y_qr = y_sd - params[:, 2]
     with np.errstate(invalid="ignore"):

@@ -27,6 +27,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.profiles.parameters import tape_circle_height_mm
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import (
     FIT_WINDOWS_MM,
@@ -169,7 +170,7 @@ def process_profile(
         alignment=alignment,
         datum=datum,
         reference_check=check_reference(parameters, areas, reference_height,
-                                        float(np.interp(0.0, grid, wear)),
+                                        tape_circle_height_mm(grid, wear),
                                         aligned.rms_residual_mm, grid, wear),
     )
 

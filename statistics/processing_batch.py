@@ -24,7 +24,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.profiles.parameters import flange_parameters_rows
+from wearcast.physics.profiles.parameters import flange_parameters_rows, tape_circle_height_mm
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import AlignedProfile, ReferenceHeight, align_to_reference
 from wearcast.statistics.alignment_batch import align_to_reference_batch
@@ -135,7 +135,7 @@ def _process_block(profiles: Sequence[tuple[ArrayLike, ArrayLike]],
             cleaned=c, aligned=a, grid_y_mm=grid, wear_mm=w, areas=areas,
             parameters=parameters[row], alignment="free", datum=None,
             reference_check=check_reference(
-                parameters[row], areas, reference_height, float(np.interp(0.0, grid, w)),
+                parameters[row], areas, reference_height, tape_circle_height_mm(grid, w),
                 a.rms_residual_mm, *((grid, w) if may_stretch[row] else (None, None))))
     return out
 

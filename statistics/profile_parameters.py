@@ -17,20 +17,20 @@ from wearcast.physics.profiles.parameters import (
     BACK_FACE_Y_MM,
     QR_DEPTH_MM,
     SD_HEIGHT_MM,
-    BatchGrid,
     FlangeParameterArrays,
     FlangeParameters,
     flange_parameters,
     flange_parameters_batch,
+    tape_circle_height_mm,
 )
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.alignment import ReferenceHeight
 from wearcast.statistics.wear_curves import reference_on_grid
 
 __all__ = [
-    "BACK_FACE_Y_MM", "DEFAULT_LIMITS", "QR_DEPTH_MM", "SD_HEIGHT_MM", "BatchGrid",
+    "BACK_FACE_Y_MM", "DEFAULT_LIMITS", "QR_DEPTH_MM", "SD_HEIGHT_MM",
     "FlangeParameterArrays", "FlangeParameters", "WheelLimits", "flange_parameters",
-    "flange_parameters_batch", "parameters_from_wear_curve",
+    "flange_parameters_batch", "parameters_from_wear_curve", "tape_circle_height_mm",
 ]
 
 

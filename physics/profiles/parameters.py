@@ -21,21 +21,24 @@ anywhere left of y = -25 mm, chord crossings) is the convention the loop used be
 the same :func:`flange_parameters` with other options, kept for comparisons (e.g. to show that
 wear never thickens the flange in the new profile's frame).
 
-The definitions are written once: the heights of the Sd and qR points (``_point_heights``),
-Sd/Sh/qR from the flank points (``_sd_sh_qr``) and the flank crossing (``_bracket_crossing``;
-searched along one profile by ``_flank_crossing``, along many rows, on a common grid or on
-rows of their own, by ``_flank_crossings``). :func:`flange_parameters` (one profile),
-:func:`flange_parameters_batch` (many on one grid) and :func:`flange_parameters_rows` (many of
-different lengths) use them and give the same numbers.
+Each rule is written once, as compiled (numba) code on one profile: the height at a lateral
+position (``_height_at``, the tape circle, ``np.interp``'s numbers; public as
+:func:`tape_circle_height_mm`), the flange-tip search (``_tip_index``), the heights of the Sd
+and qR points (``_point_heights``), the flank crossing (``_flank_crossing`` with
+``_bracket_crossing``) and Sd/Sh/qR from the flank points (``_sd_sh_qr``).
+``_parameters_kernel`` runs them over rows, on a common grid or on rows of their own;
+:func:`flange_parameters` (one profile), :func:`flange_parameters_batch` (many on one grid) and
+:func:`flange_parameters_rows` (many of different lengths) all call it, so their numbers are
+the same to the bit.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 #: Lateral position of the back face in the wheel frame [mm] (tape circle 70 mm from it).
@@ -59,57 +62,147 @@ class FlangeParameters:
     qr_mm: float
 
 
-def _point_heights(z_tape: Any, z_tip: Any) -> tuple[Any, Any]:
+@njit(cache=True)
+def _point_heights(z_tape: float, z_tip: float) -> tuple[float, float]:
     """Heights [mm] of the Sd point (``SD_HEIGHT_MM`` above the tape-circle height) and of the
     qR point (``QR_DEPTH_MM`` below the flange tip)."""
     return z_tape + SD_HEIGHT_MM, z_tip - QR_DEPTH_MM
 
 
-def _sd_sh_qr(y_sd: Any, y_qr: Any, z_tip: Any, z_tape: Any) -> tuple[Any, Any, Any]:
+@njit(cache=True)
+def _sd_sh_qr(y_sd: float, y_qr: float, z_tip: float, z_tape: float
+              ) -> tuple[float, float, float]:
     """Sd, Sh, qR [mm] (module docstring) from the flank points y_sd, y_qr [mm] and the
     heights of the tip and the tape circle [mm]."""
     return y_sd - BACK_FACE_Y_MM, z_tip - z_tape, y_sd - y_qr
 
 
-def _bracket_crossing(y0: Any, y1: Any, y2: Any, z0: Any, z1: Any, z2: Any, level: Any,
-                      has_next: Any) -> NDArray:
-    """Offset t = y - y0 [mm] where z crosses ``level`` between (y0, z0) and (y1, z1),
-    elementwise: on the quadratic through the two bracketing points and the next one (y2, z2)
-    where ``has_next``, the quadratic is not degenerate and has a root in [0, h]; else on the
+@njit(cache=True, error_model="numpy")
+def _height_at(y: NDArray, z: NDArray, n: int, x: float) -> float:
+    """Height [mm] of the profile (y, z) [mm] (its first ``n`` points, y ascending) at the
+    lateral position ``x`` [mm], with the formula and the end rules of ``np.interp`` (so its
+    numbers): the last point at or before ``x``; its height if it lies at ``x`` or is the
+    last point, else the chord to the next; the first height before the first point."""
+    j = -1
+    while j + 1 < n and y[j + 1] <= x:
+        j += 1
+    if j < 0:
+        return float(z[0])
+    if j >= n - 1 or y[j] == x:
+        return float(z[j])
+    return float((z[j + 1] - z[j]) / (y[j + 1] - y[j]) * (x - y[j]) + z[j])
+
+
+@njit(cache=True)
+def _tip_index(y: NDArray, z: NDArray, n: int, y_from: float, y_to: float) -> int:
+    """Index of the flange tip of the profile (y, z) [mm] (its first ``n`` points): the first
+    highest point with y_from <= y < y_to [mm] (the sampled maximum: off by <= h^2/(8 R) =
+    0.003 mm for h 0.5, R 12); -1 if no point lies there."""
+    k = -1
+    for i in range(n):
+        if y[i] >= y_to:
+            break
+        if y[i] >= y_from and (k < 0 or z[i] > z[k]):
+            k = i
+    return k
+
+
+@njit(cache=True, error_model="numpy")
+def _bracket_crossing(y0: float, y1: float, y2: float, z0: float, z1: float, z2: float,
+                      level: float, has_next: bool) -> float:
+    """Offset t = y - y0 [mm] where z crosses ``level`` between (y0, z0) and (y1, z1): on
+    the quadratic through the two bracketing points and the next one (y2, z2) where
+    ``has_next``, the quadratic is not degenerate and has a root in [0, h]; else on the
     chord. On the steep, curved flank a chord would be off by up to 0.01 mm for 0.5 mm
     sampling."""
     h = y1 - y0
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        t_lin = (level - z0) * h / (z1 - z0)
-        d01 = (z1 - z0) / h
-        a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
-        # z0 + d01 t + a t (t - h) = level
-        b = d01 - a * h
-        disc = b * b - 4.0 * a * (z0 - level)
-        root = np.sqrt(np.maximum(disc, 0.0))
-        t1 = (-b - root) / (2.0 * a)
-        t2 = (-b + root) / (2.0 * a)
-    quadratic = has_next & (np.abs(a) * h >= 1e-12 * (np.abs(b) + 1e-300)) & (disc >= 0.0)
-    ok1 = quadratic & (t1 >= 0.0) & (t1 <= h)
-    ok2 = quadratic & (t2 >= 0.0) & (t2 <= h)
-    return np.asarray(np.where(ok1, t1, np.where(ok2, t2, t_lin)))
+    dz = z1 - z0
+    t_lin = (level - z0) * h / dz
+    if not has_next:
+        return t_lin
+    d01 = dz / h
+    a = ((z2 - z1) / (y2 - y1) - d01) / (y2 - y0)
+    # z0 + d01 t + a t (t - h) = level
+    b = d01 - a * h
+    disc = b * b - 4.0 * a * (z0 - level)
+    if not (abs(a) * h >= 1e-12 * (abs(b) + 1e-300) and disc >= 0.0):
+        return t_lin
+    root = math.sqrt(disc)
+    t1 = (-b - root) / (2.0 * a)
+    if t1 >= 0.0 and t1 <= h:
+        return t1
+    t2 = (-b + root) / (2.0 * a)
+    if t2 >= 0.0 and t2 <= h:
+        return t2
+    return t_lin
 
 
-def _flank_crossing(y: NDArray, z: NDArray, start: int, level: float,
-                    quadratic: bool = True) -> float:
-    """y [mm] where z first drops below ``level`` walking from index ``start`` to +y, on the
-    quadratic through the bracketing points and the next one (:func:`_bracket_crossing`;
-    the chord if ``quadratic`` is False)."""
-    below = z[start:] < level
-    if not below.any():
-        return float("nan")
-    k = start + int(np.argmax(below))
+@njit(cache=True)
+def _flank_crossing(y: NDArray, z: NDArray, n: int, start: int, level: float,
+                    quadratic: bool) -> float:
+    """y [mm] where z first drops below ``level`` walking from index ``start`` to +y along
+    the profile's first ``n`` points: NaN if it never does, the start point if it is below
+    already, else :func:`_bracket_crossing` between the first point below and the one
+    before (the chord if ``quadratic`` is False)."""
+    k = start
+    while k < n and not z[k] < level:
+        k += 1
+    if k >= n:
+        return math.nan
     if k == start:
         return float(y[k])
-    k2 = min(k + 1, y.size - 1)
-    t = _bracket_crossing(y[k - 1], y[k], y[k2], z[k - 1], z[k], z[k2], level,
-                          quadratic and k + 1 < y.size)
-    return float(y[k - 1] + t)
+    k2 = min(k + 1, n - 1)
+    return float(y[k - 1] + _bracket_crossing(y[k - 1], y[k], y[k2], z[k - 1], z[k], z[k2],
+                                              level, quadratic and k + 1 < n))
+
+
+@njit(cache=True)
+def _parameters_kernel(y: NDArray, z: NDArray, n: NDArray, y_from: float, y_to: float,
+                       tape_circle_z_mm: float, quadratic: bool) -> NDArray:
+    """Sd, Sh, qR (M, 3) [mm] of the rows of ``z`` (M, L) [mm]: row i holds a profile's
+    ``n[i]`` points (the rest padding), ascending in ``y`` (1, L), a common grid, or
+    (M, L), the rows' own; tape circle at ``tape_circle_z_mm`` [mm] (NaN: each profile's
+    own height at y = 0, :func:`_height_at`); tip region [y_from, y_to) [mm]. NaN where a
+    point is not in the data."""
+    m = z.shape[0]
+    out = np.full((m, 3), np.nan)
+    for i in range(m):
+        yi = y[0] if y.shape[0] == 1 else y[i]
+        zi = z[i]
+        ni = n[i]
+        if ni < 3 or yi[0] > 0.0 or yi[ni - 1] < 0.0:
+            continue
+        k = _tip_index(yi, zi, ni, y_from, y_to)
+        if k < 0:
+            continue
+        z_tape = _height_at(yi, zi, ni, 0.0) if math.isnan(tape_circle_z_mm) else \
+            tape_circle_z_mm
+        z_tip = zi[k]
+        sd_level, qr_level = _point_heights(z_tape, z_tip)
+        y_sd = _flank_crossing(yi, zi, ni, k, sd_level, quadratic)
+        y_qr = _flank_crossing(yi, zi, ni, k, qr_level, quadratic)
+        out[i, 0], out[i, 1], out[i, 2] = _sd_sh_qr(y_sd, y_qr, z_tip, z_tape)
+    return out
+
+
+def _parameters(y: NDArray, z: NDArray, n: NDArray,
+                tip_region_y_mm: tuple[float, float] = TIP_REGION_Y_MM,
+                tape_circle_z_mm: float | None = None, quadratic: bool = True) -> NDArray:
+    """The one computation behind :func:`flange_parameters`, :func:`flange_parameters_batch`
+    and :func:`flange_parameters_rows`: :func:`_parameters_kernel` on y (1, L) or (M, L) and
+    z (M, L) [mm] and the point counts n (M,), each at most L (checked: the compiled loops
+    do not check their indices)."""
+    y = np.ascontiguousarray(y, dtype=np.float64)
+    z = np.ascontiguousarray(z, dtype=np.float64)
+    n = np.ascontiguousarray(n, dtype=np.int64)
+    if (z.ndim != 2 or y.ndim != 2 or y.shape[1] != z.shape[1]
+            or y.shape[0] not in (1, z.shape[0]) or n.shape != (z.shape[0],)
+            or (n.size and (n.max() > z.shape[1] or n.min() < 0))):
+        raise ValueError(f"y_mm, z_mm: rows of the same length with a point count each, got "
+                         f"y {y.shape}, z {z.shape}, n {n.shape}")
+    return np.asarray(_parameters_kernel(y, z, n, float(tip_region_y_mm[0]),
+        float(tip_region_y_mm[1]),
+        math.nan if tape_circle_z_mm is None else float(tape_circle_z_mm), bool(quadratic)))
 
 
 def flange_parameters(
@@ -140,32 +233,19 @@ def flange_parameters(
     FlangeParameters; a value is NaN if its point is not in the data.
 
     Definitions: EN 15313 / MiniProf (module docstring); S1002 gives 32.50 / 28.00 / 10.80.
+    Non-finite points are dropped; the rest go through :func:`_parameters` as one row.
     """
     if interpolation not in ("quadratic", "linear"):
         raise ValueError(f"interpolation must be 'quadratic' or 'linear', got {interpolation!r}")
     y = np.asarray(y_mm, dtype=float)
     z = np.asarray(z_mm, dtype=float)
+    if y.ndim != 1 or z.shape != y.shape:
+        raise ValueError(f"y_mm, z_mm: one profile, got shapes {y.shape}, {z.shape}")
     finite = np.isfinite(z) & np.isfinite(y)
     if not finite.all():
         y, z = y[finite], z[finite]
-    if y.size < 3 or y[0] > 0.0 or y[-1] < 0.0:
-        nan = float("nan")
-        return FlangeParameters(sd_mm=nan, sh_mm=nan, qr_mm=nan)
-    if tape_circle_z_mm is None:
-        z_tape = float(np.interp(0.0, y, z))
-    else:
-        z_tape = float(tape_circle_z_mm)
-    lo, hi = np.searchsorted(y, tip_region_y_mm)
-    if hi <= lo:
-        nan = float("nan")
-        return FlangeParameters(sd_mm=nan, sh_mm=nan, qr_mm=nan)
-    k = lo + int(np.argmax(z[lo:hi]))
-    z_tip = float(z[k])  # sampled maximum: off by <= h^2/(8 R) = 0.003 mm (h 0.5, R 12)
-    quadratic = interpolation == "quadratic"
-    sd_level, qr_level = _point_heights(z_tape, z_tip)
-    y_sd = _flank_crossing(y, z, k, sd_level, quadratic)
-    y_qr = _flank_crossing(y, z, k, qr_level, quadratic)
-    sd, sh, qr = _sd_sh_qr(y_sd, y_qr, z_tip, z_tape)
+    sd, sh, qr = _parameters(y[None, :], z[None, :], np.array([y.size]), tip_region_y_mm,
+                             tape_circle_z_mm, interpolation == "quadratic")[0].tolist()
     return FlangeParameters(sd_mm=sd, sh_mm=sh, qr_mm=qr)
 
 
@@ -194,83 +274,15 @@ class FlangeParameterArrays:
         return np.column_stack([self.sd_mm, self.sh_mm, self.qr_mm])
 
 
-def _flank_crossings(y: NDArray, z: NDArray, start: NDArray, levels: NDArray,
-                     n: NDArray | None = None) -> NDArray:
-    """Vectorised :func:`_flank_crossing`: rows of ``z`` (M, g) [mm] on the common grid ``y``
-    (g,) [mm] or on their own rows ``y`` (M, g) [mm], their start indices ``start`` (M,) and
-    L levels per row ``levels`` (M, L) [mm]; ``n`` (M,) the number of points of each row (the
-    rest padding; None: all g). Returns y (M, L) [mm].
-
-    Same rule as the scalar version, row by row and level by level: the first point at or
-    after ``start`` below the level, then the quadratic through the bracketing points and
-    the next one, with the same fall-backs to the chord. Only the columns from the smallest
-    start on are searched.
-    """
-    m, g = z.shape
-    s0 = int(start.min()) if start.size else 0
-    cols = np.arange(s0, g)
-    below = z[:, None, s0:] < levels[:, :, None]
-    if not (start == s0).all():
-        below &= (cols >= start[:, None])[:, None, :]
-    if n is not None:
-        below &= (cols < n[:, None])[:, None, :]
-    found = below.any(axis=2)
-    k = below.argmax(axis=2) + s0
-    at_start = k == start[:, None]
-    k1 = np.maximum(k, 1)
-    k2 = np.minimum(k1 + 1, g - 1)
-    row = (np.arange(m) * g)[:, None]
-    flat = z.reshape(-1)
-    z0, z1, z2 = flat[row + (k1 - 1)], flat[row + k1], flat[row + k2]
-    if y.ndim == 1:
-        y0, y1, y2, y_k = y[k1 - 1], y[k1], y[k2], y[k]
-    else:
-        flat_y = y.reshape(-1)
-        y0, y1, y2, y_k = (flat_y[row + (k1 - 1)], flat_y[row + k1], flat_y[row + k2],
-                           flat_y[row + k])
-    t = _bracket_crossing(y0, y1, y2, z0, z1, z2, levels,
-                          k1 + 1 < (g if n is None else n[:, None]))
-    out = np.where(at_start, y_k, y0 + t)
-    return np.where(found, out, np.nan)
-
-
-@dataclass(frozen=True)
-class BatchGrid:
-    """What the batched Sd/Sh/qR need of a lateral grid, computed once per grid: the grid
-    y [mm], the tip-region columns [lo, hi) and the tape-circle interpolation (columns j,
-    j + 1 and the weight of j + 1). ``None`` from :meth:`build` when the grid cannot give
-    the parameters (too short, no tape circle, no tip region)."""
-
-    y_mm: NDArray
-    tip_lo: int
-    tip_hi: int
-    tape_j: int
-    tape_w: float
-
-    @classmethod
-    def build(cls, y_mm: NDArray, tip_region_y_mm: tuple[float, float] = TIP_REGION_Y_MM
-              ) -> BatchGrid | None:
-        y = np.asarray(y_mm, dtype=float)
-        lo, hi = (int(v) for v in np.searchsorted(y, tip_region_y_mm))
-        if (not np.all(np.isfinite(y)) or y.size < 3 or y[0] > 0.0 or y[-1] < 0.0
-                or hi <= lo):
-            return None
-        j = min(int(np.searchsorted(y, 0.0, side="right")) - 1, y.size - 2)
-        w = 0.0 if y[j] == 0.0 else (0.0 - y[j]) / (y[j + 1] - y[j])
-        return cls(y, lo, hi, j, float(w))
-
-    def parameters(self, z: NDArray) -> NDArray:
-        """(M, 3) Sd, Sh, qR [mm] of finite rows ``z`` (M, g) on this grid."""
-        n = z.shape[0]
-        j = self.tape_j
-        if self.tape_w == 0.0:
-            z_tape = z[:, j]
-        else:  # as np.interp(0, y, z) row by row
-            z_tape = (z[:, j + 1] - z[:, j]) * self.tape_w + z[:, j]
-        k = self.tip_lo + np.argmax(z[:, self.tip_lo:self.tip_hi], axis=1)
-        z_tip = z[np.arange(n), k]
-        both = _flank_crossings(self.y_mm, z, k, np.column_stack(_point_heights(z_tape, z_tip)))
-        return np.column_stack(_sd_sh_qr(both[:, 0], both[:, 1], z_tip, z_tape))
+def tape_circle_height_mm(y_mm: ArrayLike, z_mm: ArrayLike) -> float:
+    """Height [mm] of a profile (or a wear curve) at the tape circle y = 0: z at y = 0 by
+    the chord between the neighbouring points (``np.interp``'s numbers, the end heights
+    outside the data). y_mm ascending [mm], z_mm [mm]."""
+    y = np.ascontiguousarray(y_mm, dtype=np.float64)
+    z = np.ascontiguousarray(z_mm, dtype=np.float64)
+    if y.ndim != 1 or y.size == 0 or z.shape != y.shape:
+        raise ValueError(f"y_mm, z_mm: one or more points each, got {y.shape}, {z.shape}")
+    return float(_height_at(y, z, y.size, 0.0))
 
 
 def flange_parameters_batch(
@@ -279,7 +291,7 @@ def flange_parameters_batch(
     *,
     tip_region_y_mm: tuple[float, float] = TIP_REGION_Y_MM,
 ) -> FlangeParameterArrays:
-    """Sd, Sh and qR of many profiles sampled on one common lateral grid (vectorised).
+    """Sd, Sh and qR of many profiles sampled on one common lateral grid (one compiled loop).
 
     Parameters
     ----------
@@ -290,8 +302,8 @@ def flange_parameters_batch(
     Returns
     -------
     FlangeParameterArrays of shape (N,). The result of every row is that of
-    :func:`flange_parameters` on the row (same definitions and the same interpolation, so
-    they agree to rounding); rows with non-finite heights are passed to it one by one.
+    :func:`flange_parameters` on the row, to the bit (the same :func:`_parameters`); rows
+    with non-finite heights are passed to it one by one.
     """
     y = np.asarray(y_mm, dtype=float)
     z = np.atleast_2d(np.asarray(z_mm, dtype=float))
@@ -299,13 +311,14 @@ def flange_parameters_batch(
         raise ValueError(f"z_mm: must have shape (N, {y.size}), got {np.shape(z_mm)}")
     n = z.shape[0]
     out = np.full((n, 3), np.nan)
-    grid = BatchGrid.build(y, tip_region_y_mm) if n else None
-    finite = np.isfinite(z).all(axis=1) if grid is not None else np.zeros(n, bool)
+    finite = np.isfinite(z).all(axis=1) & bool(np.isfinite(y).all())
     for r in np.flatnonzero(~finite):
         fp = flange_parameters(y, z[r], tip_region_y_mm=tip_region_y_mm)
         out[r] = fp.sd_mm, fp.sh_mm, fp.qr_mm
-    if grid is not None and finite.any():
-        out[finite] = grid.parameters(z if finite.all() else z[finite])
+    if finite.any():
+        rows = z if finite.all() else z[finite]
+        out[finite] = _parameters(y[None, :], rows, np.full(rows.shape[0], y.size),
+                                  tip_region_y_mm)
     return FlangeParameterArrays(out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy())
 
 
@@ -316,7 +329,7 @@ def flange_parameters_rows(
     *,
     tip_region_y_mm: tuple[float, float] = TIP_REGION_Y_MM,
 ) -> NDArray[np.float64]:
-    """:func:`flange_parameters` of many profiles of different lengths, vectorised.
+    """:func:`flange_parameters` of many profiles of different lengths (one compiled loop).
 
     Parameters
     ----------
@@ -327,37 +340,7 @@ def flange_parameters_rows(
 
     Returns
     -------
-    (M, 3) Sd, Sh, qR [mm] with the definitions, the tape-circle height (``np.interp``'s own
-    formula at y = 0) and the quadratic flank crossings of :func:`flange_parameters`, so the
-    numbers are the same; NaN where a point is not in the data.
+    (M, 3) Sd, Sh, qR [mm], each row that of :func:`flange_parameters` on the profile, to
+    the bit (the same :func:`_parameters`); NaN where a point is not in the data.
     """
-    m, width = y_mm.shape
-    out = np.full((m, 3), np.nan)
-    n = valid.sum(axis=1)
-    if m == 0 or width == 0:
-        return out
-    rows = np.arange(m)
-    last = np.maximum(n - 1, 0)
-    big = np.where(valid, y_mm, np.inf)  # ascending with the padding beyond the data
-    usable = (n >= 3) & (y_mm[:, 0] <= 0.0) & (y_mm[rows, last] >= 0.0)
-    # tape circle: np.interp(0, y, z)
-    j = np.clip((big <= 0.0).sum(axis=1) - 1, 0, width - 1)
-    j1 = np.minimum(j + 1, width - 1)
-    yj, zj, yj1, zj1 = y_mm[rows, j], z_mm[rows, j], y_mm[rows, j1], z_mm[rows, j1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z_tape = np.where((j == last) | (yj == 0.0), zj,
-                          (zj1 - zj) / (yj1 - yj) * (0.0 - yj) + zj)
-    lo = (big < tip_region_y_mm[0]).sum(axis=1)
-    hi = (big < tip_region_y_mm[1]).sum(axis=1)
-    usable &= hi > lo
-    cols = np.arange(width)
-    in_tip = (cols >= lo[:, None]) & (cols < hi[:, None])
-    k = np.argmax(np.where(in_tip, z_mm, -np.inf), axis=1)
-    z_tip = z_mm[rows, k]
-    levels = np.column_stack(_point_heights(z_tape, z_tip))
-    crossing = _flank_crossings(y_mm, z_mm, k, levels, n)
-    sd, sh, qr = _sd_sh_qr(crossing[:, 0], crossing[:, 1], z_tip, z_tape)
-    out[usable, 0] = sd[usable]
-    out[usable, 1] = sh[usable]
-    out[usable, 2] = qr[usable]
-    return out
+    return _parameters(y_mm, z_mm, valid.sum(axis=1), tip_region_y_mm)

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from wearcast.physics.profiles.parameters import flange_parameters
+from wearcast.physics.profiles.parameters import flange_parameters, tape_circle_height_mm
 from wearcast.physics.profiles.references import S1002_ROOT_Y_MM
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.statistics.maintenance.limits import FleetLimits
@@ -57,7 +57,7 @@ class SyntheticWheel:
         z_a = float(s1002_height_mm(np.array([y_a]))[0])
         z = np.where(y >= y_a, ref, np.where(y <= y_a - r, face, z_a))
         z = z - km_since * self.tread_rate * np.exp(-((y - Y_TREAD_MM) / B_TREAD_MM) ** 2)
-        return z - float(np.interp(0.0, y, z))
+        return z - tape_circle_height_mm(y, z)
 
     def date_at(self, mileage_km: float) -> dt.date:
         return self.first_date + dt.timedelta(

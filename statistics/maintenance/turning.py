@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.profiles.parameters import flange_parameters
+from wearcast.physics.profiles.parameters import flange_parameters, tape_circle_height_mm
 from wearcast.physics.profiles.references import (
     S1002_FLANGE_THICKNESS_MM,
     S1002_FLANGE_THICKNESSES_MM,
@@ -143,7 +143,7 @@ def turning_cut(worn_y_mm: ArrayLike, worn_z_mm: ArrayLike, target: TargetProfil
     if y[0] > lo_req or y[-1] < hi_req:
         raise ValueError(f"profile: covers y {y[0]:.1f} to {y[-1]:.1f} mm; the cut needs "
                          f"{lo_req:g} to {hi_req:g} mm")
-    z_rel = z - float(np.interp(0.0, y, z))
+    z_rel = z - tape_circle_height_mm(y, z)
     lo = max(y[0], target.y_min_mm, CHECK_RANGE_Y_MM[0])
     hi = min(y[-1], target.y_max_mm, CHECK_RANGE_Y_MM[1])
     grid = np.arange(lo, hi + 1e-9, GRID_STEP_MM)
@@ -181,7 +181,7 @@ def projected_profile(y_mm: ArrayLike, z_mm: ArrayLike, factor: float,
     are in the worn profile's own tape-circle frame."""
     y = np.asarray(y_mm, dtype=float)
     z = np.asarray(z_mm, dtype=float)
-    z_rel = z - float(np.interp(0.0, *_polyline(y, z)))
+    z_rel = z - tape_circle_height_mm(*_polyline(y, z))
     ref = reference(y)
     return ref - float(factor) * (ref - z_rel)
 

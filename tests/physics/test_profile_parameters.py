@@ -12,6 +12,7 @@ from tests.conftest import flange_face_worn_s1002
 from wearcast.physics.profiles.parameters import (
     flange_parameters,
     nominal_frame_flange_parameters,
+    tape_circle_height_mm,
 )
 from wearcast.physics.profiles.s1002 import s1002_height_mm, s1002_profile
 
@@ -102,3 +103,19 @@ def test_nominal_frame_is_the_one_definition_with_its_options():
     assert abs(p.sd_mm - flange_parameters(y, z, tape_circle_z_mm=0.0).sd_mm) < 0.005
     with pytest.raises(ValueError, match="interpolation"):
         flange_parameters(y, z, interpolation="cubic")
+
+
+def test_tape_circle_height_gives_np_interp_numbers():
+    # the one interpolation at y = 0 (tape circle) behind Sd/Sh/qR, the datum check and the
+    # wear at the tape circle: np.interp's numbers to the bit, on a point, between points
+    # and beyond the ends (the end heights)
+    rng = np.random.default_rng(3)
+    for shift in (0.0, 0.13, -0.37, 5.0, -5.0, 2.0):
+        y = np.sort(rng.uniform(-3.0, 3.0, 40)) + shift
+        y[10] = 0.0 if shift == 2.0 else y[10]
+        y = np.sort(y)
+        z = rng.normal(0.0, 1.0, y.size)
+        assert tape_circle_height_mm(y, z) == float(np.interp(0.0, y, z))
+    for bad in (([], []), ([-1.0, 1.0], [0.0])):
+        with pytest.raises(ValueError, match="y_mm"):
+            tape_circle_height_mm(*bad)

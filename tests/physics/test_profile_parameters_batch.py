@@ -35,15 +35,15 @@ def _scalar(y: np.ndarray, z: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("y", [np.asarray(DEFAULT_GRID_Y_MM), np.linspace(-70.0, 60.0, 1301),
                                np.linspace(-60.3, 40.1, 300)], ids=["model", "0.1mm", "odd"])
 def test_batch_equals_the_one_profile_definition(y):
-    # the batch applies the same rule (sampled tip, quadratic flank crossings, tape-circle
-    # interpolation) row by row, so it must agree to rounding, far inside the 0.005 mm
-    # the task allows
+    # the batch runs the one computation of the one-profile definition (sampled tip,
+    # quadratic flank crossings, tape-circle interpolation) on all rows at once: the same
+    # numbers to the bit
     z = _worn_profiles(y, 300, seed=int(y.size))
     z[3, 40] = np.nan  # a gap: that row goes through the one-profile path
     batch = flange_parameters_batch(y, z).stacked()
     scalar = _scalar(y, z)
-    assert np.array_equal(np.isnan(batch), np.isnan(scalar))
-    np.testing.assert_allclose(batch, scalar, rtol=0, atol=1e-9, equal_nan=True)
+    assert np.isfinite(batch).sum() > 800
+    assert np.array_equal(batch, scalar, equal_nan=True)
 
 
 def test_s1002_new_gives_the_published_parameters_in_a_batch():
@@ -75,4 +75,4 @@ def test_batch_matches_scalar_for_any_wear(dz, flange, tread, centre):
     z = (s1002_height_mm(y) + dz - flange * np.exp(-0.5 * ((y - centre) / 3.0) ** 2)
          - tread * np.exp(-0.5 * (y / 14.0) ** 2))
     batch = flange_parameters_batch(y, z[None, :]).stacked()[0]
-    np.testing.assert_allclose(batch, _scalar(y, z[None, :])[0], atol=1e-9, equal_nan=True)
+    assert np.array_equal(batch, _scalar(y, z[None, :])[0], equal_nan=True)
