@@ -45,6 +45,7 @@ from wearcast.physics.profiles.measured_rail import (
     GAUGE_POINT_DEPTH_MM,
     crossings_at_height,
     heights_at_y,
+    polyline_crossings,
     shape_facts,
     upper_envelope,
 )
@@ -209,20 +210,9 @@ def _distance_along(y: NDArray, z: NDArray, point: NDArray, inward: NDArray) -> 
     rel = np.stack([y - point[0], z - point[1]], axis=1)
     along = rel @ tangent
     depth = rel @ inward
-    hits = _crossings_param(along, depth)
+    hits = polyline_crossings(along, depth)
     hits = hits[np.abs(hits) <= CORNER_SEARCH_MM]
     return float(hits[np.argmin(np.abs(hits))]) if hits.size else None
-
-
-def _crossings_param(a: NDArray, b: NDArray) -> NDArray:
-    out = []
-    for i in range(len(a) - 1):
-        if a[i] == 0.0:
-            out.append(b[i])
-        elif a[i] * a[i + 1] < 0.0:
-            t = a[i] / (a[i] - a[i + 1])
-            out.append(b[i] + t * (b[i + 1] - b[i]))
-    return np.asarray(out, dtype=float)
 
 
 def place_reference(y_mm: NDArray, z_mm: NDArray, ref: RailReference,

@@ -44,8 +44,10 @@ SHORT_SIDE_DEPTH_MM = 10.0
 DEPTH_EVIDENCE_MM = 3.0
 
 
-def _crossings(a: NDArray, b: NDArray, level: float) -> NDArray:
-    """Values of ``b`` where the polyline (a, b) crosses ``a = level`` (linear)."""
+def polyline_crossings(a: NDArray, b: NDArray, level: float = 0.0) -> NDArray:
+    """Values of ``b`` where the ordered polyline (a, b) crosses ``a = level``, linearly
+    interpolated between the two vertices that bracket the level; a vertex exactly at the
+    level (the last one included) counts once. The one crossing rule of the rail geometry."""
     d = a - level
     out = []
     for i in range(len(a) - 1):
@@ -61,12 +63,12 @@ def _crossings(a: NDArray, b: NDArray, level: float) -> NDArray:
 
 def crossings_at_height(y_mm: ArrayLike, z_mm: ArrayLike, z_level_mm: float) -> NDArray:
     """Lateral positions [mm] where an ordered polyline crosses the height ``z_level_mm``."""
-    return _crossings(np.asarray(z_mm, float), np.asarray(y_mm, float), z_level_mm)
+    return polyline_crossings(np.asarray(z_mm, float), np.asarray(y_mm, float), z_level_mm)
 
 
 def heights_at_y(y_mm: ArrayLike, z_mm: ArrayLike, y_level_mm: float) -> NDArray:
     """Heights [mm] where an ordered polyline crosses the vertical line ``y = y_level_mm``."""
-    return _crossings(np.asarray(y_mm, float), np.asarray(z_mm, float), y_level_mm)
+    return polyline_crossings(np.asarray(y_mm, float), np.asarray(z_mm, float), y_level_mm)
 
 
 def vertical_sense(x_mm: ArrayLike, y_mm: ArrayLike) -> tuple[bool, str]:
