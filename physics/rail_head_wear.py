@@ -46,6 +46,7 @@ from wearcast.physics.profiles.measured_rail import (
     crossings_at_height,
     heights_at_y,
     polyline_crossings,
+    rail_points,
     shape_facts,
     upper_envelope,
 )
@@ -366,12 +367,7 @@ class WornRail(ContentIdentity):
     base: str = "60E1"
 
     def __post_init__(self) -> None:
-        y = np.asarray(self.y_mm, float)
-        z = np.asarray(self.z_mm, float)
-        if y.shape != z.shape or y.ndim != 1 or y.size < 10:
-            raise ValueError("a worn rail needs at least 10 (y, z) points of equal count")
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
-            raise ValueError("worn rail points must be finite")
+        y, z = rail_points(self.y_mm, self.z_mm, "worn rail")
         if self.base.strip().upper() not in REFERENCE_NAMES:
             raise ValueError(f"base: unknown rail profile {self.base!r}")
         object.__setattr__(self, "y_mm", y)

@@ -200,6 +200,24 @@ def upper_envelope(y_mm: ArrayLike, z_mm: ArrayLike) -> tuple[NDArray, NDArray]:
     return yy, zz
 
 
+#: Fewest points a rail head's polyline needs (its top, gauge side and corner are found on it).
+MIN_RAIL_POINTS = 10
+
+
+def rail_points(y_mm: ArrayLike, z_mm: ArrayLike, what: str
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A rail head's (y, z) points [mm] as float arrays, checked: one-dimensional, of equal
+    count, at least :data:`MIN_RAIL_POINTS`, finite. ``what`` names the rail in the error
+    (``measured rail``, ``worn rail``)."""
+    y = np.asarray(y_mm, float)
+    z = np.asarray(z_mm, float)
+    if y.shape != z.shape or y.ndim != 1 or y.size < MIN_RAIL_POINTS:
+        raise ValueError(f"a {what} needs at least {MIN_RAIL_POINTS} (y, z) points of equal "
+                         "count")
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+        raise ValueError(f"{what} points must be finite")
+    return y, z
+
 @dataclass(frozen=True, eq=False)
 class MeasuredRail(ContentIdentity):
     """A measured rail head, points in the rail frame (see the module docstring) [mm].
@@ -218,12 +236,7 @@ class MeasuredRail(ContentIdentity):
     inclination: float | None = None
 
     def __post_init__(self) -> None:
-        y = np.asarray(self.y_mm, float)
-        z = np.asarray(self.z_mm, float)
-        if y.shape != z.shape or y.ndim != 1 or y.size < 10:
-            raise ValueError("a measured rail needs at least 10 (y, z) points of equal count")
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
-            raise ValueError("measured rail points must be finite")
+        y, z = rail_points(self.y_mm, self.z_mm, "measured rail")
         if self.kind not in ("rail", "roller"):
             raise ValueError(f"kind must be 'rail' or 'roller', got {self.kind!r}")
         if self.inclination is not None and not 0.0 <= self.inclination <= 0.2:
