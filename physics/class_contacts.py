@@ -39,7 +39,7 @@ from wearcast.physics.curving import (
 )
 from wearcast.physics.curving_table import same_rail, track_rails
 from wearcast.physics.vehicles import BogieVehicle
-from wearcast.physics.vocabulary import CurveClass
+from wearcast.physics.vocabulary import AXLES, SIDES, CurveClass
 
 #: Patch-width models of :func:`class_contacts`.
 PATCH_WIDTHS = ("hertz", "kik_piotrowski")
@@ -163,8 +163,6 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], y_mm: N
     Returns (contacts, number of classes that kept the previous contact). Raises
     CurvingConvergenceError when a class fails and there is no previous contact.
     """
-    if axle not in (1, 2) or side not in ("left", "right"):
-        raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
     out, fallbacks = class_contacts_all_wheels(
         vehicle, classes, y_mm, z_mm, wheels=((axle, side),),
         unbalanced_acceleration_m_s2=unbalanced_acceleration_m_s2,
@@ -187,7 +185,7 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
     previous update (fallback and warm start); ``warm_first``: see :func:`_solve_points`.
     Returns ({(axle, side): contacts}, class fallbacks summed over the wheels)."""
     for axle, side in wheels:
-        if axle not in (1, 2) or side not in ("left", "right"):
+        if axle not in AXLES or side not in SIDES:
             raise ValueError("axle must be 1 or 2 and side 'left' or 'right'")
     if patch_width not in PATCH_WIDTHS:
         raise ValueError(f"patch_width must be one of {', '.join(PATCH_WIDTHS)}, "

@@ -27,6 +27,7 @@ from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.vehicles import BogieVehicle
+from wearcast.physics.vocabulary import DIRECTIONS
 
 #: Track gauge measured 14 mm below the rail top [mm] (standard gauge).
 GAUGE_MM = 1435.0
@@ -588,7 +589,7 @@ def track_rails(vehicle: BogieVehicle, direction: str | None = None
     right rail is the high one, in a right curve the left one. On tangent track, and without
     them, both rails are ``rail_profile``.
     """
-    if direction is not None and direction not in ("left", "right"):
+    if direction is not None and direction not in DIRECTIONS:
         raise ValueError(f"direction must be 'left', 'right' or None, got {direction!r}")
     high = vehicle.high_rail_profile
     low = vehicle.low_rail_profile

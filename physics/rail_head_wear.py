@@ -45,6 +45,8 @@ from wearcast.physics.profiles.measured_rail import (
     GAUGE_POINT_DEPTH_MM,
     crossings_at_height,
     heights_at_y,
+    polyline_crossings,
+    rail_points,
     shape_facts,
     upper_envelope,
 )
@@ -209,20 +211,9 @@ def _distance_along(y: NDArray, z: NDArray, point: NDArray, inward: NDArray) -> 
     rel = np.stack([y - point[0], z - point[1]], axis=1)
     along = rel @ tangent
     depth = rel @ inward
-    hits = _crossings_param(along, depth)
+    hits = polyline_crossings(along, depth)
     hits = hits[np.abs(hits) <= CORNER_SEARCH_MM]
     return float(hits[np.argmin(np.abs(hits))]) if hits.size else None
-
-
-def _crossings_param(a: NDArray, b: NDArray) -> NDArray:
-    out = []
-    for i in range(len(a) - 1):
-        if a[i] == 0.0:
-            out.append(b[i])
-        elif a[i] * a[i + 1] < 0.0:
-            t = a[i] / (a[i] - a[i + 1])
-            out.append(b[i] + t * (b[i + 1] - b[i]))
-    return np.asarray(out, dtype=float)
 
 
 def place_reference(y_mm: NDArray, z_mm: NDArray, ref: RailReference,
@@ -376,12 +367,7 @@ class WornRail(ContentIdentity):
     base: str = "60E1"
 
     def __post_init__(self) -> None:
-        y = np.asarray(self.y_mm, float)
-        z = np.asarray(self.z_mm, float)
-        if y.shape != z.shape or y.ndim != 1 or y.size < 10:
-            raise ValueError("a worn rail needs at least 10 (y, z) points of equal count")
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
-            raise ValueError("worn rail points must be finite")
+        y, z = rail_points(self.y_mm, self.z_mm, "worn rail")
         if self.base.strip().upper() not in REFERENCE_NAMES:
             raise ValueError(f"base: unknown rail profile {self.base!r}")
         object.__setattr__(self, "y_mm", y)

@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape
+from wearcast.physics.vocabulary import BOGIE_TYPES
 
 GRAVITY_M_S2 = 9.81
 
@@ -100,7 +101,7 @@ class BogieVehicle:
     low_rail_profile: str | RailShape | None = None
 
     def __post_init__(self) -> None:
-        if self.bogie_type not in ("motor", "trailer"):
+        if self.bogie_type not in BOGIE_TYPES:
             raise ValueError(f"bogie_type must be 'motor' or 'trailer', got {self.bogie_type!r}")
         if isinstance(self.wheel_profile, str):
             if self.wheel_profile.upper() != "S1002":

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import Literal, cast, get_args
 
 Region = Literal["flange", "tread"]
 BogieType = Literal["motor", "trailer"]
@@ -51,14 +51,20 @@ def region_of(y_mm: float, split_y_mm: float = REGION_SPLIT_Y_MM) -> Region:
     return "flange" if y_mm < split_y_mm else "tread"
 
 
+def check_side(side: object) -> Side:
+    """``side`` itself when it is ``'left'`` or ``'right'``; a ValueError naming it otherwise."""
+    if side not in SIDES:
+        raise ValueError(f"side: must be 'left' or 'right', got {side!r}")
+    return cast(Side, side)
+
+
 def rail_for(direction: Direction | None, side: Side) -> Rail:
     """Rail a wheel on ``side`` runs on in a curve bending towards ``direction``.
 
     ``direction`` None (or a tangent class) gives ``tangent``. In a left curve the right wheels
     run on the high (outer) rail and the left wheels on the low rail; mirrored in a right curve.
     """
-    if side not in SIDES:
-        raise ValueError(f"side: must be 'left' or 'right', got {side!r}")
+    check_side(side)
     if direction is None:
         return "tangent"
     if direction not in DIRECTIONS:

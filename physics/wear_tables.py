@@ -59,7 +59,7 @@ from wearcast.physics.curving import (
     solve_curving_cases,
 )
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
-from wearcast.physics.vocabulary import WEAR_MEASURES, CurveClass
+from wearcast.physics.vocabulary import SIDES, WEAR_MEASURES, CurveClass
 from wearcast.physics.wear_measures import (
     krause_poll_index,
     kth_archard_index,
@@ -148,7 +148,7 @@ def _contact_rows(bogie_type: str, k: int, cls: CurveClass, result: CurvingResul
     c = _contacts_of(result, contact_model)
     rows = []
     for axle in range(2):
-        for s, side in enumerate(("left", "right")):
+        for s, side in enumerate(SIDES):
             for slot in range(c["normal_force_n"].shape[-1]):
                 fn = float(c["normal_force_n"][axle, s, slot])
                 loaded = bool(c["in_contact"][axle, s, slot])

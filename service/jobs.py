@@ -28,6 +28,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import job_store
 from wearcast.service.db import Database
+from wearcast.service.db_outage import OutageLog
 from wearcast.service.errors import ApiError
 from wearcast.service.housekeeping import sweep_abandoned_imports
 from wearcast.service.settings import Settings
@@ -134,16 +135,14 @@ class JobRunner:
         return None
 
     def _work(self) -> None:
-        failures = 0
+        # polled every 2 s while idle: a warning about once a minute while the database is away
+        outage = OutageLog(log, "job worker could not read the queue", every=30)
         while not self._stop.is_set():
             try:
                 job_id = self._next()
-                failures = 0
+                outage.succeeded()
             except Exception as exc:  # the database is away for a moment: try again later
-                failures += 1
-                if failures == 1 or failures % 30 == 0:
-                    log.warning("job worker could not read the queue (%d times): %s",
-                                failures, exc)
+                outage.failed(exc)
                 job_id = None
             if job_id is None:
                 with self._wake:

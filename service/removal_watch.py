@@ -20,6 +20,7 @@ from typing import Any
 
 from sqlalchemy import func, select
 
+from wearcast.service.db_outage import OutageLog
 from wearcast.service.models_access import AuditRecord
 
 log = logging.getLogger(__name__)
@@ -62,16 +63,14 @@ class RemovalWatch:
         return changed
 
     def _run(self) -> None:
-        failures = 0
+        # a warning about once a minute (at CHECK_S = 1 s) while the database is away
+        outage = OutageLog(log, "removal watch could not read the audit trail", every=60)
         while not self._stop.wait(self.period_s):
             try:
                 self.check()
-                failures = 0
+                outage.succeeded()
             except Exception as exc:  # the database is away for a moment: look again later
-                failures += 1
-                if failures == 1 or failures % 60 == 0:
-                    log.warning("removal watch could not read the audit trail (%d times): %s",
-                                failures, exc)
+                outage.failed(exc)
 
     def start(self) -> None:
         if self._thread is not None:

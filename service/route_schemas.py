@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
@@ -11,32 +11,40 @@ from wearcast.physics.vocabulary import Direction
 from wearcast.service.schema_base import Strict
 
 
-class RouteClassIn(Strict):
+class _CurveNeedsDirection(Strict):
+    """A curve (``radius_m`` given) names the side it bends towards; a tangent need not."""
+
+    if TYPE_CHECKING:  # the fields are the subclasses' (their order stays theirs)
+        radius_m: float | None
+        direction: Direction | None
+    #: What one item is called in the error message.
+    _item: ClassVar[str] = "a curve"
+
+    @model_validator(mode="after")
+    def _direction_for_curves(self) -> Self:
+        if self.radius_m is not None and self.direction is None:
+            raise ValueError(f"{self._item} (radius_m given) needs a direction: left or right")
+        return self
+
+
+class RouteClassIn(_CurveNeedsDirection):
+    _item: ClassVar[str] = "a curve class"
+
     radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
     direction: Direction | None = Field(default=None, description="side the track bends towards")
     cant_mm: float = Field(default=0.0, ge=0, le=250, description="cant [mm]")
     speed_kmh: float = Field(gt=0, le=500, description="running speed [km/h]")
     share: float = Field(ge=0, le=1, description="share of the route's length [-]")
 
-    @model_validator(mode="after")
-    def _direction_for_curves(self) -> RouteClassIn:
-        if self.radius_m is not None and self.direction is None:
-            raise ValueError("a curve class (radius_m given) needs a direction: left or right")
-        return self
 
+class SegmentIn(_CurveNeedsDirection):
+    _item: ClassVar[str] = "a curved segment"
 
-class SegmentIn(Strict):
     length_m: float = Field(gt=0, description="segment length [m]")
     radius_m: float | None = Field(default=None, gt=0, description="radius [m]; null = tangent")
     direction: Direction | None = None
     cant_mm: float = Field(default=0.0, ge=0, le=250)
     speed_kmh: float = Field(gt=0, le=500)
-
-    @model_validator(mode="after")
-    def _direction_for_curves(self) -> SegmentIn:
-        if self.radius_m is not None and self.direction is None:
-            raise ValueError("a curved segment (radius_m given) needs a direction: left or right")
-        return self
 
 
 class RouteSpec(Strict):

@@ -42,10 +42,9 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, REGIONS
+from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, REGIONS, WHEELSETS
 
 Array = NDArray[np.float64]
-WHEELSETS = ("leading", "trailing")
 
 
 @dataclass(frozen=True)

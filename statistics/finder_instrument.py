@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics.cause_base import Array, Cause, FinderData, Mask
@@ -48,7 +49,7 @@ class InstrumentAreaScale(Cause):
         return None if self.levels else "needs at least two instruments"
 
     def param_names(self) -> list[str]:
-        return [f"log_scale_{r}_{i}" for i in self.levels for r in ("flange", "tread")]
+        return [f"log_scale_{r}_{i}" for i in self.levels for r in REGIONS]
 
     def features(self, data: FinderData, theta: Array) -> Array:
         x = np.zeros((data.n, 2, 2 * len(self.levels)))

@@ -13,7 +13,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -38,7 +37,7 @@ from wearcast.statistics.route_measure import (
 )
 from wearcast.statistics.routes import Route
 from wearcast.statistics.wear_curves import DEFAULT_GRID_Y_MM, DEFAULT_SPLIT_Y_MM
-from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate
+from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, predictive_std
 from wearcast.statistics.wear_states import (
     WearStates,
     build_wear_states,
@@ -74,8 +73,8 @@ class RegionCalibration:
 
     @property
     def c_s_rel_predictive(self) -> float:
-        """Relative std of a single wheel's rate: hypot(rel. spread, rel. std error)."""
-        return math.hypot(self.c_s_rel_std_error, self.c_s_rel_spread)
+        """Relative std of a single wheel's rate [-] (:func:`.wear_rates.predictive_std`)."""
+        return predictive_std(self.c_s_rel_spread, self.c_s_rel_std_error)
 
     def to_dict(self) -> dict[str, Any]:
         return {

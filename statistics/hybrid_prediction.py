@@ -125,6 +125,20 @@ def model_weighted_measures(model: HybridModel, route: Route,
     }
 
 
+def start_areas(given: Mapping[str, float | None] | None, name: str) -> dict[str, float]:
+    """Wear areas [mm²] of the start state per region: the measured ones in ``given``
+    (each finite and >= 0), 0 (the new profile) for the regions it leaves out.
+
+    ``name`` is the argument's name in the error messages.
+    """
+    start: dict[str, float] = {r: 0.0 for r in REGIONS}
+    for r, v in (given or {}).items():
+        check_choice(r, REGIONS, f"{name}.{r}")
+        if v is None or not math.isfinite(float(v)) or float(v) < 0:
+            raise ValueError(f"{name}.{r}: must be finite and >= 0")
+        start[r] = float(v)
+    return start
+
 def predict(
     model: HybridModel,
     route: Route,
@@ -162,13 +176,7 @@ def predict(
     q = tuple(float(v) for v in quantiles)
     if 0.5 not in q:
         raise ValueError("quantiles: must include 0.5 (the median drives the wear curves)")
-    start: dict[str, float] = {r: 0.0 for r in REGIONS}
-    if start_areas_mm2:
-        for r, v in start_areas_mm2.items():
-            check_choice(r, REGIONS, "start_areas_mm2")
-            if not math.isfinite(float(v)) or float(v) < 0:
-                raise ValueError(f"start_areas_mm2.{r}: must be finite and >= 0")
-            start[r] = float(v)
+    start = start_areas(start_areas_mm2, "start_areas_mm2")
     p_s, rates = region_rates(model, route, table, bogie_type=bogie_type, axle=axle, side=side,
                               quantiles=q, weighted_measures=weighted_measures)
     areas = {r: start[r] + rates[r][:, None] * s[None, :] for r in REGIONS}

@@ -35,6 +35,7 @@ import pandas as pd
 from wearcast.physics.vocabulary import REGIONS
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.hybrid_prediction import region_rates
+from wearcast.statistics.hybrid_prediction import start_areas as start_areas_of
 from wearcast.statistics.hybrid_profiles import parameters_at_areas
 from wearcast.statistics.json_values import finite_or_none
 from wearcast.statistics.profile_parameters import DEFAULT_LIMITS, WheelLimits
@@ -428,13 +429,7 @@ def reprofiling_mileage(
     lim = _as_limits(limits)
     if not (math.isfinite(horizon_km) and horizon_km > 0):
         raise ValueError("horizon_km: must be finite and > 0")
-    start: dict[str, float] = {r: 0.0 for r in REGIONS}
-    for r, v in (start_areas or {}).items():
-        if r not in REGIONS:
-            raise ValueError(f"start_areas.{r}: unknown region (flange, tread)")
-        if v is None or not math.isfinite(float(v)) or float(v) < 0:
-            raise ValueError(f"start_areas.{r}: must be finite and >= 0")
-        start[r] = float(v)
+    start = start_areas_of(start_areas, "start_areas")
     measured = _measured_start(start_parameters)
     if measured:
         crossed = crossed_limits(measured, lim)

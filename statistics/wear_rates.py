@@ -101,6 +101,13 @@ def normal_quantile(q: ArrayLike) -> NDArray[np.float64]:
     return ndtri(qa)
 
 
+def predictive_std(spread: float, std_error: float) -> float:
+    """Std of the rate of one new wheel: sqrt(spread² + se²), the spread of individual rates
+    about the fleet's and the standard error of the fleet's estimate, in the units given
+    (absolute [mm²/km] or relative [-] alike)."""
+    return math.hypot(spread, std_error)
+
+
 @dataclass(frozen=True)
 class WearRate:
     """Wear rate of one region: A(s) = k s.
@@ -121,7 +128,7 @@ class WearRate:
     @property
     def predictive_std_mm2_per_km(self) -> float:
         """Std of the rate of a new measurement: sqrt(spread² + se²) [mm²/km]."""
-        return math.hypot(self.spread_mm2_per_km, self.std_error_mm2_per_km)
+        return predictive_std(self.spread_mm2_per_km, self.std_error_mm2_per_km)
 
     def rate_quantile(self, q: ArrayLike) -> NDArray[np.float64]:
         """Rate [mm²/km] at quantile q of the predictive distribution, clipped at 0."""

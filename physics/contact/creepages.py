@@ -25,6 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from wearcast.physics.vocabulary import check_side
+
 _FloatArray = NDArray[np.float64]
 
 
@@ -53,8 +55,7 @@ def rigid_creepages(side: str, speed_m_s: float, angular_velocity_rad_s: ArrayLi
     -------
     xi, eta, phi in the wheel's local contact frame (module docstring).
     """
-    if side not in ("left", "right"):
-        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    check_side(side)
     if speed_m_s <= 0:
         raise ValueError("speed_m_s must be positive")
     sign = 1.0 if side == "left" else -1.0

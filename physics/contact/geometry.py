@@ -79,6 +79,7 @@ from wearcast.physics.contact.geometry_results import (
 )
 from wearcast.physics.contact.min_gap_kernel import min_gap_no_yaw
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
+from wearcast.physics.vocabulary import check_side
 
 _FloatArray = NDArray[np.float64]
 
@@ -483,8 +484,7 @@ def wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left",
     [mm] and the undeformed vertical gap [mm] (0 at the primary contact, inf where no rail is
     below).  A normal-contact model can use it to find every point within its approach.
     """
-    if side not in ("left", "right"):
-        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    check_side(side)
     shift, yaw = _pose_arrays(shifts_mm, yaw_rad)
     sides = _prepare(wt)
     roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm)
@@ -499,8 +499,7 @@ def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
     """:func:`wheel_gap` without yaw, with the solved roll: (y_wheel_mm (M,), gap_mm (N, M),
     roll_rad (N,)) [mm, mm, rad]. The gap is 0 at each wheel's primary contact (rigid pose);
     the curving model's contact table is built from it (``curving.build_contact_table``)."""
-    if side not in ("left", "right"):
-        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    check_side(side)
     shift, yaw = _pose_arrays(shifts_mm, 0.0)
     sides = _prepare(wt)
     start = None

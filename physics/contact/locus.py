@@ -23,6 +23,7 @@ from wearcast.physics.contact.geometry import (
     _prepare,
     _solve_roll,
 )
+from wearcast.physics.vocabulary import check_side
 
 _FloatArray = NDArray[np.float64]
 
@@ -120,8 +121,7 @@ def wheel_locus(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left",
 
     Raises ``NoContactError`` when no rail lies below the wheel at some pose.
     """
-    if side not in ("left", "right"):
-        raise ValueError(f"side must be 'left' or 'right', not {side!r}")
+    check_side(side)
     shift, yaw = _pose_arrays(shifts_mm, yaw_rad)
     sides = _prepare(wt)
     r0 = wt.nominal_radius_mm

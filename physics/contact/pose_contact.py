@@ -26,6 +26,7 @@ from wearcast.physics.contact.geometry import WheelsetTrack
 from wearcast.physics.contact.hertz import STEEL_SHEAR_MODULUS_MPA
 from wearcast.physics.contact.locus import wheel_locus
 from wearcast.physics.contact.wheel_rail import LoadedWheel, loaded_wheel_contact
+from wearcast.physics.vocabulary import check_side
 
 
 @dataclass(frozen=True)
@@ -100,8 +101,7 @@ def contact_at_poses(track: WheelsetTrack, side: str, poses: Sequence[Pose], *,
     Raises ``NoContactError`` (a ``ValueError`` "field: reason") when the wheel cannot touch
     its rail at some pose, ``ValueError`` for bad arguments.
     """
-    if side not in ("left", "right"):
-        raise ValueError(f"side: must be 'left' or 'right', not {side!r}")
+    check_side(side)
     if not poses:
         raise ValueError("poses: at least one pose is needed")
     out: list[PoseContact | None] = [None] * len(poses)

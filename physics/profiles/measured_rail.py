@@ -44,8 +44,10 @@ SHORT_SIDE_DEPTH_MM = 10.0
 DEPTH_EVIDENCE_MM = 3.0
 
 
-def _crossings(a: NDArray, b: NDArray, level: float) -> NDArray:
-    """Values of ``b`` where the polyline (a, b) crosses ``a = level`` (linear)."""
+def polyline_crossings(a: NDArray, b: NDArray, level: float = 0.0) -> NDArray:
+    """Values of ``b`` where the ordered polyline (a, b) crosses ``a = level``, linearly
+    interpolated between the two vertices that bracket the level; a vertex exactly at the
+    level (the last one included) counts once. The one crossing rule of the rail geometry."""
     d = a - level
     out = []
     for i in range(len(a) - 1):
@@ -61,12 +63,12 @@ def _crossings(a: NDArray, b: NDArray, level: float) -> NDArray:
 
 def crossings_at_height(y_mm: ArrayLike, z_mm: ArrayLike, z_level_mm: float) -> NDArray:
     """Lateral positions [mm] where an ordered polyline crosses the height ``z_level_mm``."""
-    return _crossings(np.asarray(z_mm, float), np.asarray(y_mm, float), z_level_mm)
+    return polyline_crossings(np.asarray(z_mm, float), np.asarray(y_mm, float), z_level_mm)
 
 
 def heights_at_y(y_mm: ArrayLike, z_mm: ArrayLike, y_level_mm: float) -> NDArray:
     """Heights [mm] where an ordered polyline crosses the vertical line ``y = y_level_mm``."""
-    return _crossings(np.asarray(y_mm, float), np.asarray(z_mm, float), y_level_mm)
+    return polyline_crossings(np.asarray(y_mm, float), np.asarray(z_mm, float), y_level_mm)
 
 
 def vertical_sense(x_mm: ArrayLike, y_mm: ArrayLike) -> tuple[bool, str]:
@@ -198,6 +200,24 @@ def upper_envelope(y_mm: ArrayLike, z_mm: ArrayLike) -> tuple[NDArray, NDArray]:
     return yy, zz
 
 
+#: Fewest points a rail head's polyline needs (its top, gauge side and corner are found on it).
+MIN_RAIL_POINTS = 10
+
+
+def rail_points(y_mm: ArrayLike, z_mm: ArrayLike, what: str
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A rail head's (y, z) points [mm] as float arrays, checked: one-dimensional, of equal
+    count, at least :data:`MIN_RAIL_POINTS`, finite. ``what`` names the rail in the error
+    (``measured rail``, ``worn rail``)."""
+    y = np.asarray(y_mm, float)
+    z = np.asarray(z_mm, float)
+    if y.shape != z.shape or y.ndim != 1 or y.size < MIN_RAIL_POINTS:
+        raise ValueError(f"a {what} needs at least {MIN_RAIL_POINTS} (y, z) points of equal "
+                         "count")
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+        raise ValueError(f"{what} points must be finite")
+    return y, z
+
 @dataclass(frozen=True, eq=False)
 class MeasuredRail(ContentIdentity):
     """A measured rail head, points in the rail frame (see the module docstring) [mm].
@@ -216,12 +236,7 @@ class MeasuredRail(ContentIdentity):
     inclination: float | None = None
 
     def __post_init__(self) -> None:
-        y = np.asarray(self.y_mm, float)
-        z = np.asarray(self.z_mm, float)
-        if y.shape != z.shape or y.ndim != 1 or y.size < 10:
-            raise ValueError("a measured rail needs at least 10 (y, z) points of equal count")
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
-            raise ValueError("measured rail points must be finite")
+        y, z = rail_points(self.y_mm, self.z_mm, "measured rail")
         if self.kind not in ("rail", "roller"):
             raise ValueError(f"kind must be 'rail' or 'roller', got {self.kind!r}")
         if self.inclination is not None and not 0.0 <= self.inclination <= 0.2:

@@ -16,6 +16,8 @@ They wrap :mod:`wearcast.statistics.generators.fleet_twin` without changing it. 
 - ``vehicle_load(gamma, load_ref_t)``: areas x (load / load_ref)^gamma.
 - ``lateral_scale_error`` / ``flange_tread_offset``: one instrument's geometric error.
 
+``moderate_effects(table)`` names every cause hidden at the strength the detection tests use.
+
 ``twin_measurements`` processes a generated fleet's profiles (clean, align, wear curve,
 areas: ``processing.process_profile``) into the measurement frame and wear curves that
 ``discrepancy.diagnose`` and ``hybrid.calibrate`` read.
@@ -169,6 +171,31 @@ def flange_tread_offset(instrument_id: str, offset_mm: float, split_y_mm: float 
             return y, z
         return np.where(y < split_y_mm, y + offset_mm, y), z
     return effect
+
+
+def moderate_effects(table: pd.DataFrame
+                     ) -> dict[str, tuple[tuple[ft.WearEffect, ...], tuple[ft.ProfileEffect, ...]]]:
+    """Every cause of the catalogue hidden at a moderate strength: cause code (and ``none``)
+    -> (wear effects, profile effects) for :func:`scenario_config`.
+
+    The strengths the hidden-effect tests detect (the finder's and the API's alike):
+    motor treads x 1.3, axle 1 leading 80 %, 70 % of the curved length bending left,
+    lubricated flanges x 0.5, wear following ``t_gamma``, progression exponent 0.75, seasonal
+    amplitude 0.3, load exponent 1.5 and instrument MP-2's flange part shifted by 0.3 mm.
+    ``table`` is the curve-radius table the twin is generated with.
+    """
+    return {
+        "none": ((), ()),
+        "traction": ((traction(1.3),), ()),
+        "running_direction": ((running_direction(table, 0.8),), ()),
+        "curve_asymmetry": ((curve_asymmetry(table, 0.7),), ()),
+        "flange_lubrication": ((flange_lubrication(0.5),), ()),
+        "wear_measure": ((wear_measure(table),), ()),
+        "nonlinear_progression": ((nonlinear_progression(0.75),), ()),
+        "seasonal_friction": ((seasonal_friction(0.3),), ()),
+        "vehicle_load": ((vehicle_load(1.5),), ()),
+        "profile_misalignment": ((), (flange_tread_offset("MP-2", 0.3),)),
+    }
 
 
 def to_route(route: twin_routes.TwinRoute) -> Route:

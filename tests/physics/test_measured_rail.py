@@ -16,12 +16,14 @@ from wearcast.physics.profiles.measured_rail import (
     NOMINAL_GAUGE_POINT_Y_MM,
     MeasuredRail,
     orient,
+    polyline_crossings,
     shape_facts,
     upper_envelope,
 )
 from wearcast.physics.profiles.rails import rail_profile
 from wearcast.physics.rail_head_wear import (
     DATUM_TOLERANCE_MM,
+    WornRail,
     rail_head_wear,
     reference_from_points,
 )
@@ -228,3 +230,31 @@ def test_real_rail_files_wear(reference_dir) -> None:
     assert wear.placement.fitted and abs(wear.placement.lateral_mm) > 10
     assert not wear.reference_fits
     assert wear.measured_head_width_mm == pytest.approx(76.9, abs=0.2)
+
+
+def test_polyline_crossings_interpolate_and_count_vertices_once():
+    # a zig-zag a = 0, 2, -2, 2, 0 against b = 0, 1, 2, 3, 4: the level a = 0 is met at the
+    # first vertex, inside the two sign changes (b = 1.5, 2.5) and at the last vertex
+    a = np.array([0.0, 2.0, -2.0, 2.0, 0.0])
+    b = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_allclose(polyline_crossings(a, b), [0.0, 1.5, 2.5, 4.0])
+    # a level between the vertices: a = 1 is crossed at b = 0.5, 1.25, 2.75 and 3.5
+    np.testing.assert_allclose(polyline_crossings(a, b, 1.0), [0.5, 1.25, 2.75, 3.5])
+    assert polyline_crossings(a, b, 5.0).size == 0
+
+
+@pytest.mark.parametrize("make, what", [
+    (lambda y, z: MeasuredRail("m", y, z), "measured rail"),
+    (lambda y, z: WornRail("w", y, z), "worn rail"),
+])
+def test_measured_and_worn_rails_check_their_points_alike(make, what):
+    y = np.linspace(-35.0, 35.0, 12)
+    z = -0.01 * y**2
+    with pytest.raises(ValueError, match=f"a {what} needs at least 10"):
+        make(y[:9], z[:9])
+    with pytest.raises(ValueError, match=f"a {what} needs at least 10"):
+        make(y, z[:-1])
+    z_nan = z.copy()
+    z_nan[3] = np.nan
+    with pytest.raises(ValueError, match=f"{what} points must be finite"):
+        make(y, z_nan)

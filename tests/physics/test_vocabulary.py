@@ -10,6 +10,7 @@ from wearcast.physics.vocabulary import (
     RAILS,
     REGIONS,
     CurveClass,
+    check_side,
     leading_share,
     rail_for,
     region_of,
@@ -58,3 +59,15 @@ def test_curve_class_checks_name_the_field() -> None:
     assert CurveClass(radius_m=None).is_tangent and CurveClass(radius_m=math.inf).is_tangent
     assert CurveClass(radius_m=300.0, direction="left").rail_for("right") == "high"
     assert CurveClass(radius_m=None).rail_for("right") == "tangent"
+
+
+def test_side_check_is_one_rule_for_the_contact_functions() -> None:
+    from wearcast.physics.contact.creepages import rigid_creepages
+
+    assert [check_side(s) for s in ("left", "right")] == ["left", "right"]
+    for bad in ("Left", "centre", None, 1):
+        with pytest.raises(ValueError, match="side: must be 'left' or 'right', got"):
+            check_side(bad)
+    with pytest.raises(ValueError, match="side: must be 'left' or 'right', got 'middle'"):
+        rigid_creepages("middle", 10.0, 20.0, 0.0, 0.0, 0.0, 0.0, 460.0,
+                        [[0.0], [750.0], [0.0]], 0.0)

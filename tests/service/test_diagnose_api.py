@@ -27,17 +27,7 @@ from wearcast.statistics.generators import twin_wear_table
 @lru_cache(maxsize=16)
 def _twin(effect: str, seed: int = 0):
     table = twin_wear_table.synthetic_wear_table()
-    # moderate strengths of every cause of the catalogue (the generator's truths)
-    effects = {"none": ((), ()), "traction": ((te.traction(1.3),), ()),
-               "running_direction": ((te.running_direction(table, 0.8),), ()),
-               "curve_asymmetry": ((te.curve_asymmetry(table, 0.7),), ()),
-               "flange_lubrication": ((te.flange_lubrication(0.5),), ()),
-               "wear_measure": ((te.wear_measure(table),), ()),
-               "nonlinear_progression": ((te.nonlinear_progression(0.75),), ()),
-               "seasonal_friction": ((te.seasonal_friction(0.3),), ()),
-               "vehicle_load": ((te.vehicle_load(1.5),), ()),
-               "profile_misalignment": ((), (te.flange_tread_offset("MP-2", 0.3),))}
-    wear, profile = effects[effect]
+    wear, profile = te.moderate_effects(table)[effect]
     cfg = te.scenario_config(seed=seed, wear_effects=wear, profile_effects=profile)
     return cfg, table, ft.generate_fleet(cfg, table)
 

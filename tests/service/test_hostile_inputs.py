@@ -69,6 +69,21 @@ def test_route_ids_that_are_not_ascii_digits_are_names(client: TestClient) -> No
         assert r.status_code < 500, (ref, r.status_code, r.text)
 
 
+
+def test_a_curve_without_a_direction_is_refused_a_tangent_is_not(client: TestClient) -> None:
+    # one rule for curve classes and segments: radius_m given -> direction left or right
+    curve = {"radius_m": 300.0, "speed_kmh": 60}
+    for body, item in (({"name": "c", "classes": [{**curve, "share": 1.0}]}, "a curve class"),
+                       ({"name": "s", "segments": [{**curve, "length_m": 100.0}]},
+                        "a curved segment")):
+        r = client.post("/v1/routes", json=body)
+        assert r.status_code == 422 and f"{item} (radius_m given) needs a direction" in r.text, \
+            r.text
+    r = client.post("/v1/routes", json={"name": "t", "segments": [
+        {"radius_m": None, "speed_kmh": 60, "length_m": 100.0},
+        {**curve, "direction": "left", "length_m": 100.0}]})
+    assert r.status_code == 201, r.text
+
 def test_decimal_id_reads_only_ascii_digits_in_the_64_bit_range() -> None:
     assert decimal_id("17") == 17 and decimal_id("007") == 7 and decimal_id("0") == 0
     assert decimal_id(str(2**63 - 1)) == 2**63 - 1

@@ -13,18 +13,7 @@ from wearcast.statistics.generators import twin_effects as te
 TABLE = twin_wear_table.synthetic_wear_table()
 
 #: Moderate strengths of every cause (the hidden-effect tests).
-EFFECTS = {
-    "none": ((), ()),
-    "traction": ((te.traction(1.3),), ()),
-    "running_direction": ((te.running_direction(TABLE, 0.8),), ()),
-    "curve_asymmetry": ((te.curve_asymmetry(TABLE, 0.7),), ()),
-    "flange_lubrication": ((te.flange_lubrication(0.5),), ()),
-    "wear_measure": ((te.wear_measure(TABLE),), ()),
-    "nonlinear_progression": ((te.nonlinear_progression(0.75),), ()),
-    "seasonal_friction": ((te.seasonal_friction(0.3),), ()),
-    "vehicle_load": ((te.vehicle_load(1.5),), ()),
-    "profile_misalignment": ((), (te.flange_tread_offset("MP-2", 0.3),)),
-}
+EFFECTS = te.moderate_effects(TABLE)
 
 
 def run_scenario(wear_effects=(), profile_effects=(), seed=0, **kwargs):

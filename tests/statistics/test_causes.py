@@ -37,6 +37,18 @@ def test_catalogue_has_every_design_cause():
         assert cause.explanation and cause.needs
 
 
+
+def test_moderate_effects_hide_every_catalogue_cause_once():
+    # the twin's hidden-effect scenarios name exactly the catalogue (and the effect-free case),
+    # each with one wear or one profile effect
+    effects = te.moderate_effects(TABLE)
+    assert list(effects) == ["none", *cz.CAUSE_CODES]
+    assert effects["none"] == ((), ())
+    for code in cz.CAUSE_CODES:
+        wear, profile = effects[code]
+        assert len(wear) + len(profile) == 1, code
+    assert effects["profile_misalignment"][0] == ()
+
 def test_every_cause_applies_to_a_complete_dataset(scenario):
     model, df, curves, routes, attrs = scenario
     data = build_data(model, df, curves, routes, TABLE, route_attributes=attrs)

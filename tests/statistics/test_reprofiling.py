@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from tests.statistics import _reprofiling_helpers as fixtures
+from wearcast.statistics.hybrid_prediction import start_areas
 from wearcast.statistics.profile_parameters import WheelLimits
 from wearcast.statistics.reprofiling import reprofiling_mileage
 
@@ -69,6 +70,19 @@ def test_limits_are_configurable_and_validated():
         reprofiling_mileage(_model(), ROUTE, _table(), limits={"sd_max_mm": 30.0}, **KW)
     with pytest.raises(ValueError, match="start_areas.web"):
         reprofiling_mileage(_model(), ROUTE, _table(), start_areas={"web": 1.0}, **KW)
+    with pytest.raises(ValueError, match="start_areas.tread: must be finite"):
+        reprofiling_mileage(_model(), ROUTE, _table(), start_areas={"tread": -1.0}, **KW)
+
+
+def test_start_areas_are_the_measured_ones_or_the_new_profile():
+    # one rule for predict's start_areas_mm2 and reprofiling's start_areas
+    assert start_areas(None, "start_areas") == {"flange": 0.0, "tread": 0.0}
+    assert start_areas({"tread": 3.5}, "x") == {"flange": 0.0, "tread": 3.5}
+    for bad in ({"tread": float("nan")}, {"flange": None}, {"flange": -0.1}):
+        with pytest.raises(ValueError, match="start_areas_mm2.(tread|flange): must be finite"):
+            start_areas(bad, "start_areas_mm2")
+    with pytest.raises(ValueError, match="start_areas_mm2.web: must be one of"):
+        start_areas({"web": 1.0}, "start_areas_mm2")
 
 
 def test_wider_rate_uncertainty_widens_the_band_not_the_median():

@@ -5,7 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate
+from wearcast.statistics.hybrid import RegionCalibration
+from wearcast.statistics.wear_rates import WearRate, fit_ratio, fit_wear_rate, predictive_std
 
 
 def _fan(rng, n, rate=2e-3, rel_spread=0.15):
@@ -67,3 +68,13 @@ def test_fit_is_scale_equivariant(scale, seed):
     base, scaled = fit_ratio(s, a), fit_ratio(s, a * scale)
     assert scaled.slope == pytest.approx(base.slope * scale, rel=1e-6)
     assert scaled.spread == pytest.approx(base.spread * scale, rel=1e-6)
+
+
+def test_predictive_std_is_one_rule_for_rates_and_calibration_factors():
+    # sqrt(spread² + se²): 3-4-5, absolute for a WearRate, relative for a region's c_s
+    assert predictive_std(3.0, 4.0) == 5.0
+    rate = WearRate(rate_mm2_per_km=1.0, std_error_mm2_per_km=0.4, spread_mm2_per_km=0.3, n=9)
+    assert rate.predictive_std_mm2_per_km == pytest.approx(0.5, rel=1e-15)
+    cal = RegionCalibration(c_s=2.0, c_s_rel_std_error=0.04, c_s_rel_spread=0.03, p_m=1.0,
+                            rate=rate)
+    assert cal.c_s_rel_predictive == pytest.approx(0.05, rel=1e-15)
