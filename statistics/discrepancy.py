@@ -37,7 +37,11 @@ scores it out of sample and names a cause only when it is specific:
    (``_noise_whitened``; its gain is reported in curve space), every measurement weighted by
    the inverse of the shape nuisance's variance at its predicted worn area
    (``finder_shape_weights``: the late, worn rows no longer drown a signature that is the
-   same at every mileage);
+   same at every mileage), each wheel life's growth with the wear removed
+   (``finder_shape_growth``); where wheel lives measured by several instruments exist, the
+   signature must also stand out inside them (``_within_life_p``, nuisance resampled by
+   measurement session), the larger of the two adjusted p-values counting
+   (intersection-union test, Berger 1982);
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
    runner-up (the next best cause) by a margin that is itself tested: a parametric
@@ -88,6 +92,7 @@ from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import finder_shape_growth as fsg
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.discrepancy_findings import (
@@ -184,7 +189,8 @@ def _instrument_centred(coef: NDArray[np.float64], inst_codes: NDArray[np.int64]
 
 
 def _noise_whitened(coef: NDArray[np.float64], inst_codes: NDArray[np.int64],
-                    wheel: NDArray[Any]) -> NDArray[np.float64]:
+                    wheel: NDArray[Any], rows: NDArray[np.bool_] | None = None
+                    ) -> NDArray[np.float64]:
     """Shape coefficients (n, 3) in the metric of their nuisance: times L^-T, where L L^T is
     the covariance of the wheels' mean coefficients about their instrument's mean.
 
@@ -197,9 +203,14 @@ def _noise_whitened(coef: NDArray[np.float64], inst_codes: NDArray[np.int64],
     Hotelling-type contrast) every direction carries equal nuisance. The transform is fixed
     before the test and applied to the data and to every resampled dataset alike, so the
     resampling p-value keeps its level.
+
+    ``rows``: the rows the test uses (``causes_route.signature_rows``); when they are the
+    within-life contrasts (each life's own level removed, ``finder_shape_growth``), a
+    wheel's mean carries no nuisance left and the scatter is the rows' own.
     """
-    c = _instrument_centred(coef, inst_codes)
-    w = fs.codes_of(wheel)
+    keep = np.ones(len(inst_codes), dtype=bool) if rows is None else np.asarray(rows, bool)
+    c = _instrument_centred(np.asarray(coef, dtype=float)[keep], inst_codes[keep])
+    w = fs.codes_of(np.asarray(wheel)[keep] if keep.all() else np.arange(int(keep.sum())))
     g = int(w.max()) + 1
     sums = np.zeros((g, c.shape[1]))
     np.add.at(sums, w, c)
@@ -208,6 +219,52 @@ def _noise_whitened(coef: NDArray[np.float64], inst_codes: NDArray[np.int64],
     ridge = 1e-9 * max(float(np.trace(cov)), 1e-300)
     chol = np.linalg.cholesky(cov + ridge * np.eye(c.shape[1]))
     return np.asarray(np.linalg.solve(chol, np.asarray(coef, dtype=float).T).T)
+
+
+def _sessions(frame: pd.DataFrame, instrument: NDArray[Any]) -> NDArray[Any]:
+    """(n,) measurement session of each row: its instrument and its day (``measured_on``;
+    the instrument alone without dates)."""
+    inst = np.asarray(instrument).astype(str)
+    if "measured_on" not in frame.columns:
+        return inst
+    day = pd.to_datetime(frame["measured_on"]).dt.strftime("%Y-%m-%d").to_numpy().astype(str)
+    return np.char.add(np.char.add(inst, "|"), day)
+
+
+def _within_life_p(data: cz.FinderData, coef: NDArray[np.float64], inst: NDArray[Any],
+                   wheel: NDArray[Any], folds: NDArray[np.int64], n_null: int,
+                   rng: np.random.Generator) -> tuple[float, NDArray[np.float64]] | None:
+    """Observed held-out gain and its resampled null gains (B,) of the instrument signature
+    tested on the contrasts inside the wheel lives measured by more than one instrument
+    (``finder_shape_growth.within_life_contrasts``), or None when the data hold too few
+    such lives. ``diagnose`` adjusts it over the catalogue like the between-wheel test.
+
+    The between-wheel test of the per-instrument means takes a shape level shared by the
+    wheels of a unit measured by one instrument for the instrument's; inside one life every
+    wheel, vehicle and unit level cancels. The same statistic as the between-wheel test
+    (held-out gain of per-instrument means in the nuisance metric, precision weights, rows
+    outside the mixed lives with weight 0); the nuisance is resampled by measurement session
+    (one instrument on one day, ``_sessions``: the wheels a unit's visit measured share its
+    point of wear and its conditions) and by wheel.
+    """
+    mixed, within = fsg.within_life_contrasts(
+        coef, cz.life_ids(data.frame, data.mileage_km), np.asarray(inst).astype(str))
+    if mixed is None:
+        return None
+    codes = fs.codes_of(inst)
+    z = _noise_whitened(within, codes, wheel, mixed)
+    centred = _instrument_centred(z, codes)
+    w = np.zeros(data.n)
+    w[mixed] = fsw.shape_weights(centred[mixed], data.base.sum(axis=1)[mixed])
+    gain = _relative(w * np.sum(fs.held_out_shape(z, None, folds, w) ** 2, axis=1),
+                     w * np.sum(fs.held_out_shape(z, inst, folds, w) ** 2, axis=1))
+    sw = np.sqrt(w)[:, None] * np.ones_like(z)
+    nm = fs.NuisanceModel.fit(sw * centred, sw, _sessions(data.frame, inst), wheel)
+    draws = nm.draws(n_null, rng, used_dof=int(codes.max()))
+    sw_flat = sw.reshape(-1)[:, None]
+    boot = fs.bootstrap_gains(sw_flat * _shape_design(data.n, None),
+                              [sw_flat * _shape_design(data.n, inst)], draws, np.repeat(folds, 3))
+    return gain, boot[0]
 
 
 def _shape_design(n: int, instrument: NDArray[Any] | None) -> NDArray[np.float64]:
@@ -322,6 +379,7 @@ def diagnose(
     # The gain is reported in curve space; the test statistic is the same held-out gain in
     # the metric of the nuisance covariance (``_noise_whitened``)
     shape_row: tuple[float, NDArray[np.float64]] | None = None
+    shape_within: tuple[float, NDArray[np.float64]] | None = None
     scored: dict[str, Scored] = {}
     if shape_cause is not None:
         coef = _whitened_shape(data)
@@ -346,6 +404,9 @@ def diagnose(
                                   [sw_flat * _shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
         shape_row = (z_gain, boot[0])
+        # its own random stream: the other causes' resampled datasets stay as they were
+        shape_within = _within_life_p(data, coef, inst, wheel, folds, n_null,
+                                        np.random.default_rng(seed + 2))
         scored[shape_cause.code] = Scored(shape_cause, before, after, _relative(before, after),
                                            metric="shape")
 
@@ -415,6 +476,15 @@ def diagnose(
             boot = np.vstack([boot, shape_row[1][None, :]])
             codes.append(shape_cause.code)  # type: ignore[union-attr]
         p_raw, p_adj = fs.min_p(observed, boot)
+        if step == 0 and shape_row is not None and shape_within is not None:
+            # intersection-union test (Berger 1982): the instrument is named only when its
+            # signature stands out both between the wheels and inside the lives measured by
+            # several instruments, each adjusted over the catalogue; its p-value is the larger
+            obs_w, boot_w = observed.copy(), boot.copy()
+            obs_w[-1], boot_w[-1] = shape_within
+            p_raw_w, p_adj_w = fs.min_p(obs_w, boot_w)
+            p_raw[-1] = max(p_raw[-1], p_raw_w[-1])
+            p_adj[-1] = max(p_adj[-1], p_adj_w[-1])
         for i, code in enumerate(codes):
             if code in rows:
                 # the gain (materiality, the verdict's order) in the rows' own metric, the
@@ -425,6 +495,7 @@ def diagnose(
             else:
                 s = scored[code]
                 s.p_raw, s.p_adj = float(p_raw[i]), float(p_adj[i])
+
         eligible = [c for c in remaining if is_named(scored[c.code], alpha, min_relative_gain,
                                                      groups, n_boot, rng)]
         if not eligible:

@@ -98,6 +98,9 @@ def held_out_shape(coef: Array, instrument: NDArray[Any] | None,
     w = np.ones(coef.shape[0]) if weights is None else np.asarray(weights, dtype=float)
 
     def mean_of(rows: NDArray[np.bool_]) -> Array:
+        # no weight at all (rows the test leaves out): the minimum-norm fit, 0
+        if float(w[rows].sum()) <= 0.0:
+            return np.zeros(coef.shape[1])
         return np.asarray(np.average(coef[rows], axis=0, weights=w[rows]))
 
     for k in np.unique(folds):

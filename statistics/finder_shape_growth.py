@@ -31,17 +31,22 @@ that have one). The transform is linear, fixed before the test and applied to th
 coefficients once; every resampled dataset is drawn from the nuisance of the transformed
 coefficients, so the resampling p-value keeps its level.
 
-``SHAPE_GROWTH``: "life" (the above) or "none" (the coefficients as measured; the default).
-Not the default because it fails the null control on the independent generators: with the
-wheels' growth removed the instrument test is about four times as sensitive (the twin's
-0.1 mm flange offset named on 20 of 20 seeds against 5 of 20), and so it also finds what the
-finder's nuisance model does not carry -- a shape difference shared by all the cars of a unit
-(fleet_twin_alt: the calibration unit U1's lives sit at -0.016 to -0.030 in the lateral-shift
-coefficient, unit U2's at +0.024 to +0.038, and each unit has one instrument). The wild
-cluster bootstrap flips every vehicle's effect independently, so a unit-level difference is
-not in its null: on effect-free data ``profile_misalignment`` was named on 3 of 20 alt
-datasets (0 without) and 1 of 20 depot datasets (0 without). Using it needs a unit (or
-route) level in the shape test's nuisance model first.
+``SHAPE_GROWTH``: "life" (the above; the default) or "none" (the coefficients as measured).
+With the wheels' growth removed the instrument test is about four times as sensitive (the
+twin's 0.1 mm flange offset named on 20 of 20 seeds against 5 of 20), and so the
+between-wheel test alone also found what the finder's nuisance model does not carry -- a
+shape level shared by all the wheels of a unit measured by one instrument (fleet_twin_alt:
+the calibration unit U1's lives sit at -0.016 to -0.030 in the lateral-shift coefficient,
+unit U2's at +0.024 to +0.038, one instrument each); the wild cluster bootstrap flips every
+vehicle's effect independently, so a unit-level difference is not in its null
+(``profile_misalignment`` named on 3 of 20 effect-free alt datasets and 2 of 20 depot ones).
+Where the data hold wheel lives measured by several instruments (``within_life_contrasts``:
+at least ``MIN_MIXED_LIVES`` of them), every wheel, vehicle and unit level cancels inside a
+life, and ``discrepancy`` names the instrument only when its signature stands out both
+between the wheels and inside those lives (an intersection-union test, Berger 1982). Data
+with one instrument per unit and no such life (the twin, the loop) keep the between-wheel
+test alone: there a unit-level shape difference and an instrument's signature cannot be
+told apart by any test.
 
 Pure numpy.
 """
@@ -51,11 +56,52 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pandas as pd
 from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
 
-SHAPE_GROWTH = "none"
+SHAPE_GROWTH = "life"
+
+# fewest wheel lives measured by more than one instrument for the test to use only the
+# contrasts within them (``within_life_contrasts``)
+MIN_MIXED_LIVES = 2
+
+
+def _mixed_lives(life: NDArray[Any], instrument: NDArray[Any] | None
+                 ) -> NDArray[np.bool_] | None:
+    """(n,) rows of the wheel lives measured by two or more instruments, or None when fewer
+    than ``MIN_MIXED_LIVES`` lives are."""
+    if instrument is None:
+        return None
+    frame = pd.DataFrame({"life": np.asarray(life).astype(str),
+                          "inst": np.asarray(instrument).astype(str)})
+    per_life = frame.groupby("life")["inst"].nunique()
+    mixed = per_life.index[per_life.to_numpy() >= 2]
+    if mixed.size < MIN_MIXED_LIVES:
+        return None
+    return np.asarray(frame["life"].isin(mixed).to_numpy(), dtype=bool)
+
+
+def within_life_contrasts(coef: Array, life: NDArray[Any], instrument: NDArray[Any] | None
+                          ) -> tuple[NDArray[np.bool_] | None, Array]:
+    """Rows of the wheel lives measured by more than one instrument and their coefficients
+    less each such life's own mean (a fixed effect per life: what is left are the contrasts
+    between instruments inside a life, free of every wheel, vehicle and unit level).
+
+    coef : (n, k) signature coefficients (``without_wear_growth``)
+    Returns (mask, contrasts): mask None (and the coefficients unchanged) with
+    ``SHAPE_GROWTH = "none"`` or when fewer than ``MIN_MIXED_LIVES`` lives are mixed.
+    """
+    c = np.array(coef, dtype=float)
+    mixed = _mixed_lives(life, instrument) if SHAPE_GROWTH == "life" else None
+    if mixed is None:
+        return None, c
+    lives = np.asarray(life).astype(str)
+    for lev in np.unique(lives[mixed]):
+        rows = lives == lev
+        c[rows] -= c[rows].mean(axis=0)
+    return mixed, c
 
 
 def without_wear_growth(coef: Array, area_mm2: Array, life: NDArray[Any],
@@ -108,3 +154,4 @@ def without_wear_growth(coef: Array, area_mm2: Array, life: NDArray[Any],
         for rows in pending:
             c[rows] -= np.outer(a[rows], pooled)
     return c
+

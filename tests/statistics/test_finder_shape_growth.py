@@ -1,13 +1,16 @@
 """Each wheel life's shape growth with the wear, removed before the instrument test
-(``finder_shape_growth``, option ``SHAPE_GROWTH = "life"``; not the default).
+(``finder_shape_growth``, ``SHAPE_GROWTH = "life"``, the default), and the instrument's
+contrast inside the lives measured by several instruments (``within_life_contrasts``).
 
 An instrument's geometric error gives the same wear-curve signature at every mileage; a
 wheel's own shape departure from the model's worn shape grows with its wear. The transform
 must remove the second and keep the first exactly, also when a wheel changes instrument in
 the middle of a life; with it the finder names a flange-tread offset of 0.1 mm that it misses
-without it (the detection table's half strength). It is not the default because it fails the
-null control on fleet_twin_alt (a unit-level shape difference the nuisance model does not
-carry): the default finder must keep answering ``none`` there.
+without it (the detection table's half strength). Without more, the growth model named a
+shape level shared by the wheels of a unit measured by one instrument (effect-free
+fleet_twin_alt and depot data); the instrument must now also stand out inside the wheel
+lives measured by several instruments where the data hold them (an intersection-union test),
+so those effect-free datasets answer ``none``.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import pytest
 from tests.statistics.conftest import findings_summary
 from wearcast.statistics import finder_shape_growth as fsg
 from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.generators import depot as dp
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import scenarios
@@ -26,11 +30,12 @@ from wearcast.statistics.generators import twin_effects as te
 
 @pytest.fixture
 def growth_removed():
+    previous = fsg.SHAPE_GROWTH
     fsg.SHAPE_GROWTH = "life"
     try:
         yield
     finally:
-        fsg.SHAPE_GROWTH = "none"
+        fsg.SHAPE_GROWTH = previous
 
 
 def _lives(rng: np.random.Generator, n_lives: int = 40, per_life: int = 6):
@@ -58,6 +63,36 @@ def test_growth_is_removed_and_the_instrument_signature_kept(growth_removed):
                                atol=1e-12)
     fsg.SHAPE_GROWTH = "none"
     np.testing.assert_array_equal(fsg.without_wear_growth(coef, area, life), coef)
+    fsg.SHAPE_GROWTH = "life"
+
+
+def test_within_life_contrasts_keep_the_instrument_and_drop_every_life_level(growth_removed):
+    # 6 lives: 4 alternate instruments A/B visit by visit, 2 are measured by A only; each
+    # life has its own level (a wheel's, its vehicle's or its unit's shape) and B reads 0.09
+    # higher than A in the second direction
+    rng = np.random.default_rng(5)
+    life = np.repeat(np.arange(6), 6).astype(str)
+    instrument = np.where((np.tile(np.arange(6), 6) % 2 == 1)
+                          & (np.repeat(np.arange(6), 6) < 4), "B", "A")
+    level = np.repeat(rng.normal(0.0, 0.3, (6, 3)), 6, axis=0)
+    signature = np.where(instrument[:, None] == "B", np.array([0.0, 0.09, 0.0]), 0.0)
+    mixed, out = fsg.within_life_contrasts(level + signature, life, instrument)
+    assert mixed is not None
+    np.testing.assert_array_equal(mixed, np.repeat(np.arange(6), 6) < 4)
+    # inside every mixed life: B - A is the signature, the life's level is gone
+    for lev in map(str, range(4)):
+        r = life == lev
+        b, a = out[r & (instrument == "B")].mean(0), out[r & (instrument == "A")].mean(0)
+        np.testing.assert_allclose(b - a, [0.0, 0.09, 0.0], atol=1e-12)
+        np.testing.assert_allclose(out[r].mean(0), 0.0, atol=1e-12)
+    # one mixed life is too few (MIN_MIXED_LIVES), and so is none: the coefficients unchanged
+    one = np.where(np.repeat(np.arange(6), 6) == 0, instrument, "A")
+    mixed_one, same = fsg.within_life_contrasts(level, life, one)
+    assert mixed_one is None
+    np.testing.assert_array_equal(same, level)
+    assert fsg.within_life_contrasts(level, life, None)[0] is None
+    fsg.SHAPE_GROWTH = "none"
+    assert fsg.within_life_contrasts(level + signature, life, instrument)[0] is None
 
 
 def test_an_instrument_change_within_a_life_is_not_taken_for_growth(growth_removed):
@@ -124,13 +159,28 @@ def test_effect_free_twin_is_none_with_the_growth_model(seed, growth_removed):
     assert d.verdict == "none", findings_summary(d)
 
 
-# effect-free fleet_twin_alt datasets on which the growth model named profile_misalignment
-# (adjusted p 0.005 on both): a unit-level shape difference, one instrument per unit. The
-# default finder must answer ``none``
-@pytest.mark.parametrize("seed", [116, 118])
-def test_default_finder_keeps_the_alt_nulls_none(seed):
-    assert fsg.SHAPE_GROWTH == "none"
-    s = scenarios.alt_scenario(fa.AltEffects(), seed)
+# effect-free datasets on which the growth model alone named profile_misalignment: alt seeds
+# 116 and 118 (adjusted p 0.005; a unit-level shape difference, one instrument per unit) and
+# depot seed 110 (p 0.005, gain 0.028). The default finder (growth model and the within-life
+# test) must answer ``none``
+@pytest.mark.parametrize(("generator", "seed"), [("alt", 116), ("alt", 118), ("depot", 110)])
+def test_default_finder_keeps_the_growth_models_false_alarms_none(generator, seed):
+    assert fsg.SHAPE_GROWTH == "life"
+    s = (scenarios.alt_scenario(fa.AltEffects(), seed) if generator == "alt"
+         else scenarios.depot_scenario(dp.DepotEffects(), seed))
     args, kwargs = s.finder_arguments()
     d = diagnose(*args, **kwargs, n_boot=200)
     assert d.verdict == "none", findings_summary(d)
+    f = d.finding("profile_misalignment")
+    assert f is not None and f.evidence["p_value"] > 0.05, findings_summary(d)
+
+
+# the instrument's lateral scale at the alt table's weakest strength (0.5 %) is named by the
+# default finder: its signature stands out inside U3's lives, which alternate instruments
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [100, 104])
+def test_alt_lateral_scale_is_named_between_and_within_lives(seed):
+    s = scenarios.alt_scenario(fa.AltEffects(instrument_scale=("LP-2", 0.005)), seed)
+    args, kwargs = s.finder_arguments()
+    d = diagnose(*args, **kwargs, n_boot=200)
+    assert d.verdict == "profile_misalignment", findings_summary(d)
