@@ -8,7 +8,7 @@ from typing import Any
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from wearcast.physics.vocabulary import Direction
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 
 
 class RouteClassIn(Strict):
@@ -21,7 +21,8 @@ class RouteClassIn(Strict):
     @model_validator(mode="after")
     def _direction_for_curves(self) -> RouteClassIn:
         if self.radius_m is not None and self.direction is None:
-            raise ValueError("a curve class (radius_m given) needs a direction: left or right")
+            raise FieldsError(["direction"],
+                              "a curve class (radius_m given) needs a direction: left or right")
         return self
 
 
@@ -35,7 +36,8 @@ class SegmentIn(Strict):
     @model_validator(mode="after")
     def _direction_for_curves(self) -> SegmentIn:
         if self.radius_m is not None and self.direction is None:
-            raise ValueError("a curved segment (radius_m given) needs a direction: left or right")
+            raise FieldsError(["direction"], "a curved segment (radius_m given) needs a "
+                              "direction: left or right")
         return self
 
 
@@ -49,7 +51,8 @@ class RouteSpec(Strict):
     @model_validator(mode="after")
     def _one_of(self) -> RouteSpec:
         if (self.classes is None) == (self.segments is None):
-            raise ValueError("give either classes or segments (exactly one)")
+            raise FieldsError(["classes", "segments"],
+                              "give either classes or segments (exactly one)")
         return self
 
 

@@ -9,7 +9,12 @@ bodies themselves live one resource a module (``route_schemas``, ``measurement_s
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict
+import datetime as dt
+import re
+from collections.abc import Sequence
+from typing import Annotated, Any
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 FilterValue = str | int | float | bool | None
 Filter = dict[str, FilterValue | list[FilterValue]]
@@ -19,6 +24,39 @@ Filter = dict[str, FilterValue | list[FilterValue]]
 MAX_MILEAGE_KM = 1e8
 #: Most points of one measured profile (instruments give a few hundred to a few thousand).
 MAX_PROFILE_POINTS = 20_000
+
+
+_ISO_DATE = re.compile(r"[0-9]{4}-[0-9]{2}-[0-9]{2}")
+
+
+def _iso_date_only(value: Any) -> Any:
+    """Refuse what pydantic would read as a date but the contract's ``format: date`` does not
+    allow: a number or a string of digits (read as Unix seconds: ``today=0`` is 1970-01-01),
+    a date-time."""
+    if isinstance(value, dt.date) and not isinstance(value, dt.datetime):
+        return value
+    if isinstance(value, str) and _ISO_DATE.fullmatch(value):
+        return value
+    raise ValueError(f"{str(value)[:40]!r} is not a date as YYYY-MM-DD")
+
+
+#: A calendar date given as ``YYYY-MM-DD`` only (the published ``format: date``), in bodies
+#: and in query strings.
+IsoDate = Annotated[dt.date, BeforeValidator(_iso_date_only)]
+
+#: The id of a stored row named in a body (``rail_id``, ``measurement_id`` ...): a JSON
+#: integer from 1 to 2**62; ``true``, ``"1"`` or ``1.5`` are refused rather than read as 1.
+StoredId = Annotated[int, Field(strict=True, ge=1, le=2**62)]
+
+
+class FieldsError(ValueError):
+    """A rule across fields that a request breaks, raised from a model validator: the 422
+    names each of ``fields`` (relative to the model) with the reason, where a plain
+    ``ValueError`` would name only the model (``body``)."""
+
+    def __init__(self, fields: Sequence[str], reason: str) -> None:
+        super().__init__(reason)
+        self.fields = tuple(fields)
 
 
 class Strict(BaseModel):
