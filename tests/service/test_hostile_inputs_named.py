@@ -11,7 +11,10 @@ naming the field at fault or by accepting what the published schema refuses.
   ``"measured_on": 0`` as 1970-01-01 (pydantic reads digits as Unix seconds) where the
   schema says ``integer`` and ``format: date``;
 - a rail reference ``rail:<id>`` beyond 64 bits reached the database: a 422 naming ``body``
-  (SQLite's overflow, PostgreSQL's "value cannot be stored").
+  (SQLite's overflow, PostgreSQL's "value cannot be stored");
+- a NUL byte in a JSON string (a table's or simulation's ``name``, a route attribute key) or
+  in a form field (a rail's ``name``) reached PostgreSQL, which refuses it in text and JSON: a
+  422 naming ``body`` (SQLite stored it).
 """
 
 from __future__ import annotations
@@ -134,3 +137,27 @@ def test_a_rail_reference_beyond_64_bits_is_a_404_naming_reference(
         assert _problem(r, 404) == ["reference"], (ref, r.text)
     assert client.get(f"/v1/rails/{rail}", params={"reference": f"rail:{rail}"}
                       ).status_code == 200
+
+
+def test_a_nul_byte_in_a_body_is_a_422_naming_its_field(client: TestClient,
+                                                        reference_dir: Path) -> None:
+    for path, body, field in (
+            ("/v1/wear-tables/compute", {**TABLE, "name": "a\x00b"}, "name"),
+            ("/v1/simulations", {**SIMULATION, "name": "a\x00b"}, "name"),
+            ("/v1/routes", {"name": "r", "classes": SIMULATION["classes"],
+                            "attributes": {"line": ["x\x00"]}}, "attributes.line[0]"),
+            ("/v1/routes", {"name": "r", "classes": SIMULATION["classes"],
+                            "attributes": {"k\x00": 1}}, "attributes")):
+        r = client.post(path, json=body)
+        assert _problem(r, 422) == [field], (path, r.text)
+        assert "NUL byte" in r.json()["detail"]
+    data = (reference_dir / "miniprof" / "avg_low2.ban").read_bytes()
+    r = client.post("/v1/rails/import", files={"file": ("avg_low2.ban", data)},
+                    data={"name": "x\x00y"})
+    assert _problem(r, 422) == ["name"] and "NUL byte" in r.json()["detail"]
+    raw = (b'--b\r\nContent-Disposition: form-data; name="file"; filename="a\x00.ban"\r\n\r\n'
+           + data + b"\r\n--b--\r\n")  # written by hand: httpx would escape the NUL
+    r = client.post("/v1/rails/import", content=raw,
+                    headers={"content-type": "multipart/form-data; boundary=b"})
+    assert _problem(r, 422) == ["file"] and "file name" in r.json()["detail"]
+    assert client.get("/v1/rails").json() == [] and client.get("/v1/routes").json() == []
