@@ -44,9 +44,20 @@ def _iso_date_only(value: Any) -> Any:
 #: and in query strings.
 IsoDate = Annotated[dt.date, BeforeValidator(_iso_date_only)]
 
+def _json_integer_only(value: Any) -> Any:
+    """Refuse what pydantic would read as an integer but JSON Schema's ``integer`` does not
+    allow: ``true``/``false`` and strings (``"1"``); ``1.0`` is an integer, ``1.5`` is refused
+    by the integer check itself."""
+    if isinstance(value, bool | str):
+        raise ValueError(f"{value!r} is not an integer id (give a JSON number such as 12)")
+    return value
+
+
 #: The id of a stored row named in a body (``rail_id``, ``measurement_id`` ...): a JSON
-#: integer from 1 to 2**62; ``true``, ``"1"`` or ``1.5`` are refused rather than read as 1.
-StoredId = Annotated[int, Field(strict=True, ge=1, le=2**62)]
+#: integer from 1 to 2**62; ``true`` or ``"1"`` are refused rather than read as the id 1.
+#: (The bounds come before the validator: after it, pydantic would publish them as ``ge``/``le``
+#: instead of ``minimum``/``maximum``.)
+StoredId = Annotated[int, Field(ge=1, le=2**62), BeforeValidator(_json_integer_only)]
 
 
 class FieldsError(ValueError):

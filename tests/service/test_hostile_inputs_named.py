@@ -96,14 +96,21 @@ def test_a_rule_across_fields_names_each_field(client: TestClient) -> None:
 @pytest.mark.parametrize("field", ["rail_id", "high_rail_id", "low_rail_id",
                                    "measurement_id"])
 def test_a_stored_id_is_a_json_integer(client: TestClient, field: str) -> None:
-    """``true``, ``"1"`` and ``1.5`` are not the id 1 (the schema says ``integer``)."""
+    """``true``, ``"1"`` and ``1.5`` are not the id 1 (the schema says ``integer``); ``1.0``
+    is (JSON Schema counts it an integer)."""
     path, body = (("/v1/contact", CONTACT) if field == "rail_id"
                   else ("/v1/wear-tables/compute", TABLE))
     for value in (True, "1", 1.5, 0, -1, 2**62 + 1):
         r = client.post(path, json={**body, field: value})
         assert _problem(r, 422) == [field], (value, r.text)
-    r = client.post(path, json={**body, field: 999})  # an integer: looked up, not there
-    assert _problem(r, 404) == [field], r.text
+    for value in (999, 999.0):  # an integer: looked up, not there
+        r = client.post(path, json={**body, field: value})
+        assert _problem(r, 404) == [field], r.text
+    # the bounds are published as JSON Schema's minimum/maximum (not pydantic's ge/le)
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    model = "ContactIn" if field == "rail_id" else "WearTableComputeIn"
+    published = schemas[model]["properties"][field]["anyOf"][0]
+    assert published == {"type": "integer", "minimum": 1, "maximum": 2**62}, published
 
 
 def test_a_date_is_yyyy_mm_dd_only(client: TestClient) -> None:
