@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
-from wearcast.service.schema_base import IsoDate, StoredId
+from wearcast.service.schema_base import IsoDate, StoredId, Strict
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class _Strict(Strict):
+    """Planning bodies: the shared strict base (NaN and infinities are refused too)."""
 
 
 class FleetIn(_Strict):

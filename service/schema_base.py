@@ -10,11 +10,14 @@ bodies themselves live one resource a module (``route_schemas``, ``measurement_s
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import re
+import types
+import typing
 from collections.abc import Sequence
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, field_validator
 
 FilterValue = str | int | float | bool | None
 Filter = dict[str, FilterValue | list[FilterValue]]
@@ -70,5 +73,43 @@ class FieldsError(ValueError):
         self.fields = tuple(fields)
 
 
+@functools.cache
+def _takes_bool(annotation: Any) -> bool:
+    """Whether a field's type admits ``true``/``false`` anywhere in it (``bool``, ``Any``, an
+    unknown type; a union, a container or an ``Annotated`` that holds one)."""
+    if annotation is bool or annotation is Any:
+        return True
+    if annotation is None or annotation is types.NoneType:
+        return False
+    args = typing.get_args(annotation)
+    origin = typing.get_origin(annotation)
+    if origin is typing.Literal:
+        return any(isinstance(a, bool) for a in args)
+    if origin is Annotated:
+        return _takes_bool(args[0])
+    if args:
+        return any(_takes_bool(a) for a in args if a is not Ellipsis)
+    if isinstance(annotation, type):
+        if issubclass(annotation, BaseModel):
+            return False  # its own fields are checked by its own validator
+        return not issubclass(annotation, int | float | str | bytes | dt.date)
+    return True
+
+
 class Strict(BaseModel):
+    """Unknown fields, NaN and infinities refused; and ``true``/``false`` where the schema
+    says number, integer or string (pydantic would read ``true`` as 1 or 1.0: a rail, a route
+    or a mileage the client did not name), in the field itself or as an item of its list."""
+
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_numbers(cls, value: Any, info: ValidationInfo) -> Any:
+        if isinstance(value, bool | list) and info.field_name in cls.model_fields:
+            items = value if isinstance(value, list) else [value]
+            if any(isinstance(v, bool) for v in items) and not _takes_bool(
+                    cls.model_fields[info.field_name].annotation):
+                where = "an item is" if isinstance(value, list) else "is"
+                raise ValueError(f"{where} true or false where the schema takes no boolean")
+        return value

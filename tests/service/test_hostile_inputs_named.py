@@ -7,7 +7,8 @@ naming the field at fault or by accepting what the published schema refuses.
   body";
 - a rule across fields (``wheel_id`` and ``measurement_id`` both given, ``route_id`` or
   ``radii``) was a 422 naming only ``body``;
-- ``"high_rail_id": true`` or ``"1"`` was read as the rail 1, and ``?today=0`` or
+- ``"high_rail_id": true`` or ``"1"`` was read as the rail 1, ``"route_id": true`` of a
+  plan as the route 1, ``"km_per_day": true`` as 1 km/day, and ``?today=0`` or
   ``"measured_on": 0`` as 1970-01-01 (pydantic reads digits as Unix seconds) where the
   schema says ``integer`` and ``format: date``;
 - a rail reference ``rail:<id>`` beyond 64 bits reached the database: a 422 naming ``body``
@@ -168,3 +169,26 @@ def test_a_nul_byte_in_a_body_is_a_422_naming_its_field(client: TestClient,
                     headers={"content-type": "multipart/form-data; boundary=b"})
     assert _problem(r, 422) == ["file"] and "file name" in r.json()["detail"]
     assert client.get("/v1/rails").json() == [] and client.get("/v1/routes").json() == []
+
+
+def test_true_is_not_a_number(client: TestClient) -> None:
+    """``true`` where the schema says number or integer (pydantic reads it as 1); a boolean
+    field and free-form attributes still take it."""
+    for path, body, field in (
+            ("/v1/plans", {"route_id": True}, "route_id"),
+            ("/v1/plans", {"target_flange_thicknesses_mm": [32.5, True]},
+             "target_flange_thicknesses_mm"),
+            ("/v1/wear-tables/compute", {**TABLE, "radii": [{"radius_m": True}]},
+             "radii[0].radius_m"),
+            ("/v1/simulations", {**SIMULATION, "route_id": True, "classes": None},
+             "route_id")):
+        r = client.post(path, json=body)
+        assert _problem(r, 422) == [field], (path, r.text)
+        assert "true or false" in r.json()["detail"]
+    r = client.put("/v1/vehicles/V1", json={"km_per_day": True})
+    assert _problem(r, 422) == ["km_per_day"]
+    r = client.post("/v1/routes", json={"name": "r", "classes": SIMULATION["classes"],
+                                        "attributes": {"electrified": True}})
+    assert r.status_code == 201 and r.json()["attributes"] == {"electrified": True}, r.text
+    r = client.post("/v1/plans", json={"keep_diameter_differences": True})
+    assert r.status_code == 201, r.text
