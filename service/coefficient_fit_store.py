@@ -31,7 +31,7 @@ from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.job_schemas import JobStatusOut
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 from wearcast.service.simulation_schemas import SimulationClassIn, SmoothingIn
 
 log = logging.getLogger(__name__)
@@ -65,11 +65,11 @@ class MeasuredWearIn(Strict):
     @model_validator(mode="after")
     def _same_length(self) -> MeasuredWearIn:
         if len(self.y_mm) != len(self.wear_mm):
-            raise ValueError("y_mm and wear_mm must have the same length")
+            raise FieldsError(["y_mm", "wear_mm"], "y_mm and wear_mm must have the same length")
         if any(b <= a for a, b in zip(self.y_mm, self.y_mm[1:], strict=False)):
-            raise ValueError("y_mm must be strictly increasing")
+            raise FieldsError(["y_mm"], "y_mm must be strictly increasing")
         if max(self.wear_mm) <= 0:
-            raise ValueError("wear_mm holds no wear (its maximum must be > 0)")
+            raise FieldsError(["wear_mm"], "wear_mm holds no wear (its maximum must be > 0)")
         return self
 
 
@@ -147,18 +147,20 @@ class CoefficientFitIn(Strict):
     @model_validator(mode="after")
     def _consistent(self) -> CoefficientFitIn:
         if (self.route_id is None) == (self.classes is None):
-            raise ValueError("give either route_id or classes (exactly one)")
+            raise FieldsError(["route_id", "classes"],
+                              "give either route_id or classes (exactly one)")
         if (self.wear is None) == (self.measurement_id is None):
-            raise ValueError("give either wear or measurement_id (exactly one)")
+            raise FieldsError(["wear", "measurement_id"],
+                              "give either wear or measurement_id (exactly one)")
         if self.wear is not None and self.mileage_km is None:
-            raise ValueError("mileage_km is required with wear")
+            raise FieldsError(["mileage_km"], "mileage_km is required with wear")
         if len(set(self.methods)) != len(self.methods):
-            raise ValueError("methods must not repeat")
+            raise FieldsError(["methods"], "methods must not repeat")
         if len(set(self.zones)) != len(self.zones):
-            raise ValueError("zones must not repeat")
+            raise FieldsError(["zones"], "zones must not repeat")
         if (self.law == "archard_kth" and self.bounds is not None
                 and len(self.bounds) != len(self.zones)):
-            raise ValueError("bounds must give one (lower, upper) per zone")
+            raise FieldsError(["bounds"], "bounds must give one (lower, upper) per zone")
         return self
 
 

@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from wearcast.physics.vocabulary import Side
 from wearcast.service.profile_schemas import MeasuredProfilesIn
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 
 #: Most poses in one request (each takes about 0.1-0.5 s of one core).
 MAX_POSES = 100
@@ -68,9 +68,10 @@ class ContactIn(MeasuredProfilesIn):
         others = [k for k in ("wheel_id", "measurement_id", "profile")
                   if getattr(self, k) is not None]
         if self.wheel_file is not None and others:
-            raise ValueError(f"give at most one of wheel_file, {', '.join(others)}")
+            raise FieldsError(["wheel_file", *others],
+                              f"give at most one of wheel_file, {', '.join(others)}")
         if self.rail_file is not None and self.rail_id is not None:
-            raise ValueError("give at most one of rail_file, rail_id")
+            raise FieldsError(["rail_file", "rail_id"], "give at most one of rail_file, rail_id")
         return self
 
 

@@ -13,7 +13,7 @@ from wearcast.physics.vocabulary import (
     Wheelset,
 )
 from wearcast.service.model_schemas import ModelOut
-from wearcast.service.schema_base import Filter, Strict
+from wearcast.service.schema_base import FieldsError, Filter, Strict
 
 
 class ProgressionAreasIn(Strict):
@@ -36,7 +36,8 @@ class ExpectedProgressionIn(Strict):
     def _same_lengths(self) -> ExpectedProgressionIn:
         for i, a in enumerate(self.areas):
             if len(a.areas_mm2) != len(self.mileage_km):
-                raise ValueError(f"areas[{i}].areas_mm2 has {len(a.areas_mm2)} values for "
+                raise FieldsError([f"areas[{i}].areas_mm2"],
+                                  f"areas[{i}].areas_mm2 has {len(a.areas_mm2)} values for "
                                  f"{len(self.mileage_km)} mileages")
         return self
 
@@ -67,8 +68,9 @@ class DiagnoseIn(Strict):
     def _one_progression(self) -> DiagnoseIn:
         if self.expected_progression is not None and \
                 self.expected_progression_simulations is not None:
-            raise ValueError("give expected_progression or expected_progression_simulations, "
-                             "not both")
+            raise FieldsError(["expected_progression", "expected_progression_simulations"],
+                              "give expected_progression or expected_progression_simulations, "
+                              "not both")
         return self
 
 

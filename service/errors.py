@@ -17,6 +17,7 @@ the request id to quote; the exception is logged, never sent.
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Sequence
 from http import HTTPStatus
 from typing import Any
@@ -27,6 +28,8 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 from sqlalchemy.exc import DataError, IntegrityError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from wearcast.service.schema_base import FieldsError
 
 log = logging.getLogger(__name__)
 PROBLEM_MEDIA_TYPE = "application/problem+json"
@@ -128,6 +131,13 @@ def validation_items(errors: Sequence[Any]) -> list[dict[str, Any]]:
             items.append({"loc": ["body"], "field": "body",
                           "reason": f"invalid JSON at character {where}: {detail}".rstrip(": ")})
             continue
+        cause = (error.get("ctx") or {}).get("error")
+        if isinstance(cause, FieldsError) and cause.fields:  # a rule across named fields
+            for name in cause.fields:
+                at = [*loc, *(int(p) if p.isdigit() else p
+                              for p in re.findall(r"[^.\[\]]+", name))]
+                items.append({"loc": at, "field": _field_from_loc(at), "reason": reason})
+            continue
         items.append({"loc": loc, "field": _field_from_loc(loc), "reason": reason})
     return items
 
@@ -171,7 +181,23 @@ def _http_exception_items(exc: StarletteHTTPException, request: Request) -> list
     if isinstance(detail, list):
         return [d if isinstance(d, dict) and "field" in d else
                 {"loc": [], "field": "request", "reason": str(d)} for d in detail]
+    if exc.status_code == 400:  # the framework could not read the body
+        return [{"loc": ["body"], "field": "body", "reason": body_parse_reason(exc)}]
     return [{"loc": [], "field": "request", "reason": str(detail)}]
+
+
+def body_parse_reason(exc: StarletteHTTPException) -> str:
+    """Why a body could not be read, from the exception FastAPI (``"There was an error
+    parsing the body"``) or Starlette (a malformed multipart body) raised the 400 from."""
+    cause = exc.__cause__
+    if isinstance(cause, UnicodeDecodeError):
+        return (f"the body is not JSON in UTF-8, UTF-16 or UTF-32: {cause.encoding} cannot "
+                f"decode byte {cause.start}")
+    if isinstance(cause, RecursionError):
+        return "the JSON body is nested too deeply"
+    if cause is not None:
+        return f"the body cannot be read as its Content-Type says ({type(cause).__name__})"
+    return f"the body cannot be read as its Content-Type says: {str(exc.detail)[:200]}"
 
 
 def allowed_methods(app: Any, path: str) -> list[str]:

@@ -14,7 +14,14 @@ from wearcast.physics.vocabulary import (
     RunningMode,
     Side,
 )
-from wearcast.service.schema_base import MAX_MILEAGE_KM, MAX_PROFILE_POINTS, FilterValue, Strict
+from wearcast.service.schema_base import (
+    MAX_MILEAGE_KM,
+    MAX_PROFILE_POINTS,
+    FieldsError,
+    FilterValue,
+    IsoDate,
+    Strict,
+)
 
 
 class ReportedParameters(Strict):
@@ -32,7 +39,7 @@ class MeasurementIn(Strict):
     axle: Axle
     side: Side
     mileage_km: float = Field(ge=0, le=MAX_MILEAGE_KM)
-    measured_on: dt.date | None = None
+    measured_on: IsoDate | None = None
     route_id: int | Annotated[str, Field(max_length=200)] | None = None
     running_mode: RunningMode | None = None
     instrument_id: str | None = Field(default=None, max_length=200)
@@ -54,16 +61,21 @@ class MeasurementIn(Strict):
         has_params = any(v is not None for v in (self.sd_mm, self.sh_mm, self.qr_mm))
         if has_points:
             if self.y_mm is None or self.z_mm is None:
-                raise ValueError("y_mm and z_mm must be given together")
+                raise FieldsError(["z_mm" if self.z_mm is None else "y_mm"],
+                                  "y_mm and z_mm must be given together")
             if len(self.y_mm) != len(self.z_mm):
-                raise ValueError(f"y_mm has {len(self.y_mm)} points, z_mm {len(self.z_mm)}")
+                raise FieldsError(["y_mm", "z_mm"],
+                                  f"y_mm has {len(self.y_mm)} points, z_mm {len(self.z_mm)}")
             if len(self.y_mm) < 10:
-                raise ValueError("a profile needs at least 10 points")
+                raise FieldsError(["y_mm", "z_mm"], "a profile needs at least 10 points")
         elif has_params:
-            if any(v is None for v in (self.sd_mm, self.sh_mm, self.qr_mm)):
-                raise ValueError("a parameter-only measurement needs sd_mm, sh_mm and qr_mm")
+            missing = [k for k in ("sd_mm", "sh_mm", "qr_mm") if getattr(self, k) is None]
+            if missing:
+                raise FieldsError(missing,
+                                  "a parameter-only measurement needs sd_mm, sh_mm and qr_mm")
         else:
-            raise ValueError("give the profile (y_mm, z_mm) or the parameters (sd_mm, sh_mm, "
+            raise FieldsError(["y_mm", "z_mm", "sd_mm", "sh_mm", "qr_mm"],
+                              "give the profile (y_mm, z_mm) or the parameters (sd_mm, sh_mm, "
                              "qr_mm)")
         return self
 

@@ -8,8 +8,8 @@
   naming the limit, checked on ``Content-Length`` and again while the body streams),
   cross-site writes (403: an ``Origin`` that is not allowed, or ``Sec-Fetch-Site:
   cross-site``) and undocumented methods on literal paths (405 with ``Allow``).
-* :func:`check_request_values` (a dependency after the key check): path or query values no
-  route could use (422: NUL bytes, integers beyond 64 bits, over-long values).
+* :func:`check_request_values` (a dependency after the key check): path, query or JSON body
+  values no route could use (422: NUL bytes, integers beyond 64 bits, over-long values).
 * :class:`AuditTrail`: one :class:`~wearcast.service.models_access.AuditRecord` per accepted
   write, naming the key, the entity and its id.
 * :class:`RateLimiter`: a token bucket per key (429 with ``Retry-After``), called by
@@ -137,9 +137,9 @@ def _literal_path_methods(scope: Scope) -> list[str] | None:
 
 
 async def check_request_values(request: Request) -> None:
-    """422 for path or query values no route could use (NUL bytes, integers beyond 64 bits,
-    over-long values); a dependency run after the key check, so a request without a key gets
-    401 whatever its values."""
+    """422 for path, query or JSON body values no route could use (NUL bytes, integers beyond
+    64 bits, over-long values), naming the field; a dependency run after the key check, so a
+    request without a key gets 401 whatever its values."""
     settings = request.app.state.settings
     for segment in request.url.path.split("/"):
         problem = _value_problem(segment, settings.max_id_length)
@@ -148,30 +148,57 @@ async def check_request_values(request: Request) -> None:
     item = _query_problem(request.scope.get("query_string", b""), MAX_QUERY_VALUE_CHARS)
     if item:
         raise ApiError(422, item["field"], item["reason"])
-    if request.headers.get("content-type", "").startswith("application/json"):
-        field = _big_integer_field(await request.body())
-        if field is not None:
-            raise ApiError(422, field, "integer out of the 64-bit range")
+    content_type = request.headers.get("content-type", "")
+    if content_type.startswith("application/json"):
+        found = _unstorable_field(await request.body())
+        if found is not None:
+            raise ApiError(422, *found)
+    elif content_type.startswith(("multipart/form-data", "application/x-www-form-urlencoded")):
+        found = await _unstorable_form_field(request)
+        if found is not None:
+            raise ApiError(422, *found)
 
 
-def _big_integer_field(body: bytes) -> str | None:
-    """The field of a JSON body holding an integer beyond 64 bits (None when there is none
-    or the body is not JSON: request validation names that)."""
-    if not body or not _LONG_DIGITS.search(body):  # no run of 19+ digits: nothing to walk
+async def _unstorable_form_field(request: Request) -> tuple[str, str] | None:
+    """The form field (a value or an uploaded file's name) holding a NUL byte, and why; the
+    form is the one the route already read (Starlette keeps it on the request)."""
+    try:
+        form = await request.form()
+    except Exception:  # not a readable form: the route's body parsing named that
         return None
+    for name, value in form.multi_items():
+        text = value if isinstance(value, str) else (getattr(value, "filename", None) or "")
+        if "\x00" in text:
+            return name[:100], ("holds a NUL byte" if isinstance(value, str)
+                                else "the file name holds a NUL byte")
+    return None
+
+
+def _unstorable_field(body: bytes) -> tuple[str, str] | None:
+    """The field of a JSON body no database column could hold, and why: an integer beyond
+    64 bits, or a string (value or key) holding a NUL byte, which PostgreSQL refuses in text
+    and JSON (None when there is none or the body is not JSON: request validation names
+    that)."""
+    if not body or not (_LONG_DIGITS.search(body) or b"\\u0000" in body):
+        return None  # no run of 19+ digits and no escaped NUL: nothing to walk
     try:
         value = json.loads(body)
     except (ValueError, RecursionError):
         return None
 
-    def find(node: Any, path: str) -> str | None:
+    def find(node: Any, path: str) -> tuple[str, str] | None:
         if isinstance(node, bool):
             return None
         if isinstance(node, int) and not INT64_MIN <= node <= INT64_MAX:
-            return path or "body"
+            return path or "body", "integer out of the 64-bit range"
+        if isinstance(node, str) and "\x00" in node:
+            return path or "body", "holds a NUL byte"
         if isinstance(node, dict):
             for key, child in node.items():
-                found = find(child, f"{path}.{key}" if path else str(key))
+                where = f"{path}.{key}" if path else str(key)
+                if "\x00" in key:
+                    return path or "body", "holds a key with a NUL byte"
+                found = find(child, where)
                 if found:
                     return found
         if isinstance(node, list):

@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field
 
 from wearcast.physics.vocabulary import RunningMode
 from wearcast.physics.vocabulary import WearMeasure as Measure
-from wearcast.service.schema_base import Filter, Strict
+from wearcast.service.schema_base import Filter, StoredId, Strict
 
 
 class CalibrationIn(Strict):
@@ -25,7 +25,7 @@ class ModelIn(Strict):
     name: str = Field(min_length=1, max_length=200)
     measure: Measure
     running_mode: RunningMode
-    wear_table_id: int
+    wear_table_id: StoredId
     calibration: CalibrationIn
 
 

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-import datetime as dt
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
+
+from wearcast.service.schema_base import IsoDate, StoredId, Strict
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class _Strict(Strict):
+    """Planning bodies: the shared strict base (NaN and infinities are refused too)."""
 
 
 class FleetIn(_Strict):
@@ -36,11 +37,11 @@ class PlanIn(_Strict):
     """
 
     fleet_id: str | None = None
-    start: dt.date | None = None
+    start: IsoDate | None = None
     horizon_weeks: int = Field(default=26, ge=1, le=260)
     capacity_per_week: int = Field(default=4, ge=0, le=10_000)
     fixed_interval_km: float = Field(default=150_000.0, gt=0, le=5e6)
-    model_id: int | None = None
+    model_id: StoredId | None = None
     route_id: int | str | None = None
     target_flange_thicknesses_mm: list[float] = Field(
         default_factory=lambda: [32.5, 31.5, 30.5, 29.5, 28.5], min_length=1, max_length=12)

@@ -14,25 +14,27 @@ from wearcast.physics.vocabulary import (
 )
 from wearcast.service.profile_schemas import MeasuredProfileIn
 from wearcast.service.route_schemas import RouteSpec
-from wearcast.service.schema_base import MAX_MILEAGE_KM, Strict
+from wearcast.service.schema_base import MAX_MILEAGE_KM, FieldsError, StoredId, Strict
 
 
 def check_one_route(body: Any) -> None:
     """A request names its route by ``route_id`` or gives it inline (``route``), not both;
     neither: a physics model runs on its own route, a hybrid model answers 422 route_id."""
     if body.route_id is not None and body.route is not None:
-        raise ValueError("give either route_id or route (exactly one)")
+        raise FieldsError(["route_id", "route"], "give either route_id or route (exactly one)")
 
 
 def check_wheel_start(body: Any) -> None:
     """A request starts from at most one of ``wheel_id``, ``measurement_id``, ``profile``,
     and without a stored one (``wheel_id``/``measurement_id``) gives the wheel's position."""
-    starts = [body.wheel_id, body.measurement_id, body.profile]
-    if sum(v is not None for v in starts) > 1:
-        raise ValueError("give at most one of wheel_id, measurement_id, profile")
+    given = [k for k in ("wheel_id", "measurement_id", "profile") if getattr(body, k) is not None]
+    if len(given) > 1:
+        raise FieldsError(given, "give at most one of wheel_id, measurement_id, profile")
     stored = body.wheel_id is not None or body.measurement_id is not None
-    if not stored and None in (body.bogie_type, body.axle, body.side):
-        raise ValueError("give wheel_id or measurement_id, or bogie_type, axle and side")
+    missing = [k for k in ("bogie_type", "axle", "side") if getattr(body, k) is None]
+    if not stored and missing:
+        raise FieldsError(missing, "give wheel_id or measurement_id, or bogie_type, axle and "
+                          "side")
 
 
 class RouteRef(Strict):
@@ -51,7 +53,7 @@ class PredictIn(RouteRef):
     side: Side | None = None
     wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
                                  "profile; mileage_km then counts from that measurement")
-    measurement_id: int | None = Field(None, description="start from this measurement")
+    measurement_id: StoredId | None = Field(None, description="start from this measurement")
     profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     covariates: dict[str, Any] | None = Field(default=None, description=(
         "the wheel's covariates for an extended model (load_t, running_mode, ...)"))

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pydantic import Field, model_validator
 
-from wearcast.service.schema_base import MAX_PROFILE_POINTS, Strict
+from wearcast.service.schema_base import MAX_PROFILE_POINTS, FieldsError, StoredId, Strict
 
 
 class MeasuredProfileIn(Strict):
@@ -23,7 +23,7 @@ class RailIdIn(Strict):
     """The stored measured rail a physics request may lay in place of the preset's nominal
     rail."""
 
-    rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+    rail_id: StoredId | None = Field(default=None, description=(
         "a stored measured rail (GET /v1/rails) in place of the preset's nominal rail, on "
         "both sides, placed by its gauge point"))
 
@@ -32,7 +32,7 @@ class MeasuredProfilesIn(RailIdIn):
     """The measured wheel and rail a physics request may use instead of the preset's S1002 on
     its nominal rail (``POST /v1/wear-tables/compute``, ``POST /v1/simulations``)."""
 
-    measurement_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+    measurement_id: StoredId | None = Field(default=None, description=(
         "a stored profile measurement whose wheel replaces the preset's S1002 on every wheel "
         "(a table) or starts the simulated wheel (a simulation), placed by the instrument's "
         "datum when the import found one"))
@@ -46,7 +46,7 @@ class MeasuredProfilesIn(RailIdIn):
         given = [k for k in ("wheel_id", "measurement_id", "profile")
                  if getattr(self, k) is not None]
         if len(given) > 1:
-            raise ValueError(f"give at most one of wheel_id, measurement_id, profile (got "
+            raise FieldsError(given, "give at most one of wheel_id, measurement_id, profile (got "
                              f"{', '.join(given)})")
         return self
 
@@ -57,11 +57,11 @@ class TrackRailIdsIn(RailIdIn):
     ``POST /v1/models`` with ``kind: "physics"``; not the one-wheel contact, which takes one
     rail). ``service.rail_store.requested_rails`` resolves and checks all three."""
 
-    high_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+    high_rail_id: StoredId | None = Field(default=None, description=(
         "a stored measured rail as the high (outer) rail of every curve, placed by its gauge "
         "point; the low rail is low_rail_id, else rail_id, else the preset's nominal rail; "
         "tangent track runs on rail_id (or the nominal rail)"))
-    low_rail_id: int | None = Field(default=None, ge=1, le=2**62, description=(
+    low_rail_id: StoredId | None = Field(default=None, description=(
         "as high_rail_id, the low (inner) rail of every curve"))
 
 

@@ -40,6 +40,7 @@ from wearcast.physics.rail_head_wear import (
 from wearcast.service import models_db as db
 from wearcast.service import rawfiles
 from wearcast.service.errors import NotFound, Unprocessable
+from wearcast.service.id_text import decimal_id
 from wearcast.service.importing import import_file_error
 from wearcast.service.rail_schemas import (
     RailFrameOut,
@@ -58,7 +59,7 @@ from wearcast.service.readers.miniprof_rail import (
 MAX_RAIL_FILE_BYTES = 20 * 1024 * 1024
 #: Header W1/W2/W3 and recomputed wear further apart than this are reported [mm].
 INSTRUMENT_WEAR_TOLERANCE_MM = 0.3
-_REF_RAIL = re.compile(r"^rail:(\d+)$")
+_REF_RAIL = re.compile(r"rail:([0-9]+)\Z")
 
 
 def _f8(values: np.ndarray) -> bytes:
@@ -92,13 +93,23 @@ def check_reference(session: Session, reference: str, field: str = "reference") 
     ref = reference.strip()
     if ref.upper() in REFERENCE_NAMES:
         return ref.upper()
-    found = _REF_RAIL.match(ref)
-    if found:
-        if session.get(db.Rail, int(found.group(1))) is None:
-            raise NotFound(field, f"no rail with id {found.group(1)} to use as reference")
+    if _REF_RAIL.match(ref):
+        _reference_row(session, ref, field)
         return ref
     raise Unprocessable(field, f"unknown reference {reference!r}: give 60E1, UIC60, 60E2 or "
                         "rail:<id> (a stored rail)")
+
+
+def _reference_row(session: Session, name: str, field: str) -> db.Rail:
+    """The stored rail a ``rail:<id>`` reference (matched by ``_REF_RAIL``) names: 404
+    naming ``field`` when there is none, an id beyond the 64-bit range of the id column
+    included (never looked up: SQLite would overflow, answering for no field)."""
+    digits = name.strip().removeprefix("rail:")
+    rail_id = decimal_id(digits)
+    row = None if rail_id is None else session.get(db.Rail, rail_id)
+    if row is None:
+        raise NotFound(field, f"no rail with id {digits[:40]} to use as reference")
+    return row
 
 
 def _rail_frame_points(row: db.Rail) -> tuple[np.ndarray, np.ndarray]:
@@ -109,12 +120,9 @@ def _rail_frame_points(row: db.Rail) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _reference(session: Session, name: str) -> RailReference | str:
-    found = _REF_RAIL.match(name)
-    if not found:
+    if not _REF_RAIL.match(name):
         return name
-    ref_row = session.get(db.Rail, int(found.group(1)))
-    if ref_row is None:
-        raise NotFound("reference", f"no rail with id {found.group(1)} to use as reference")
+    ref_row = _reference_row(session, name, "reference")
     y, z = _rail_frame_points(ref_row)
     try:
         return reference_from_points(name, y, z, source=f"stored rail {ref_row.id} "

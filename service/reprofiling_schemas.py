@@ -15,7 +15,7 @@ from wearcast.physics.vocabulary import (
 from wearcast.service.prediction_schemas import check_one_route, check_wheel_start
 from wearcast.service.profile_schemas import MeasuredProfileIn
 from wearcast.service.route_schemas import RouteSpec
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import StoredId, Strict
 
 
 class Limits(Strict):
@@ -29,7 +29,7 @@ class ReprofilingIn(Strict):
     route: RouteSpec | None = None
     wheel_id: str | None = Field(None, description="start from the wheel's latest measured "
                                  "profile (its Sd/Sh/qR and wear areas)")
-    measurement_id: int | None = Field(None, description="start from this measurement")
+    measurement_id: StoredId | None = Field(None, description="start from this measurement")
     profile: MeasuredProfileIn | None = Field(None, description="start from this profile")
     bogie_type: BogieType | None = None
     axle: Axle | None = None

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Self
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from wearcast.physics.vocabulary import Direction
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 
 
 class _CurveNeedsDirection(Strict):
@@ -23,7 +23,8 @@ class _CurveNeedsDirection(Strict):
     @model_validator(mode="after")
     def _direction_for_curves(self) -> Self:
         if self.radius_m is not None and self.direction is None:
-            raise ValueError(f"{self._item} (radius_m given) needs a direction: left or right")
+            raise FieldsError(["direction"],
+                              f"{self._item} (radius_m given) needs a direction: left or right")
         return self
 
 
@@ -57,7 +58,8 @@ class RouteSpec(Strict):
     @model_validator(mode="after")
     def _one_of(self) -> RouteSpec:
         if (self.classes is None) == (self.segments is None):
-            raise ValueError("give either classes or segments (exactly one)")
+            raise FieldsError(["classes", "segments"],
+                              "give either classes or segments (exactly one)")
         return self
 
 

@@ -16,7 +16,7 @@ from wearcast.physics.vocabulary import (
 )
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.profile_schemas import TrackRailsIn
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 
 WearLawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
 
@@ -69,7 +69,8 @@ class SimulationIn(TrackRailsIn):
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:
         if (self.route_id is None) == (self.classes is None):
-            raise ValueError("give either route_id or classes (exactly one)")
+            raise FieldsError(["route_id", "classes"],
+                              "give either route_id or classes (exactly one)")
         return self
 
 

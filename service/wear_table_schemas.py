@@ -8,7 +8,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field, model_validator
 
 from wearcast.service.profile_schemas import TrackRailsIn
-from wearcast.service.schema_base import Strict
+from wearcast.service.schema_base import FieldsError, Strict
 
 
 class WearTableRowOut(BaseModel):
@@ -77,7 +77,7 @@ class WearTableComputeIn(TrackRailsIn):
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
         if (self.route_id is None) == (self.radii is None):
-            raise ValueError("give either route_id or radii (exactly one)")
+            raise FieldsError(["route_id", "radii"], "give either route_id or radii (exactly one)")
         return self
 
 

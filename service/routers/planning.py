@@ -7,7 +7,6 @@ profile and turning options, and lathe plans (POST to compute and store; GET as 
 
 from __future__ import annotations
 
-import datetime as dt
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Response
@@ -16,6 +15,7 @@ from wearcast.service import planning_store
 from wearcast.service.deps import SessionDep
 from wearcast.service.id_text import decimal_id
 from wearcast.service.planning_schemas import FleetIn, PlanIn, VehicleIn
+from wearcast.service.schema_base import IsoDate
 
 router = APIRouter(tags=["planning"])
 Format = Literal["json", "csv"]
@@ -47,7 +47,7 @@ def put_vehicle(vehicle_id: str, body: VehicleIn, session: SessionDep) -> dict[s
 @router.get("/fleet/state", response_model=None, responses=_CSV_ANSWER)
 def fleet_state(session: SessionDep, fleet_id: str | None = None,
                 model_id: int | None = None, route_id: str | None = None,
-                today: dt.date | None = None, format: Format = "json"
+                today: IsoDate | None = None, format: Format = "json"
                 ) -> dict[str, Any] | Response:
     """Every wheel's latest state and remaining km to each limit (P10/P50/P90) and dates."""
     payload = planning_store.state_payload(session, fleet_id, model_id, _route_ref(route_id),
@@ -60,7 +60,7 @@ def fleet_state(session: SessionDep, fleet_id: str | None = None,
 @router.get("/fleet/wheels/{wheel_id}")
 def wheel_detail(wheel_id: str, session: SessionDep, fleet_id: str | None = None,
                  model_id: int | None = None, route_id: str | None = None,
-                 today: dt.date | None = None) -> dict[str, Any]:
+                 today: IsoDate | None = None) -> dict[str, Any]:
     """One wheel: history, forecast lines, latest profile over its targets, turning options."""
     return planning_store.wheel_detail(session, wheel_id, fleet_id, model_id,
                                        _route_ref(route_id), today)

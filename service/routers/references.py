@@ -17,7 +17,7 @@ from wearcast.service.errors import NotFound
 from wearcast.service.float32_blobs import floats_of
 from wearcast.service.picture_cache import NOT_MODIFIED, picture_response
 from wearcast.service.pictures import MEDIA_TYPES, ImageFormat
-from wearcast.service.schema_base import MAX_PROFILE_POINTS, Strict
+from wearcast.service.schema_base import MAX_PROFILE_POINTS, FieldsError, Strict
 
 router = APIRouter(tags=["reference profiles"])
 
@@ -37,9 +37,11 @@ class ReferenceIn(Strict):
     def _one_source(self) -> ReferenceIn:
         points = self.y_mm is not None or self.z_mm is not None
         if points == (self.measurement_id is not None):
-            raise ValueError("give either y_mm and z_mm, or measurement_id")
+            raise FieldsError(["y_mm", "z_mm", "measurement_id"],
+                              "give either y_mm and z_mm, or measurement_id")
         if points and (self.y_mm is None or self.z_mm is None):
-            raise ValueError("y_mm and z_mm go together")
+            raise FieldsError(["z_mm" if self.z_mm is None else "y_mm"],
+                              "y_mm and z_mm go together")
         return self
 
 

@@ -73,7 +73,7 @@ def test_fit_recovers_the_twin_coefficient_and_reports_the_table(tmp_path, twin)
     ({"methods": ["magic"]}, 422, "methods[0]"),
     ({"zones": [5]}, 422, "zones[0]"),
     ({"bounds": [[2e-4, 1e-4]]}, 422, "bounds"),
-    ({"measurement_id": 7}, 422, "body"),  # both wear and measurement_id
+    ({"measurement_id": 7}, 422, "wear"),  # both wear and measurement_id: each named
     ({"wear": None, "measurement_id": 7}, 404, "measurement_id"),
     ({"step_km": 0.5}, 422, "step_km"),
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),

@@ -316,9 +316,9 @@ def test_one_measurement_as_json(client: TestClient, fleet: ft.FleetTwin) -> Non
     ({"name": "r", "classes": [{"radius_m": -5, "direction": "left", "speed_kmh": 60,
                                 "share": 1}]}, "classes[0].radius_m"),
     ({"name": "r", "classes": [{"radius_m": 300, "speed_kmh": 60, "share": 1}]},
-     "classes[0]"),
+     "classes[0].direction"),
     ({"name": "r", "segments": [{"length_m": 0, "speed_kmh": 60}]}, "segments[0].length_m"),
-    ({"name": "r"}, "body"),
+    ({"name": "r"}, "classes"),  # neither classes nor segments: both named
     ({"name": "r", "classes": [{"radius_m": None, "speed_kmh": 60, "share": 1}],
       "colour": "red"}, "colour"),
 ])

@@ -95,7 +95,7 @@ def test_kik_piotrowski_patch_width_is_passed_to_the_loop(tmp_path: Path) -> Non
     ({"steps": {"count": 0}}, 422, "steps.count"),
     ({"classes": None, "route_id": "nowhere"}, 404, "route_id"),
     ({"classes": [{"radius_m": -3}]}, 422, "classes[0].radius_m"),
-    ({"route_id": "metro"}, 422, "body"),  # both route_id and classes
+    ({"route_id": "metro"}, 422, "route_id"),  # both route_id and classes: each named
 ])
 def test_bad_simulation_requests_are_refused_before_queuing(tmp_path: Path, change: dict,
                                                             status: int, field: str) -> None:
