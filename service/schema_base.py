@@ -108,8 +108,8 @@ class Strict(BaseModel):
     def _no_bool_for_numbers(cls, value: Any, info: ValidationInfo) -> Any:
         if isinstance(value, bool | list) and info.field_name in cls.model_fields:
             items = value if isinstance(value, list) else [value]
-            if any(isinstance(v, bool) for v in items) and not _takes_bool(
-                    cls.model_fields[info.field_name].annotation):
+            annotation: Any = cls.model_fields[info.field_name].annotation
+            if any(isinstance(v, bool) for v in items) and not _takes_bool(annotation):
                 where = "an item is" if isinstance(value, list) else "is"
                 raise ValueError(f"{where} true or false where the schema takes no boolean")
         return value
