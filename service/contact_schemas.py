@@ -11,7 +11,8 @@ from wearcast.physics.vocabulary import Side
 from wearcast.service.profile_schemas import MeasuredProfilesIn
 from wearcast.service.schema_base import FieldsError, Strict
 
-#: Most poses in one request (each takes about 0.1-0.5 s of one core).
+#: Most poses in one request (3-10 ms of one core each with auto, bem-coarse, kp or hertz on
+#: S1002/60E1; the fine ``bem`` is held to the ``max_fine_bem_poses`` setting).
 MAX_POSES = 100
 #: Largest SIMPACK profile file accepted [characters].
 MAX_PROFILE_FILE_CHARS = 2_000_000

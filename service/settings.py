@@ -61,6 +61,10 @@ class Settings(BaseSettings):
     max_points_per_profile: int = Field(default=20_000, ge=10,
                                         description="most points of one profile")
     max_id_length: int = Field(default=200, ge=8, description="longest id or name [chars]")
+    max_fine_bem_poses: int = Field(
+        default=10, ge=1, le=100, description="most poses of one POST /v1/contact with "
+        "normal_method bem (the fine boundary-element grid, ~0.15-2.5 s of one core per pose; "
+        "the other methods take up to 100 at ~3-10 ms each)")
 
     # --- rate limits (429 with Retry-After) -----------------------------------------------
     rate_limit_per_second: float = Field(

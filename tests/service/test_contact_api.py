@@ -88,3 +88,26 @@ def test_the_command_line_prints_the_same_patches():
         [d.to_dict()["patches"][0]["y_wheel_mm"] for d in direct], abs=1e-9)
     bad = CliRunner().invoke(app, ["contact", "--shift", "50"])
     assert bad.exit_code == 2 and "shift_mm" in bad.output
+
+
+def test_the_fine_bem_takes_at_most_max_fine_bem_poses(tmp_path):
+    """``normal_method: bem`` costs ~0.15 s of one core per pose on S1002 (up to seconds on
+    measured wheels): more poses than the setting allows are a 422 naming ``poses`` and the
+    limit, before anything is computed; as many as it allows are answered, and the other
+    methods keep the schema's 100."""
+    from tests.service.conftest import sqlite_settings
+    from wearcast.service.app import create_app
+
+    settings = sqlite_settings(tmp_path).model_copy(update={"max_fine_bem_poses": 2})
+    client = TestClient(create_app(settings))
+    three = [{"shift_mm": s} for s in (0.0, 1.0, 2.0)]
+    r = client.post("/v1/contact", json={"poses": three, "normal_method": "bem"})
+    assert r.status_code == 422, r.text
+    item = r.json()["errors"][0]
+    assert item["field"] == "poses"
+    assert item["limit"] == "max_fine_bem_poses" and item["limit_value"] == 2
+    r = client.post("/v1/contact", json={"poses": three[:2], "normal_method": "bem"})
+    assert r.status_code == 200, r.text
+    assert len(r.json()["poses"]) == 2
+    r = client.post("/v1/contact", json={"poses": three, "normal_method": "bem-coarse"})
+    assert r.status_code == 200, r.text
