@@ -345,9 +345,28 @@ def _load_script():
 
 
 def test_bundled_example_fleet_is_what_the_script_writes(tmp_path):
+    """The bundled files are the script's output: byte for byte, except that a profile
+    coordinate may differ by one in its last printed digit (in at most 10 rows). numpy's vectorised
+    exp/sin loops and their scalar tails can differ by one ulp, and which elements take which
+    path depends on the array's memory alignment, so a value on a rounding boundary prints
+    either way from one process to the next (seen once in a full run: z 11.931 against 11.932
+    in one row of 38,400)."""
     _load_script().main(["--out", str(tmp_path)])
-    for name in ("profiles.csv", "routes.json", "wear_table.csv", "README.md"):
+    for name in ("routes.json", "wear_table.csv", "README.md"):
         assert (tmp_path / name).read_bytes() == (EXAMPLE_DIR / name).read_bytes(), name
+    written = pd.read_csv(tmp_path / "profiles.csv", dtype={"y_mm": str, "z_mm": str})
+    bundled = pd.read_csv(EXAMPLE_DIR / "profiles.csv", dtype={"y_mm": str, "z_mm": str})
+    assert list(written.columns) == list(bundled.columns)
+    assert len(written) == len(bundled)
+    coordinates = ["y_mm", "z_mm"]
+    others = [c for c in written.columns if c not in coordinates]
+    pd.testing.assert_frame_equal(written[others], bundled[others])
+    for column in coordinates:
+        a, b = written[column].to_numpy(), bundled[column].to_numpy()
+        for x, y in zip(a[a != b], b[a != b], strict=True):  # one in the last printed digit
+            last_digit = 10.0 ** -len(y.partition(".")[2])
+            assert abs(float(x) - float(y)) <= 1.0001 * last_digit, (column, x, y)
+        assert (a != b).sum() <= 10, (column, int((a != b).sum()))
     assert (EXAMPLE_DIR / "profiles.csv").stat().st_size < 3.2e6
 
 
