@@ -31,7 +31,7 @@ from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.job_schemas import JobStatusOut
-from wearcast.service.schema_base import FieldsError, Strict
+from wearcast.service.schema_base import FieldsError, Strict, exactly_one
 from wearcast.service.simulation_schemas import SimulationClassIn, SmoothingIn
 
 log = logging.getLogger(__name__)
@@ -146,12 +146,8 @@ class CoefficientFitIn(Strict):
 
     @model_validator(mode="after")
     def _consistent(self) -> CoefficientFitIn:
-        if (self.route_id is None) == (self.classes is None):
-            raise FieldsError(["route_id", "classes"],
-                              "give either route_id or classes (exactly one)")
-        if (self.wear is None) == (self.measurement_id is None):
-            raise FieldsError(["wear", "measurement_id"],
-                              "give either wear or measurement_id (exactly one)")
+        exactly_one(self, "route_id", "classes")
+        exactly_one(self, "wear", "measurement_id")
         if self.wear is not None and self.mileage_km is None:
             raise FieldsError(["mileage_km"], "mileage_km is required with wear")
         if len(set(self.methods)) != len(self.methods):

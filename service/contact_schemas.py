@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from wearcast.physics.vocabulary import Side
 from wearcast.service.profile_schemas import MeasuredProfilesIn
-from wearcast.service.schema_base import FieldsError, Strict
+from wearcast.service.schema_base import FieldsError, Strict, at_most_one
 
 #: Most poses in one request (3-10 ms of one core each with auto, bem-coarse, kp or hertz on
 #: S1002/60E1; the fine ``bem`` is held to the ``max_fine_bem_poses`` setting).
@@ -71,8 +71,7 @@ class ContactIn(MeasuredProfilesIn):
         if self.wheel_file is not None and others:
             raise FieldsError(["wheel_file", *others],
                               f"give at most one of wheel_file, {', '.join(others)}")
-        if self.rail_file is not None and self.rail_id is not None:
-            raise FieldsError(["rail_file", "rail_id"], "give at most one of rail_file, rail_id")
+        at_most_one(self, "rail_file", "rail_id")
         return self
 
 

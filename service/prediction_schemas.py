@@ -14,22 +14,19 @@ from wearcast.physics.vocabulary import (
 )
 from wearcast.service.profile_schemas import MeasuredProfileIn
 from wearcast.service.route_schemas import RouteSpec
-from wearcast.service.schema_base import MAX_MILEAGE_KM, FieldsError, StoredId, Strict
+from wearcast.service.schema_base import MAX_MILEAGE_KM, FieldsError, StoredId, Strict, at_most_one
 
 
 def check_one_route(body: Any) -> None:
     """A request names its route by ``route_id`` or gives it inline (``route``), not both;
     neither: a physics model runs on its own route, a hybrid model answers 422 route_id."""
-    if body.route_id is not None and body.route is not None:
-        raise FieldsError(["route_id", "route"], "give either route_id or route (exactly one)")
+    at_most_one(body, "route_id", "route")
 
 
 def check_wheel_start(body: Any) -> None:
     """A request starts from at most one of ``wheel_id``, ``measurement_id``, ``profile``,
     and without a stored one (``wheel_id``/``measurement_id``) gives the wheel's position."""
-    given = [k for k in ("wheel_id", "measurement_id", "profile") if getattr(body, k) is not None]
-    if len(given) > 1:
-        raise FieldsError(given, "give at most one of wheel_id, measurement_id, profile")
+    at_most_one(body, "wheel_id", "measurement_id", "profile")
     stored = body.wheel_id is not None or body.measurement_id is not None
     missing = [k for k in ("bogie_type", "axle", "side") if getattr(body, k) is None]
     if not stored and missing:

@@ -6,7 +6,12 @@ from __future__ import annotations
 
 from pydantic import Field, model_validator
 
-from wearcast.service.schema_base import MAX_PROFILE_POINTS, FieldsError, StoredId, Strict
+from wearcast.service.schema_base import (
+    MAX_PROFILE_POINTS,
+    StoredId,
+    Strict,
+    at_most_one,
+)
 
 
 class MeasuredProfileIn(Strict):
@@ -43,11 +48,7 @@ class MeasuredProfilesIn(RailIdIn):
 
     @model_validator(mode="after")
     def _at_most_one_wheel(self) -> MeasuredProfilesIn:
-        given = [k for k in ("wheel_id", "measurement_id", "profile")
-                 if getattr(self, k) is not None]
-        if len(given) > 1:
-            raise FieldsError(given, "give at most one of wheel_id, measurement_id, profile (got "
-                             f"{', '.join(given)})")
+        at_most_one(self, "wheel_id", "measurement_id", "profile")
         return self
 
 

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Self
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from wearcast.physics.vocabulary import Direction
-from wearcast.service.schema_base import FieldsError, Strict
+from wearcast.service.schema_base import FieldsError, Strict, exactly_one
 
 
 class _CurveNeedsDirection(Strict):
@@ -57,9 +57,7 @@ class RouteSpec(Strict):
 
     @model_validator(mode="after")
     def _one_of(self) -> RouteSpec:
-        if (self.classes is None) == (self.segments is None):
-            raise FieldsError(["classes", "segments"],
-                              "give either classes or segments (exactly one)")
+        exactly_one(self, "classes", "segments")
         return self
 
 

@@ -63,6 +63,22 @@ def _json_integer_only(value: Any) -> Any:
 StoredId = Annotated[int, Field(ge=1, le=2**62), BeforeValidator(_json_integer_only)]
 
 
+def exactly_one(body: Any, *fields: str) -> None:
+    """The rule "give exactly one of these fields" (a route by id or inline, a wear or a
+    measurement, ...): :class:`FieldsError` naming all of them when none or several are given."""
+    given = [f for f in fields if getattr(body, f) is not None]
+    if len(given) != 1:
+        raise FieldsError(fields, f"give either {' or '.join(fields)} (exactly one)")
+
+
+def at_most_one(body: Any, *fields: str) -> None:
+    """The rule "give at most one of these fields": :class:`FieldsError` naming those given."""
+    given = [f for f in fields if getattr(body, f) is not None]
+    if len(given) > 1:
+        raise FieldsError(given, f"give at most one of {', '.join(fields)} (got "
+                          f"{', '.join(given)})")
+
+
 class FieldsError(ValueError):
     """A rule across fields that a request breaks, raised from a model validator: the 422
     names each of ``fields`` (relative to the model) with the reason, where a plain

@@ -16,7 +16,7 @@ from wearcast.physics.vocabulary import (
 )
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.profile_schemas import TrackRailsIn
-from wearcast.service.schema_base import FieldsError, Strict
+from wearcast.service.schema_base import Strict, exactly_one
 
 WearLawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
 
@@ -68,9 +68,7 @@ class SimulationIn(TrackRailsIn):
 
     @model_validator(mode="after")
     def _one_route(self) -> SimulationIn:
-        if (self.route_id is None) == (self.classes is None):
-            raise FieldsError(["route_id", "classes"],
-                              "give either route_id or classes (exactly one)")
+        exactly_one(self, "route_id", "classes")
         return self
 
 

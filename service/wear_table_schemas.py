@@ -8,7 +8,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field, model_validator
 
 from wearcast.service.profile_schemas import TrackRailsIn
-from wearcast.service.schema_base import FieldsError, Strict
+from wearcast.service.schema_base import Strict, exactly_one
 
 
 class WearTableRowOut(BaseModel):
@@ -76,8 +76,7 @@ class WearTableComputeIn(TrackRailsIn):
 
     @model_validator(mode="after")
     def _one_source(self) -> WearTableComputeIn:
-        if (self.route_id is None) == (self.radii is None):
-            raise FieldsError(["route_id", "radii"], "give either route_id or radii (exactly one)")
+        exactly_one(self, "route_id", "radii")
         return self
 
 
