@@ -53,15 +53,11 @@ scores it out of sample and names a cause only when it is specific:
    and lists the candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
-   reported with its own gain; the verdict among the area causes is the first one named
-   (the only one tested against every other cause: a later step's gain is over a baseline
-   that already carries it, and a cause significant only at a later step, e.g.
-   ``vehicle_load`` beside depot traction 1.1 on seed 113, must not displace it).
+   reported with its own gain;
    When the wear-curve (instrument) cause is named alongside area causes, the verdict is
-   the larger gain of the instrument and the first area cause, except that an area cause
-   whose held-out gain over the named instrument's per-instrument area scales is not
-   material is dropped as that instrument's echo (``finder_instrument``; the two gains
-   are in different metrics);
+   the named cause with the largest gain, except that an area cause whose held-out gain
+   over the named instrument's per-instrument area scales is not material is dropped as
+   that instrument's echo (``finder_instrument``; the two gains are in different metrics);
 6. outside the catalogue: when no cause is named but the residuals are structured by wheel
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
@@ -552,15 +548,8 @@ def diagnose(
                 echoes.append(f"{code} (held-out gain over the instrument's area scales "
                               f"{echo_gain:.4f})")
                 names.remove(code)
-    if names:
-        # of the area causes the verdict is the first one forward selection named: it alone
-        # beat every other catalogue cause by a tested margin, while a later step's gain is
-        # measured over a baseline that already carries it (and was tested against the
-        # remaining causes only), so the two gains are not comparable. Against the
-        # wear-curve (instrument) cause the larger gain decides, as before.
-        area_names = [c for c in names if shape_cause is None or c != shape_cause.code]
-        contenders = area_names[:1] + [c for c in names if c not in area_names]
-        top = max(contenders, key=lambda c: scored[c].gain)
+    if names:   # the verdict is the named cause with the largest relative gain
+        top = max(names, key=lambda c: scored[c].gain)
         names = [top] + [c for c in names if c != top]
     # an ambiguous area step does not hide a named wear-curve (instrument) cause: an
     # instrument's geometric error also distorts the areas it measures

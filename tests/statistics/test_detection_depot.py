@@ -95,32 +95,16 @@ def test_weak_depot_traction_is_named_and_its_null_gives_none(seed):
                                        findings_summary(d))
 
 
-def test_first_named_area_cause_is_the_verdict_not_a_later_steps_larger_gain():
-    # traction 1.1 on seed 113: forward selection names traction first (its margin over
-    # vehicle_load tested), then vehicle_load over a baseline carrying traction with a larger
-    # step gain (0.037 against 0.010); that later gain was the verdict before, though
-    # vehicle_load was never tested against traction. The verdict is now the first named
-    # area cause; vehicle_load stays listed after it. Effect-free data of the seed: none.
-    for effects, expected in ((dp.DepotEffects(traction=1.1), "traction"),
-                              (dp.DepotEffects(), "none")):
-        args, kwargs = scenarios.depot_scenario(effects, 113).finder_arguments()
-        d = diagnose(*args, **kwargs, n_boot=300)
-        assert d.verdict == expected, (expected, d.runner_up, d.margin, d.selected,
-                                       findings_summary(d))
-        assert d.selected[:1] == (() if expected == "none" else (expected,))
-
-
 @pytest.mark.slow
 def test_weak_depot_traction_detection_over_twenty_campaigns():
-    # the benchmark's cell (seeds 100-119): at least 16 of 20 named (measured 16 of 20;
-    # 15 of 20 before the verdict became the first named area cause, 13 of 20 before
-    # stop 26)
+    # the benchmark's cell (seeds 100-119): at least 15 of 20 named (measured 15 of 20;
+    # 13 of 20 before stop 26)
     named = 0
     for seed in range(100, 120):
         args, kwargs = scenarios.depot_scenario(dp.DepotEffects(traction=1.1),
                                                 seed).finder_arguments()
         named += diagnose(*args, **kwargs, n_boot=300).verdict == "traction"
-    assert named >= 16
+    assert named >= 15
 
 
 def test_depot_effect_size_interval_covers_the_injected_multiplier():
