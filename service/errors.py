@@ -202,8 +202,6 @@ def body_parse_reason(exc: StarletteHTTPException) -> str:
 
 def allowed_methods(app: Any, path: str) -> list[str]:
     """The methods the published contract (OpenAPI) documents for ``path``."""
-    import re
-
     table = getattr(app.state, "allowed_methods", None)
     if table is None:
         table = []

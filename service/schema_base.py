@@ -47,6 +47,7 @@ def _iso_date_only(value: Any) -> Any:
 #: and in query strings.
 IsoDate = Annotated[dt.date, BeforeValidator(_iso_date_only)]
 
+
 def _json_integer_only(value: Any) -> Any:
     """Refuse what pydantic would read as an integer but JSON Schema's ``integer`` does not
     allow: ``true``/``false`` and strings (``"1"``); ``1.0`` is an integer, ``1.5`` is refused
