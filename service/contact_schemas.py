@@ -11,7 +11,7 @@ from wearcast.physics.vocabulary import Side
 from wearcast.service.profile_schemas import MeasuredProfilesIn
 from wearcast.service.schema_base import FieldsError, Strict, at_most_one
 
-#: Most poses in one request (3-10 ms of one core each with auto, bem-coarse, kp or hertz on
+#: Most poses in one request (2-9 ms of one core each with auto, bem-coarse, kp or hertz on
 #: S1002/60E1; the fine ``bem`` is held to the ``max_fine_bem_poses`` setting).
 MAX_POSES = 100
 #: Largest SIMPACK profile file accepted [characters].

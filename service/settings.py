@@ -64,7 +64,7 @@ class Settings(BaseSettings):
     max_fine_bem_poses: int = Field(
         default=10, ge=1, le=100, description="most poses of one POST /v1/contact with "
         "normal_method bem (the fine boundary-element grid, ~0.15-2.5 s of one core per pose; "
-        "the other methods take up to 100 at ~3-10 ms each)")
+        "the other methods take up to 100 at ~2-9 ms each; benchmarks/contact_method_cost.py)")
 
     # --- rate limits (429 with Retry-After) -----------------------------------------------
     rate_limit_per_second: float = Field(

@@ -1,7 +1,7 @@
 """``/v1/contact``: the loaded wheel-rail contact of one wheel at given poses.
 
-A plain ``def``: FastAPI runs it in its threadpool (3-10 ms of one core per pose on
-S1002/60E1, ~0.15 s with the fine boundary-element grid).
+A plain ``def``: FastAPI runs it in its threadpool (2-9 ms of one core per pose on
+S1002/60E1, ~0.15 s with the fine boundary-element grid: ``benchmarks/contact_method_cost.py``).
 """
 
 from __future__ import annotations
