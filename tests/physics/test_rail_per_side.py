@@ -198,7 +198,8 @@ def test_each_wheel_takes_its_own_rails_table_in_numpy_and_in_the_kernel(tables)
     d = q[:, 3:5]
     expected = (pair.rigid_rise(y[:, 0]) - d[:, 0] - pair.right.rigid_rise(-y[:, 0]) + d[:, 1]
                 ) / 1500.0
-    assert np.array_equal(wheelset_roll(pair, y[:, 0], d), expected)
+    # to rounding (the sums are grouped differently); the two tables' rises differ by far more
+    np.testing.assert_allclose(wheelset_roll(pair, y[:, 0], d), expected, rtol=1e-12, atol=0.0)
 
 
 def test_the_whole_vehicle_runs_with_a_high_and_a_low_rail():
