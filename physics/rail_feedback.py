@@ -2,12 +2,22 @@
 
 For each rail step j the wheel evolves from new over its n_sw wheel steps on the rails of step
 j (:func:`wearcast.physics.wear_loop.simulate_wear` with the rail wear from all wheels; the
-contact table rebuilt with those rails and the current wheel at every contact update); the
-rails' depths per vehicle, averaged over those wheel steps (the seed's arithmetic mean of the
-virtual rail profiles), are scaled to D_step^r (seed 003 eq. 4: N_step = D_step^r / max depth)
-and removed along the rail's normal, giving the rails of step j + 1
-(:class:`~wearcast.physics.rail_head_wear.WornRail`). km_tot^j (seed 003 Tables 5, 8) is the
-mileage at the end of the wheel evolution on the rails of step j.
+contact table rebuilt with those rails and the current wheel at every contact update). Each
+wheel step's simulation (w_i, r_j) gives a virtual rail: its rail depths per vehicle scaled to
+D_step^r (seed 003 eq. 4-5: N_i = D_step^r / max depth); the rails of step j + 1 are the
+arithmetic mean of the virtual rails (seed 003 §6.1), removed along the rail's normal
+(:class:`~wearcast.physics.rail_head_wear.WornRail`), after N_step = mean N_i vehicles
+(``_virtual_rail_average``). km_tot^j (seed 003 Tables 5, 8) is the mileage at the end of the
+wheel evolution on the rails of step j: 20 steps whose largest depth is D_step^w = 0.2 mm
+(eq. 2), of seed 003's mean wheel with ``mean_wheel=True`` (passed to ``simulate_wear``: the
+mean of the bogie's four wheels, §4.3), else of the tracked wheel.
+
+Rail wear per tonne against seed 003: §4.3 averages the rail's wear, like the wheel's, over the
+wheel-rail pairs, so the depth per vehicle of its eq. (4)-(5) is that of one (mean) wheel
+passage, while its tonnage counts N_tot whole vehicles (104.7 t, eight axles over each rail;
+§6.2.1). Here a vehicle is two bogies of the preset, each rail under its four axle passages
+(``rail_wear_per_vehicle``). Per wheel passage the two agree to within the ratio of the wheels'
+wear rates (``benchmarks/reproduce_seed003.py --rail-steps`` prints both).
 
 Two feedbacks (``FEEDBACKS``):
 
@@ -66,10 +76,12 @@ class RailStepSimulation:
         own wheels in every curve; ``mean``: outputs only, the contact takes the mean rail)
     feedback : ``high_low`` or ``mean`` (module docstring)
     km_tot : (n,) mileage at the end of each wheel evolution [km] (seed 003 km_tot^j)
-    vehicles_per_step : (n,) N_step^j = D_step^r / max(mean rail depth per vehicle) (eq. 4)
+    vehicles_per_step : (n,) N_step^j, the mean over the wheel steps of N_i = D_step^r /
+        max(rail depth per vehicle of simulation i) (eq. 4-5, §6.1)
     rail_y_mm : (n_rail,) the inclined rail frame's lateral grid [mm]
-    rail_depth_per_vehicle_mm : (n, n_rail) mean rail depth per vehicle, averaged over the
-        wheel steps of each rail step [mm]
+    rail_depth_per_vehicle_mm : (n, n_rail) mean rail depth per vehicle of each rail step:
+        N_step^j times it is the mean of the virtual rails' depths, which the step removes
+        (peak <= D_step^r) [mm]
     high_depth_per_vehicle_mm, low_depth_per_vehicle_mm : (n, n_rail) the same of the high
         and the low rail [mm]
     rail_step_depth_mm : D_step^r [mm]; vehicle_mass_t : mass per vehicle passage [t]
@@ -140,10 +152,11 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
     20 adaptive steps of D_step^w = 0.2 mm, seed 003) on the rails of step j
     (:func:`simulate_wear` with ``rail_from_all_wheels``: the contact table is rebuilt with
     them and the current wheel at every contact update); the high, low and mean rail depths
-    per vehicle averaged over the wheel steps are smoothed like the wheel's (``smoothing``,
-    default a 3 mm moving average), scaled by N_step so that the fed-back depth peaks at
-    D_step^r (eq. 4: ``high_low`` the deeper of high and low, ``mean`` the mean) and removed
-    along the rail's normal (``rail_head_wear.wear_rail``): the rails of step j + 1. With
+    per vehicle of each wheel step are smoothed like the wheel's (``smoothing``, default a
+    3 mm moving average) and scaled by N_i so that the fed-back depth of that virtual rail
+    peaks at D_step^r (eq. 4-5: ``high_low`` the deeper of high and low, ``mean`` the mean);
+    their mean (§6.1) is removed along the rail's normal (``rail_head_wear.wear_rail``): the
+    rails of step j + 1. With
     ``high_low`` the high and low rails are fed back each under its own wheels (module
     docstring); with ``mean`` the mean rail under both and the other two are outputs.
 
@@ -152,7 +165,8 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
         given, start the high and low rails); law : default seed 003's USFD; progress :
         callback(rail step done, n_rail_steps, km_tot); feedback : ``mean`` (default) or
         ``high_low``;
-        kwargs : passed to :func:`simulate_wear` (axle, side, application, smoothing, ...).
+        kwargs : passed to :func:`simulate_wear` (axle, side, application, smoothing,
+        ``mean_wheel`` for seed 003's km_tot of the mean wheel, ...).
     """
     start = time.perf_counter()
     if n_rail_steps < 1 or not rail_step_depth_mm > 0:
@@ -188,16 +202,9 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
         runs.append(run)
         km_tot.append(float(run.mileage_km[-1]))
         rail_y = run.rail_y_mm
-        assert run.rail_high_depth_per_vehicle_mm is not None
-        assert run.rail_low_depth_per_vehicle_mm is not None
-        # Smoothed as the wheel's depth (seed 003 §4.3: both distributions are smoothed).
-        mean, high, low = (smooth.apply(d, rail_y) for d in (
-            run.rail_depth_per_vehicle_mm, run.rail_high_depth_per_vehicle_mm,
-            run.rail_low_depth_per_vehicle_mm))
-        peak = float(np.max(mean) if feedback == "mean" else max(np.max(high), np.max(low)))
-        if not peak > 0:
-            raise ValueError("the rail does not wear on this route (no loaded patch)")
-        n = rail_step_depth_mm / peak
+        assert run.rail_update_depths_mm is not None
+        n, mean, high, low = _virtual_rail_average(run.rail_update_depths_mm, rail_y, smooth,
+                                                   rail_step_depth_mm, feedback)
         n_step.append(n)
         depths.append(mean)
         high_depths.append(high)
@@ -218,6 +225,40 @@ def simulate_rail_steps(vehicle: BogieVehicle | str, route_classes: Any, *,
         elapsed_s=time.perf_counter() - start,
         high_depth_per_vehicle_mm=np.array(high_depths),
         low_depth_per_vehicle_mm=np.array(low_depths), feedback=feedback)
+
+
+def _virtual_rail_average(update_depths_mm: NDArray, rail_y_mm: NDArray, smooth: Smoothing,
+                          rail_step_depth_mm: float, feedback: str
+                          ) -> tuple[float, NDArray, NDArray, NDArray]:
+    """One rail step from the wheel evolution's simulations (w_i, r_j) (seed 003 §6.1, p_{j,2}).
+
+    update_depths_mm : (n_updates, 3, n_rail) mean, high and low rail depth per vehicle of
+        each contact update (``WearSimulation.rail_update_depths_mm``) [mm]
+
+    Each simulation i gives a virtual rail: its depths, smoothed as the wheel's (seed 003
+    §4.3), scaled by eq. (4)-(5) to peak at D_step^r, N_i = D_step^r / peak_i vehicles
+    (``mean``: the mean rail's peak; ``high_low``: the deeper of high and low). The rail of the
+    next step is the arithmetic mean of the virtual rails, i.e. the mean of the scaled depths
+    (removal along the normal of the same rail is linear in the depth to first order); its
+    peak is at most D_step^r (the virtual rails' peaks need not coincide). The step's traffic
+    is the mean N_step = mean_i N_i (ASSUMED: the seed averages the profiles with equal
+    weights and states no N for the mean rail). Returns (N_step, mean, high, low depth per
+    vehicle [mm]) with N_step x depth per vehicle = the depth the step removes, so the
+    depth per vehicle is the 1/peak_i-weighted mean of the simulations' depths.
+    """
+    removed = []
+    n_i = []
+    for depths in update_depths_mm:
+        mean, high, low = (smooth.apply(d, rail_y_mm) for d in depths)
+        peak = float(np.max(mean) if feedback == "mean" else max(np.max(high), np.max(low)))
+        if not peak > 0:
+            raise ValueError("the rail does not wear on this route (no loaded patch)")
+        n = rail_step_depth_mm / peak
+        n_i.append(n)
+        removed.append(n * np.stack([mean, high, low]))
+    n_step = float(np.mean(n_i))
+    per_vehicle = np.mean(removed, axis=0) / n_step
+    return n_step, per_vehicle[0], per_vehicle[1], per_vehicle[2]
 
 
 def _with_rail(vehicle: BogieVehicle, rail: str | RailShape) -> BogieVehicle:

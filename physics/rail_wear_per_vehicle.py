@@ -7,10 +7,10 @@ the rail is its worn volume per metre rolled (the rail's share of the law's volu
 semi-elliptically on the rail's own lateral coordinate and averaged over classes with the
 shares p_k. Either from the tracked wheel's rail (both axles of the bogie, two bogies per
 vehicle: :func:`rail_depth_per_vehicle`) or from all four wheels of the bogie, each with its
-own patches, split into the high rail (the outer rail of each curve), the low rail and the mean
-rail of seed 003 (one mean rail profile for all rails, §4.3:
-:func:`rail_depth_per_vehicle_all_wheels`). Rail steps: N_step = D_step^r / max(depth per
-vehicle) (seed 003 eq. 4, :func:`rail_step_rows`).
+own patches (globally, or locally per FASTSIM element as seed 003 §4.2), split into the high
+rail (the outer rail of each curve), the low rail and the mean rail of seed 003 (one mean rail
+profile for all rails, §4.3: :func:`rail_depth_per_vehicle_all_wheels`). Rail steps:
+N_step = D_step^r / max(depth per vehicle) (seed 003 eq. 4, :func:`rail_step_rows`).
 
 Depths in mm per vehicle passage, lateral positions in mm on the inclined rail frame's grid,
 masses in t (Mt = 1e6 t).
@@ -24,11 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.physics.class_contacts import ClassContacts
+from wearcast.physics.contact.fastsim import fastsim
+from wearcast.physics.curving import SHEAR_MODULUS_MPA
 from wearcast.physics.patch_wear import contact_volume_basis, law_coefficients
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
 from wearcast.physics.vocabulary import SIDES, CurveClass
-from wearcast.physics.wear_distribution import semi_elliptic_depth
-from wearcast.physics.wear_laws import WearLaw, wheel_rail_split
+from wearcast.physics.wear_distribution import local_rate_depth, semi_elliptic_depth
+from wearcast.physics.wear_laws import WearLaw, element_depth_rate_mm_per_m, wheel_rail_split
 
 
 def vehicle_mass_t(vehicle: BogieVehicle, bogies_per_vehicle: int = 2) -> float:
@@ -77,17 +79,58 @@ def rail_depth_per_vehicle(contacts: ClassContacts, law: WearLaw, shares: NDArra
     return np.einsum("c,cn->n", shares, per_class)
 
 
+def _local_rail_depth_per_passage(c: ClassContacts, law: WearLaw, rail_grid_mm: NDArray,
+                                  fastsim_grid: int, friction: float) -> NDArray[np.float64]:
+    """Local application on the rail: normal depth of ONE passage of each class's patches
+    (summed over the slots), (n_class, n_rail) [mm], the law's full volume (the caller applies
+    the rail's share).
+
+    Seed 003 §4.2: the specific volume K_w(I_w) / rho of each FASTSIM element is "the same
+    both for the wheel and for the rail". The element's depth rate [mm per m in contact]
+    (``wear_laws.element_depth_rate_mm_per_m``) over its length dx gives rate dx / 1000 [mm]
+    per passage; each longitudinal strip is deposited at the patch's rail position
+    (``wear_distribution.local_rate_depth`` with the circumference 2 pi R set to 1000 mm, one
+    passage instead of the 1000 / (2 pi R_cp) passages per metre of a wheel point). The
+    FASTSIM call is the wheel's (``patch_wear.wheel_depth_basis``) and the rail frame's y
+    points the same way as the wheel's (gauge corner and flange negative).
+    """
+    out = np.zeros((c.normal_force_n.shape[0], np.size(rail_grid_mm)))
+    idx = np.nonzero(c.in_contact)
+    if idx[0].size == 0:
+        return out
+    xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
+        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_force_n"))
+    fs = fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
+                 n_x=fastsim_grid, n_y=fastsim_grid)
+    v = c.speed_m_s[idx[0]][:, None, None]
+    rate = element_depth_rate_mm_per_m(law, fs.shear_traction_mpa, np.hypot(fs.sx, fs.sy),
+                                       fs.pn_mpa, v)
+    per_pass = local_rate_depth(fs, rate, c.rail_y_mm[idx], ONE_PASSAGE_RADIUS_MM,
+                                c.contact_angle_rad[idx], rail_grid_mm)
+    np.add.at(out, idx[0], per_pass)
+    return out
+
+
+#: Radius whose circumference is 1000 mm: ``local_rate_depth`` divides a strip's depth per
+#: metre in contact by 2 pi R / 1000, i.e. gives one passage's depth with it [mm].
+ONE_PASSAGE_RADIUS_MM = 1000.0 / (2.0 * np.pi)
+
+
 def rail_depth_per_vehicle_all_wheels(contacts: Mapping[tuple[int, str], ClassContacts],
                                       law: WearLaw, classes: Sequence[CurveClass],
                                       shares: NDArray, rail_grid_mm: NDArray,
-                                      bogies_per_vehicle: int = 2
+                                      bogies_per_vehicle: int = 2, application: str = "global",
+                                      fastsim_grid: int = 20, friction: float = 0.35
                                       ) -> dict[str, NDArray[np.float64]]:
     """Rail normal depth per vehicle passage from every wheel of the bogie [mm], class-averaged
     with p_k (seed 003 eq. 4), on the rail grid of the inclined rail frame.
 
     Each wheel's patches wear the rail under it with the rail's share of the law's volume
-    (``wear_laws.wheel_rail_split``): per passage the cross-section area removed is the patch
-    volume per metre rolled / 1000 mm, spread semi-elliptically at the patch's rail position.
+    (``wear_laws.wheel_rail_split``). ``application="global"``: per passage the cross-section
+    area removed is the patch volume per metre rolled / 1000 mm, spread semi-elliptically at
+    the patch's rail position. ``"local"`` (seed 003 §4.2, as the wheel's local application):
+    the law per element of the FASTSIM grid (``fastsim_grid``, ``friction``), only where the
+    element slips, each strip at its own rail position (:func:`_local_rail_depth_per_passage`).
     ``high``: the outer rail of each curve (the wheels on that side); ``low``: the inner rail;
     on tangent track both rails take the mean of the two sides. ``mean``: (high + low) / 2,
     the rail of seed 003's single mean rail profile (every rail of a line is the high rail of
@@ -97,7 +140,13 @@ def rail_depth_per_vehicle_all_wheels(contacts: Mapping[tuple[int, str], ClassCo
     coeffs = law_coefficients(law)
     n_class = len(classes)
     side_depth: dict[str, NDArray] = {s: np.zeros((n_class, np.size(rail_grid_mm))) for s in SIDES}
+    if application not in ("global", "local"):
+        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
     for (_, side), c in contacts.items():
+        if application == "local":
+            side_depth[side] += rail_share * _local_rail_depth_per_passage(
+                c, law, rail_grid_mm, fastsim_grid, friction)
+            continue
         vol = rail_share * contact_volume_basis(c, law) @ coeffs          # (n_class, slot)
         area = np.where(c.in_contact, vol, 0.0) / 1000.0                       # mm^2 per passage
         b = np.where(c.in_contact, c.b_mm, 1.0)

@@ -179,7 +179,8 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                   n_rail_steps: int = 5, progress: Progress | None = None,
                   contact_cache: dict | None = None,
                   patch_width: str = "hertz",
-                  rail_from_all_wheels: bool = False) -> WearSimulation:
+                  rail_from_all_wheels: bool = False,
+                  mean_wheel: bool = False) -> WearSimulation:
     """Simulate the wear of one wheel over a route described by curve classes.
 
     Parameters
@@ -208,11 +209,18 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         the others depend on the previous update)
     rail_from_all_wheels : rail wear from all four wheels of the bogie, each with its own
         patches, split into high, low and mean rail
-        (:func:`rail_depth_per_vehicle_all_wheels`; ``rail_depth_per_vehicle_mm`` is then the
-        mean rail of seed 003); default: from the tracked wheel's rail only
-        (:func:`rail_depth_per_vehicle`). The rail itself is ``vehicle.rail_profile`` (a name,
+        (:func:`rail_depth_per_vehicle_all_wheels`, with the wheel's ``application``: the
+        local one per FASTSIM element on the rail too, seed 003 §4.2;
+        ``rail_depth_per_vehicle_mm`` is then the mean rail of seed 003); default: from the
+        tracked wheel's rail only (:func:`rail_depth_per_vehicle`, always the global
+        application). The rail itself is ``vehicle.rail_profile`` (a name,
         a measured or a :class:`~wearcast.physics.rail_head_wear.WornRail`), in the contact
         table of every contact update.
+    mean_wheel : wear the profile by the mean of the four wheels' depths of the bogie (both
+        axles, both sides: seed 003 §4.3 averages the wear over the wheel-rail pairs into one
+        mean wheel profile, whose maximum depth sets the step, eq. 2-3) instead of the tracked
+        wheel's (``axle``, ``side``); needs ``rail_from_all_wheels`` (the four wheels' contacts,
+        all on the current profile). Fallbacks are still counted for the tracked wheel.
 
     Returns
     -------
@@ -234,6 +242,9 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
         z = np.asarray(initial_profile[1], dtype=float)
     if application not in ("global", "local"):
         raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    if mean_wheel and not rail_from_all_wheels:
+        raise ValueError("mean_wheel needs rail_from_all_wheels (the contacts of all four "
+                         "wheels)")
     coeffs = law_coefficients(wl)
     rail_y = _grid(RAIL_GRID_MM)
     profiles = [z.copy()]
@@ -248,7 +259,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     all_contacts: dict[tuple[int, str], ClassContacts] | None = None
     cache_key = None if contact_cache is None else contact_key(
         veh, classes, axle, side, unbalanced_acceleration_m_s2, tangent_speed_kmh, fastsim_grid,
-        y, patch_width) + (rail_from_all_wheels,)
+        y, patch_width) + (rail_from_all_wheels, mean_wheel)
     linear = Smoothing(sm.method, sm.window_mm, sm.lam, clip_negative=False)
     eps = 1e-3
     for i in range(st.n_steps):
@@ -287,13 +298,21 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                 fallbacks += fb
                 updates += 1
                 since_update = 0.0
-                per_class = wheel_depth_basis(contacts, wl, y, application, fastsim_grid,
-                                              veh.friction)                # mm per m rolled
+                if mean_wheel:
+                    assert all_contacts is not None
+                    # seed 003 §4.3: the average over the wheel-rail pairs, one mean wheel
+                    per_class = np.mean([wheel_depth_basis(all_contacts[w], wl, y, application,
+                                                           fastsim_grid, veh.friction)
+                                         for w in BOGIE_WHEELS], axis=0)  # mm per m rolled
+                else:
+                    per_class = wheel_depth_basis(contacts, wl, y, application, fastsim_grid,
+                                                  veh.friction)            # mm per m rolled
                 # Smooth each basis row linearly; clipping acts on the sum below.
                 basis_km = linear.apply(np.einsum("c,cbn->bn", shares, per_class) * 1000.0, y)
                 if all_contacts is not None:
-                    sides = rail_depth_per_vehicle_all_wheels(all_contacts, wl, classes, shares,
-                                                              rail_y)
+                    sides = rail_depth_per_vehicle_all_wheels(
+                        all_contacts, wl, classes, shares, rail_y, application=application,
+                        fastsim_grid=fastsim_grid, friction=veh.friction)
                     rail_sides.append(sides)
                     rail_rates.append(sides["mean"])
                 else:
@@ -358,7 +377,9 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                                         if rail_sides else None),
         rail_low_depth_per_vehicle_mm=(np.mean([r["low"] for r in rail_sides], axis=0)
                                        if rail_sides else None),
-        rail=veh.rail_profile, high_rail=veh.high_rail_profile, low_rail=veh.low_rail_profile)
+        rail=veh.rail_profile, high_rail=veh.high_rail_profile, low_rail=veh.low_rail_profile,
+        rail_update_depths_mm=(np.array([[r["mean"], r["high"], r["low"]] for r in rail_sides])
+                               if rail_sides else None))
 
 
 def _check_diverged(z_mm: NDArray, z_initial_mm: NDArray, step: int, mileage_km: float) -> None:

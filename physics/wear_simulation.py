@@ -32,7 +32,10 @@ class WearSimulation:
     rail (the rail the wheel ran on: a name or a rail shape; with a high and a low rail of
     their own, the rail of tangent track), high_rail / low_rail (the curves' outer and inner
     rails when they are profiles of their own, ``BogieVehicle.high_rail_profile``, else
-    None), step_basis_mm (n_steps, n_basis,
+    None), rail_update_depths_mm (n_updates, 3, n_rail) with ``rail_from_all_wheels`` (else
+    None): the mean, high and low rail depth per vehicle of each contact update (the
+    simulations (w_i, r) whose virtual rails seed 003 §6.1 averages), step_basis_mm (n_steps,
+    n_basis,
     n): vertical-equivalent depth of each step per unit basis coefficient (the zone
     coefficients for Archard/KTH), used by the exact calibration; coefficients (n_basis,).
     """
@@ -62,6 +65,7 @@ class WearSimulation:
     rail: Any = "60E1"
     high_rail: Any = None
     low_rail: Any = None
+    rail_update_depths_mm: NDArray | None = None
 
     @property
     def wear_mm(self) -> NDArray:
