@@ -536,9 +536,11 @@ def diagnose(
                 else step_ctx.p_value(lead_rival.code)
             if lead_rival is not None and not fs.separated(p_rival, alpha):
                 if step == 0:
-                    candidates = [best.code] + [c.code for c in rivals
-                                                if not fs.separated(step_ctx.p_value(c.code),
-                                                                 alpha)]
+                    # the leading rival with the p-value that decided (a fresh resample could
+                    # separate it and list the verdict alone), the other rivals tested in turn
+                    candidates = [best.code, lead_rival.code] + [
+                        c.code for c in rivals if c is not lead_rival
+                        and not fs.separated(step_ctx.p_value(c.code), alpha)]
                 break
         selected.append(best)
         remaining.remove(best)
