@@ -54,9 +54,10 @@ scores it out of sample and names a cause only when it is specific:
    (``finder_scoring.WITHIN_VEHICLE_MARGIN``: the sign-flip's strength, a between-vehicle
    effect the bootstrap keeps as nuisance, is out of that metric, and only the motor cars
    carry the contrast it flips). Only the other causes that are themselves significant and
-   material at the step are rivals (``finder_scoring.MARGIN_RIVALS``): the runner-up by gain
-   is reported with its margin either way, but one the finder would not name on its own
-   does not make the verdict ambiguous. If the verdict does not beat its leading rival, it
+   material at the step, or gain at least as much as the verdict, are rivals
+   (``finder_scoring.MARGIN_RIVALS``): the runner-up by gain is reported with its margin
+   either way, but a weaker one the finder would not name on its own does not make the
+   verdict ambiguous. If the verdict does not beat its leading rival, it
    is ``ambiguous`` and lists the candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
@@ -528,9 +529,11 @@ def diagnose(
             if step == 0:
                 runner_up, margin, margin_p = runner.code, m, p_m
             # the rivals the verdict must be separated from (``finder_scoring.MARGIN_RIVALS``):
-            # every other cause, or those the finder would name on their own at this step
-            rivals = others if fs.MARGIN_RIVALS == "all" else [c for c in others
-                                                                  if c in eligible]
+            # every other cause, or those the finder would name on their own at this step and
+            # any cause that gains at least as much as the verdict (significant or not)
+            rivals = others if fs.MARGIN_RIVALS == "all" else [
+                c for c in others
+                if c in eligible or scored[c.code].gain >= scored[best.code].gain]
             lead_rival = max(rivals, key=lambda c: scored[c.code].gain) if rivals else None
             p_rival = p_m if lead_rival is runner or lead_rival is None \
                 else step_ctx.p_value(lead_rival.code)
@@ -622,8 +625,8 @@ def diagnose(
                  "against its runner-up in the vehicle metric by the bootstrap alone")
     if fs.MARGIN_RIVALS == "named":
         test += ("; the verdict must beat only the causes that are themselves significant and "
-                 "material (a runner-up that is not is reported with its margin but leaves the "
-                 "verdict standing)")
+                 "material or gain at least as much (a weaker runner-up that is neither is "
+                 "reported with its margin but leaves the verdict standing)")
     if echoes:
         test += ("; named but dropped as the echo of the named instrument error: "
                  + ", ".join(echoes))

@@ -80,10 +80,10 @@ MARGIN_METRIC = "test"
 # 107 and 109: sign-flip p 0.44 and 0.49 against wear_measure, bootstrap 0.07 and 0.03)
 WITHIN_VEHICLE_MARGIN = "bootstrap"
 # the causes the verdict's margin is tested against: "named" (the other causes that are
-# themselves significant and material at the step, ``discrepancy_findings.is_named``: a cause
-# the finder would not name on its own is no rival explanation, and the verdict's margin over
-# it is reported but does not make the verdict ``ambiguous``) or "all" (every other cause, the
-# finder before)
+# themselves significant and material at the step, ``discrepancy_findings.is_named``, or gain
+# at least as much as the verdict: a weaker cause the finder would not name on its own is no
+# rival explanation, and the verdict's margin over it is reported but does not make the
+# verdict ``ambiguous``) or "all" (every other cause, the finder before)
 MARGIN_RIVALS = "named"
 
 
