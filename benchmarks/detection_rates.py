@@ -305,6 +305,15 @@ def main() -> None:
                     help="held-out error of the finder's tests: weighted squared residuals, "
                          "or after the nested vehicle/wheel random-effects transform, or "
                          "after a random log-scale per vehicle (finder_scoring.SCORE_METRIC)")
+    ap.add_argument("--within-vehicle-margin", default=fs.WITHIN_VEHICLE_MARGIN,
+                    choices=("bootstrap", "combined"),
+                    help="margin test of a within-vehicle best cause (traction) scored in the "
+                         "vehicle metric: the bootstrap alone or the combined test "
+                         "(finder_scoring.WITHIN_VEHICLE_MARGIN)")
+    ap.add_argument("--margin-rivals", default=fs.MARGIN_RIVALS, choices=("named", "all"),
+                    help="causes the verdict's margin is tested against: those significant "
+                         "and material themselves, or every other cause "
+                         "(finder_scoring.MARGIN_RIVALS)")
     ap.add_argument("--margin-metric", default=fs.MARGIN_METRIC, choices=("ols", "test"),
                     help="metric of the margin test: the reported gains' or the tests' "
                          "(finder_scoring.MARGIN_METRIC)")
@@ -331,6 +340,8 @@ def main() -> None:
     fsg.SHAPE_GROWTH = args.shape_growth
     fs.SCORE_METRIC = args.score_metric
     fs.MARGIN_METRIC = args.margin_metric
+    fs.WITHIN_VEHICLE_MARGIN = args.within_vehicle_margin
+    fs.MARGIN_RIVALS = args.margin_rivals
     fre.LEVELS = args.random_effects_levels
     cz.Traction.random_effects = args.traction_fit == "gls"
     LOOP_NULL[0] = args.loop_null

@@ -49,8 +49,16 @@ scores it out of sample and names a cause only when it is specific:
    effect and nuisance resampled from the fit carrying both causes, both causes scored on
    them as on the data;
    ``finder_scoring.margin_p``) and a sign-flip randomisation over the groups, combined by
-   Bonferroni (``finder_scoring.MarginTest``). If it does not, the verdict is ``ambiguous``
-   and lists the candidates;
+   Bonferroni (``finder_scoring.MarginTest``); a cause whose contrast lies within the
+   vehicles (traction), its margin scored in the vehicle metric, by the bootstrap alone
+   (``finder_scoring.WITHIN_VEHICLE_MARGIN``: the sign-flip's strength, a between-vehicle
+   effect the bootstrap keeps as nuisance, is out of that metric, and only the motor cars
+   carry the contrast it flips). Only the other causes that are themselves significant and
+   material at the step, or gain at least as much as the verdict, are rivals
+   (``finder_scoring.MARGIN_RIVALS``): the runner-up by gain is reported with its margin
+   either way, but a weaker one the finder would not name on its own does not make the
+   verdict ambiguous. If the verdict does not beat its leading rival, it
+   is ``ambiguous`` and lists the candidates;
 5. several causes at once: forward selection; after a cause is named it joins the baseline
    and the remaining causes are scored, resampled and tested again against it, each
    reported with its own gain;
@@ -125,7 +133,8 @@ class Diagnosis(FinderResult):
     selected : causes named by forward selection, in order (the verdict first)
     runner_up, margin, margin_p_value : the best other cause, the verdict's held-out gain
         over it (relative to the baseline's error) and the margin's randomisation p-value
-    candidates : the causes the verdict could not separate (``ambiguous``)
+    candidates : the causes the verdict could not separate (``ambiguous``): the best and
+        the rivals (other causes significant and material themselves) its margin does not beat
     unexplained : residual structure outside the catalogue, with its size
     nuisance : the baseline's per-vehicle, per-wheel and per-measurement standard deviations
     """
@@ -519,11 +528,22 @@ def diagnose(
                                                                              1e-300))
             if step == 0:
                 runner_up, margin, margin_p = runner.code, m, p_m
-            if not fs.separated(p_m, alpha):
+            # the rivals the verdict must be separated from (``finder_scoring.MARGIN_RIVALS``):
+            # every other cause, or those the finder would name on their own at this step and
+            # any cause that gains at least as much as the verdict (significant or not)
+            rivals = others if fs.MARGIN_RIVALS == "all" else [
+                c for c in others
+                if c in eligible or scored[c.code].gain >= scored[best.code].gain]
+            lead_rival = max(rivals, key=lambda c: scored[c.code].gain) if rivals else None
+            p_rival = p_m if lead_rival is runner or lead_rival is None \
+                else step_ctx.p_value(lead_rival.code)
+            if lead_rival is not None and not fs.separated(p_rival, alpha):
                 if step == 0:
-                    candidates = [best.code] + [c.code for c in others
-                                                if not fs.separated(step_ctx.p_value(c.code),
-                                                                 alpha)]
+                    # the leading rival with the p-value that decided (a fresh resample could
+                    # separate it and list the verdict alone), the other rivals tested in turn
+                    candidates = [best.code, lead_rival.code] + [
+                        c.code for c in rivals if c is not lead_rival
+                        and not fs.separated(step_ctx.p_value(c.code), alpha)]
                 break
         selected.append(best)
         remaining.remove(best)
@@ -600,6 +620,13 @@ def diagnose(
                            f"sign-flip test over {np.unique(groups).size} {group_by} groups "
                            "(Bonferroni)"
                }[fs.MARGIN_TEST])
+    if fs.MARGIN_TEST == "combined" and fs.WITHIN_VEHICLE_MARGIN == "bootstrap":
+        test += ("; a verdict whose contrast lies within the vehicles (traction) is tested "
+                 "against its runner-up in the vehicle metric by the bootstrap alone")
+    if fs.MARGIN_RIVALS == "named":
+        test += ("; the verdict must beat only the causes that are themselves significant and "
+                 "material or gain at least as much (a weaker runner-up that is neither is "
+                 "reported with its margin but leaves the verdict standing)")
     if echoes:
         test += ("; named but dropped as the echo of the named instrument error: "
                  + ", ".join(echoes))
