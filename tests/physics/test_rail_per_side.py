@@ -196,7 +196,7 @@ def test_each_wheel_takes_its_own_rails_table_in_numpy_and_in_the_kernel(tables)
                            rtol=1e-9, atol=1e-10)
     # the right wheel's rigid rise is its own table's
     d = q[:, 3:5]
-    expected = ((pair.rigid_rise(y[:, 0]) - d[:, 0]) - (pair.right.rigid_rise(-y[:, 0]) - d[:, 1])
+    expected = (pair.rigid_rise(y[:, 0]) - d[:, 0] - pair.right.rigid_rise(-y[:, 0]) + d[:, 1]
                 ) / 1500.0
     # to rounding (the sums are grouped differently); the two tables' rises differ by far more
     np.testing.assert_allclose(wheelset_roll(pair, y[:, 0], d), expected, rtol=1e-12, atol=0.0)
