@@ -77,7 +77,7 @@ from wearcast.physics.contact.geometry_results import (
     WheelContacts,
     WheelsetContact,
 )
-from wearcast.physics.contact.min_gap_kernel import min_gap_no_yaw
+from wearcast.physics.contact.min_gap_kernel import gap_rows_no_yaw, min_gap_no_yaw
 from wearcast.physics.profiles.measured import ProfileCurve, rail_curve, s1002_curve
 from wearcast.physics.vocabulary import check_side
 
@@ -308,17 +308,53 @@ def _min_gap(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArra
 
 def _min_gap_numpy(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray,
                    r0: float) -> tuple[_FloatArray, _FloatArray]:
-    """:func:`_min_gap` from the (N, M) gap array (any yaw)."""
+    """:func:`_min_gap` from the (N, M) gap array (any yaw). The derivative is that of the
+    parabola-refined minimum (:func:`_refined_rate`) from each of its three samples' rates
+    d gap / d roll = d z / d roll - rail slope x d y / d roll, the rail slope being that of
+    the linear interpolation the gap takes (yaw neglected in the rates)."""
     gap, y = _gaps(side, shift, roll, yaw, r0)
     idx = np.argmin(gap, axis=1)
     value, _ = _refine(gap, idx)
     rows = np.arange(gap.shape[0])
-    yw, zw = side.y_ws[idx], side.z_ws[idx]
+    m = gap.shape[1]
     c, s = np.cos(roll), np.sin(roll)
-    slope = np.interp(y[rows, idx], side.rail_y, side.rail_slope)
-    dz = yw * c - zw * s
-    dy = -yw * s - zw * c
-    return value, dz - slope * dy
+    dz_dy = np.diff(side.rail_z) / np.diff(side.rail_y)  # np.interp's interval slopes
+
+    def rate(p: NDArray[np.intp]) -> _FloatArray:
+        y_p = y[rows, p]
+        j = np.clip(np.searchsorted(side.rail_y, y_p, side="right") - 1, 0, dz_dy.size - 1)
+        slope = np.where(y_p <= side.rail_y[0], side.rail_slope[0],
+                         np.where(y_p >= side.rail_y[-1], side.rail_slope[-1], dz_dy[j]))
+        yw, zw = side.y_ws[p], side.z_ws[p]
+        return (yw * c - zw * s) - slope * (-yw * s - zw * c)
+
+    d0 = rate(idx)
+    g0 = gap[rows, idx]
+    gm = gap[rows, np.clip(idx - 1, 0, m - 1)]
+    gp = gap[rows, np.clip(idx + 1, 0, m - 1)]
+    with np.errstate(invalid="ignore"):
+        curv = gm - 2.0 * g0 + gp
+    ok = (idx > 0) & (idx < m - 1) & np.isfinite(curv) & (curv > 0)
+    dm = rate(np.clip(idx - 1, 0, m - 1))
+    dp = rate(np.clip(idx + 1, 0, m - 1))
+    return value, np.where(ok, _refined_rate(gm, g0, gp, dm, d0, dp, ok), d0)
+
+
+def _refined_rate(gm: _FloatArray, g0: _FloatArray, gp: _FloatArray, dm: _FloatArray,
+                  d0: _FloatArray, dp: _FloatArray, ok: NDArray[np.bool_]) -> _FloatArray:
+    """Derivative of :func:`_refine`'s minimum g0 - (gm - gp) t / 4 (t = (gm - gp) /
+    (2 curv), curv = gm - 2 g0 + gp > 0, clipped to [-1/2, 1/2]) from the samples' gaps and
+    derivatives: d0 - ((dm - dp) t + (gm - gp) dt) / 4, dt = 0 where t is clipped (rows
+    ``ok``; the others get d0). ``min_gap_kernel.refined_minimum_rate`` per row."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        curv = np.where(ok, gm - 2.0 * g0 + gp, 1.0)
+        diff = np.where(ok, gm - gp, 0.0)
+        t = 0.5 * diff / curv
+        inside = (t >= -0.5) & (t <= 0.5)
+        dt = np.where(inside, 0.5 * ((dm - dp) * curv - diff * (dm - 2.0 * d0 + dp))
+                      / (curv * curv), 0.0)
+        rate = d0 - 0.25 * ((dm - dp) * np.clip(t, -0.5, 0.5) + diff * dt)
+    return np.where(ok, rate, d0)
 
 
 def _solve_roll(sides: tuple[_Side, _Side], shift: _FloatArray, yaw: _FloatArray, r0: float,
@@ -514,7 +550,10 @@ def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
         start = np.interp(shift, shift[coarse], roll_c)
     roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm, start=start)
     chosen = sides[0] if side == "left" else sides[1]
-    gap, _ = _gaps(chosen, shift, roll, yaw, wt.nominal_radius_mm)
+    # _gaps's rows without yaw from the compiled kernel (the same numbers, bit for bit)
+    gap = gap_rows_no_yaw(chosen.y_ws, chosen.z_ws, chosen.rail_y, chosen.rail_z,
+                          np.ascontiguousarray(shift), np.cos(roll), np.sin(roll),
+                          float(wt.nominal_radius_mm))
     y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
     return y_wheel, gap - gap0[:, None], roll
 

@@ -52,6 +52,48 @@ def interp_on_interval(x: float, xp: NDArray[np.float64], fp: NDArray[np.float64
     return value
 
 
+@njit(cache=True, inline="always")
+def _gap_rate(y: float, lateral: float, vertical: float, c: float, s: float,
+              j: int, rail_y: NDArray[np.float64], rail_slope: NDArray[np.float64],
+              dz_dy: NDArray[np.float64]) -> float:
+    """d gap / d roll [mm/rad] of one wheel sample (wheelset frame lateral, vertical [mm]) at
+    track y [mm] under roll (cos c, sin s): the sample's vertical motion less the rail's rise
+    over its lateral motion, the rail's slope being that of the linear interpolation the gap
+    takes (the slope ``dz_dy`` of the interval found from ``j``, rail_y[j] <= y <
+    rail_y[j + 1]; the end slopes of ``rail_slope`` at and beyond the envelope's ends)."""
+    k = rail_y.size
+    if math.isnan(y):
+        slope = np.nan
+    elif y <= rail_y[0]:
+        slope = rail_slope[0]
+    elif y >= rail_y[k - 1]:
+        slope = rail_slope[k - 1]
+    else:
+        slope = dz_dy[_locate(y, rail_y, j)]
+    dz = lateral * c - vertical * s
+    dy = -lateral * s - vertical * c
+    return dz - slope * dy
+
+
+@njit(cache=True, inline="always")
+def refined_minimum_rate(gm: float, g0: float, gp: float, dm: float, d0: float,
+                         dp: float) -> float:
+    """Derivative of the parabola-refined minimum g0 - (gm - gp) t / 4, t = (gm - gp) /
+    (2 (gm - 2 g0 + gp)) clipped to [-1/2, 1/2] (``geometry._refine``; curvature > 0), from the
+    three samples' gaps and their derivatives dm, d0, dp: d0 - ((dm - dp) t + (gm - gp) dt) / 4
+    (dt = 0 where t is clipped)."""
+    curv = gm - 2.0 * g0 + gp
+    t = 0.5 * (gm - gp) / curv
+    dt = 0.0
+    if t < -0.5:
+        t = -0.5
+    elif t > 0.5:
+        t = 0.5
+    else:
+        dt = 0.5 * ((dm - dp) * curv - (gm - gp) * (dm - 2.0 * d0 + dp)) / (curv * curv)
+    return d0 - 0.25 * ((dm - dp) * t + (gm - gp) * dt)
+
+
 @njit(cache=True)
 def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
                    rail_y: NDArray[np.float64], rail_z: NDArray[np.float64],
@@ -67,6 +109,7 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
     deriv = np.empty(n)
     gap = np.empty(m)
     ys = np.empty(m)
+    js = np.zeros(m, dtype=np.int64)  # each sample's rail interval (where it has one)
     dz_dy = (rail_z[1:] - rail_z[:-1]) / (rail_y[1:] - rail_y[:-1])  # np.interp's slopes
     for i in range(n):
         c = math.cos(roll[i])
@@ -86,6 +129,7 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
                 g = z - rail_z[k - 1]
             else:
                 j = _locate(y, rail_y, j)
+                js[p] = j
                 g = z - (dz_dy[j] * (y - rail_y[j]) + rail_z[j])
                 if math.isnan(g):
                     g = z - interp_on_interval(y, rail_y, rail_z, j)
@@ -95,30 +139,63 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
             if g < best:
                 best = g
                 idx = p
-        # parabolic refinement (geometry._refine)
+        # parabolic refinement (geometry._refine) and its exact derivative with respect to
+        # the roll (``refined_minimum_rate``)
         g0 = gap[idx]
         gm = gap[max(idx - 1, 0)]
         gp = gap[min(idx + 1, m - 1)]
         curv = gm - 2.0 * g0 + gp
+        d0 = _gap_rate(ys[idx], y_ws[idx], z_ws[idx], c, s, js[idx], rail_y, rail_slope, dz_dy)
         if idx > 0 and idx < m - 1 and math.isfinite(curv) and curv > 0:
             t = 0.5 * (gm - gp) / curv
             t = min(max(t, -0.5), 0.5)
             value[i] = g0 - 0.25 * (gm - gp) * t
+            dm = _gap_rate(ys[idx - 1], y_ws[idx - 1], z_ws[idx - 1], c, s, js[idx - 1],
+                           rail_y, rail_slope, dz_dy)
+            dp = _gap_rate(ys[idx + 1], y_ws[idx + 1], z_ws[idx + 1], c, s, js[idx + 1],
+                           rail_y, rail_slope, dz_dy)
+            deriv[i] = refined_minimum_rate(gm, g0, gp, dm, d0, dp)
         else:
             value[i] = g0
-        # rail slope at the minimum's sample (np.interp, edge values outside)
-        y_min = ys[idx]
-        if y_min <= y_lo:
-            slope = rail_slope[0]
-        elif y_min >= y_hi:
-            slope = rail_slope[k - 1]
-        elif math.isnan(y_min):
-            slope = np.nan
-        else:
-            slope = interp_on_interval(y_min, rail_y, rail_slope, _locate(y_min, rail_y, 0))
-        yw = y_ws[idx]
-        zw = z_ws[idx]
-        dz = yw * c - zw * s
-        dy = -yw * s - zw * c
-        deriv[i] = dz - slope * dy
+            deriv[i] = d0
     return value, deriv
+
+
+@njit(cache=True)
+def gap_rows_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
+                    rail_y: NDArray[np.float64], rail_z: NDArray[np.float64],
+                    shift: NDArray[np.float64], cos_roll: NDArray[np.float64],
+                    sin_roll: NDArray[np.float64], r0: float) -> NDArray[np.float64]:
+    """Vertical gaps (N, M) [mm] of the wheel samples (wheelset frame, [mm]) over the rail's
+    upper envelope at height 0, per pose (lateral shift [mm], cos and sin of the roll): what
+    ``geometry._gaps`` computes without yaw, with its arithmetic (the sample turned and
+    shifted as ``geometry._points``, the rail by np.interp's formula, inf where no rail is
+    below), one row at a time instead of (N, M) temporaries. The cos and sin come from the
+    caller (numpy's), so the rows equal ``_gaps``'s bit for bit."""
+    n = shift.size
+    m = y_ws.size
+    k = rail_y.size
+    y_lo = rail_y[0]
+    y_hi = rail_y[k - 1]
+    out = np.empty((n, m))
+    dz_dy = (rail_z[1:] - rail_z[:-1]) / (rail_y[1:] - rail_y[:-1])  # np.interp's slopes
+    for i in range(n):
+        c = cos_roll[i]
+        s = sin_roll[i]
+        j = 0
+        for p in range(m):
+            lateral = y_ws[p]
+            vertical = z_ws[p]
+            y = shift[i] + lateral * c - vertical * s
+            z = r0 + lateral * s + vertical * c
+            if y < y_lo or y > y_hi or math.isnan(y):
+                g = np.inf
+            elif y == y_hi:
+                g = z - rail_z[k - 1]
+            else:
+                j = _locate(y, rail_y, j)
+                g = z - (dz_dy[j] * (y - rail_y[j]) + rail_z[j])
+                if math.isnan(g):
+                    g = z - interp_on_interval(y, rail_y, rail_z, j)
+            out[i, p] = g if math.isfinite(g) else np.inf
+    return out
