@@ -69,7 +69,7 @@ scores it out of sample and names a cause only when it is specific:
 6. outside the catalogue: when no cause is named but the residuals are structured by wheel
    position, route, calendar quarter, mileage or instrument (tested against the same
    resamples), the verdict is ``outside_catalogue`` and the structure is reported with its
-   size instead of ``none``;
+   size instead of ``none`` (``finder_structure``);
 7. with ``expected_progression`` (``discrepancy_progression``) the baseline grows as a
    simulation of the route says instead of linearly in mileage, so every cause is a
    departure from the simulated progression;
@@ -110,6 +110,7 @@ from wearcast.statistics.discrepancy_findings import (
     scored_findings,
 )
 from wearcast.statistics.discrepancy_progression import ExpectedProgression
+from wearcast.statistics.finder_structure import structure_scan
 from wearcast.statistics.findings import FinderResult, Finding
 from wearcast.statistics.hybrid import HybridModel
 from wearcast.statistics.json_values import json_value
@@ -582,7 +583,7 @@ def diagnose(
 
     unexplained: list[dict[str, Any]] = []
     if verdict == "none" and base_residual is not None:
-        unexplained = fs.structure_scan(data, base_residual, vehicle, wheel, n_null, rng,
+        unexplained = structure_scan(data, base_residual, vehicle, wheel, n_null, rng,
                                  structure_alpha, min_relative_gain)
         if unexplained:
             verdict = "outside_catalogue"
