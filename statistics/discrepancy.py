@@ -34,13 +34,14 @@ scores it out of sample and names a cause only when it is specific:
    candidate (so a real effect is not resampled as nuisance), widened for the degrees of
    freedom that fit used; the wear-curve shape cause is tested the same way on its
    coefficients, in the metric of their wheel-to-wheel nuisance covariance
-   (``_noise_whitened``; its gain is reported in curve space), every measurement weighted by
+   (``finder_shape_test.noise_whitened``; its gain is reported in curve space), every
+   measurement weighted by
    the inverse of the shape nuisance's variance at its predicted worn area
    (``finder_shape_weights``: the late, worn rows no longer drown a signature that is the
    same at every mileage), each wheel life's growth with the wear removed
    (``finder_shape_growth``); where wheel lives measured by several instruments exist, the
-   signature must also stand out inside them (``_within_life_p``, nuisance resampled by
-   measurement session), the larger of the two adjusted p-values counting
+   signature must also stand out inside them (``finder_shape_test.within_life_p``, nuisance
+   resampled by measurement session), the larger of the two adjusted p-values counting
    (intersection-union test, Berger 1982);
 4. specificity: the cause with the largest significant (adjusted p < alpha) and material
    (relative gain >= ``min_relative_gain``) gain must beat the
@@ -100,7 +101,7 @@ from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
-from wearcast.statistics import finder_shape_growth as fsg
+from wearcast.statistics import finder_shape_test as fst
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics.discrepancy_data import build_data
 from wearcast.statistics.discrepancy_findings import (
@@ -174,116 +175,6 @@ def _folds(groups: NDArray[Any], k: int, seed: int) -> NDArray[np.int64]:
     perm = rng.permutation(uniq.size)
     fold_of = {g: int(perm[i] % k) for i, g in enumerate(uniq)}
     return np.array([fold_of[g] for g in groups], dtype=np.int64)
-
-
-def _relative(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
-    return float(1.0 - after.sum() / max(before.sum(), 1e-300))
-
-
-def _whitened_shape(data: cz.FinderData) -> NDArray[np.float64]:
-    """Signature coefficients (shape coefficients less each wheel life's growth with the
-    wear, ``finder_shape_growth``) scaled so that their squared norm is the curve-space
-    error."""
-    gram = data.basis @ data.basis.T
-    chol = np.linalg.cholesky(gram + 1e-12 * np.eye(gram.shape[0]))
-    return np.asarray(cz.signature_coefficients(data) @ chol)
-
-
-def _instrument_centred(coef: NDArray[np.float64], inst_codes: NDArray[np.int64]
-                        ) -> NDArray[np.float64]:
-    """Residuals of the per-instrument mean fit of the shape coefficients (n, 3)."""
-    out = np.array(coef, dtype=float)
-    for i in np.unique(inst_codes):
-        out[inst_codes == i] -= out[inst_codes == i].mean(axis=0)
-    return out
-
-
-def _noise_whitened(coef: NDArray[np.float64], inst_codes: NDArray[np.int64],
-                    wheel: NDArray[Any], rows: NDArray[np.bool_] | None = None
-                    ) -> NDArray[np.float64]:
-    """Shape coefficients (n, 3) in the metric of their nuisance: times L^-T, where L L^T is
-    the covariance of the wheels' mean coefficients about their instrument's mean.
-
-    An instrument's signature is constant over a wheel's measurements, so what it must stand
-    out against is the wheel-to-wheel scatter of the mean signature (the wheel's own
-    as-turned shape, vehicle effects, averaged measurement noise). That scatter is strongly
-    correlated between the three basis directions (the flange offset and the lateral shift
-    share z' on the flange), so a sum of squares in curve space spends most of its weight on
-    noise directions; in the metric of its inverse covariance (a generalised least-squares,
-    Hotelling-type contrast) every direction carries equal nuisance. The transform is fixed
-    before the test and applied to the data and to every resampled dataset alike, so the
-    resampling p-value keeps its level.
-
-    ``rows``: the rows the test uses (``causes_route.signature_rows``); when they are the
-    within-life contrasts (each life's own level removed, ``finder_shape_growth``), a
-    wheel's mean carries no nuisance left and the scatter is the rows' own.
-    """
-    keep = np.ones(len(inst_codes), dtype=bool) if rows is None else np.asarray(rows, bool)
-    c = _instrument_centred(np.asarray(coef, dtype=float)[keep], inst_codes[keep])
-    w = fs.codes_of(np.asarray(wheel)[keep] if keep.all() else np.arange(int(keep.sum())))
-    g = int(w.max()) + 1
-    sums = np.zeros((g, c.shape[1]))
-    np.add.at(sums, w, c)
-    means = sums / np.bincount(w, minlength=g)[:, None]
-    cov = np.atleast_2d(np.cov(means.T)) if g > 1 else np.eye(c.shape[1])
-    ridge = 1e-9 * max(float(np.trace(cov)), 1e-300)
-    chol = np.linalg.cholesky(cov + ridge * np.eye(c.shape[1]))
-    return np.asarray(np.linalg.solve(chol, np.asarray(coef, dtype=float).T).T)
-
-
-def _sessions(frame: pd.DataFrame, instrument: NDArray[Any]) -> NDArray[Any]:
-    """(n,) measurement session of each row: its instrument and its day (``measured_on``;
-    the instrument alone without dates)."""
-    inst = np.asarray(instrument).astype(str)
-    if "measured_on" not in frame.columns:
-        return inst
-    day = pd.to_datetime(frame["measured_on"]).dt.strftime("%Y-%m-%d").to_numpy().astype(str)
-    return np.char.add(np.char.add(inst, "|"), day)
-
-
-def _within_life_p(data: cz.FinderData, coef: NDArray[np.float64], inst: NDArray[Any],
-                   wheel: NDArray[Any], folds: NDArray[np.int64], n_null: int,
-                   rng: np.random.Generator) -> tuple[float, NDArray[np.float64]] | None:
-    """Observed held-out gain and its resampled null gains (B,) of the instrument signature
-    tested on the contrasts inside the wheel lives measured by more than one instrument
-    (``finder_shape_growth.within_life_contrasts``), or None when the data hold too few
-    such lives. ``diagnose`` adjusts it over the catalogue like the between-wheel test.
-
-    The between-wheel test of the per-instrument means takes a shape level shared by the
-    wheels of a unit measured by one instrument for the instrument's; inside one life every
-    wheel, vehicle and unit level cancels. The same statistic as the between-wheel test
-    (held-out gain of per-instrument means in the nuisance metric, precision weights, rows
-    outside the mixed lives with weight 0); the nuisance is resampled by measurement session
-    (one instrument on one day, ``_sessions``: the wheels a unit's visit measured share its
-    point of wear and its conditions) and by wheel.
-    """
-    mixed, within = fsg.within_life_contrasts(
-        coef, cz.life_ids(data.frame, data.mileage_km), np.asarray(inst).astype(str))
-    if mixed is None:
-        return None
-    codes = fs.codes_of(inst)
-    z = _noise_whitened(within, codes, wheel, mixed)
-    centred = _instrument_centred(z, codes)
-    w = np.zeros(data.n)
-    w[mixed] = fsw.shape_weights(centred[mixed], data.base.sum(axis=1)[mixed])
-    gain = _relative(w * np.sum(fs.held_out_shape(z, None, folds, w) ** 2, axis=1),
-                     w * np.sum(fs.held_out_shape(z, inst, folds, w) ** 2, axis=1))
-    sw = np.sqrt(w)[:, None] * np.ones_like(z)
-    nm = fs.NuisanceModel.fit(sw * centred, sw, _sessions(data.frame, inst), wheel)
-    draws = nm.draws(n_null, rng, used_dof=int(codes.max()))
-    sw_flat = sw.reshape(-1)[:, None]
-    boot = fs.bootstrap_gains(sw_flat * _shape_design(data.n, None),
-                              [sw_flat * _shape_design(data.n, inst)], draws, np.repeat(folds, 3))
-    return gain, boot[0]
-
-
-def _shape_design(n: int, instrument: NDArray[Any] | None) -> NDArray[np.float64]:
-    codes = np.zeros(n, dtype=np.int64) if instrument is None else fs.codes_of(instrument)
-    levels = int(codes.max()) + 1
-    d = np.zeros((n, 3, levels * 3))
-    for j in range(3):
-        d[np.arange(n), j, codes * 3 + j] = 1.0
-    return d.reshape(n * 3, levels * 3)
 
 
 def diagnose(
@@ -387,38 +278,38 @@ def diagnose(
 
     # the wear-curve shape cause: per-instrument mean signature vs one common signature.
     # The gain is reported in curve space; the test statistic is the same held-out gain in
-    # the metric of the nuisance covariance (``_noise_whitened``)
+    # the metric of the nuisance covariance (``finder_shape_test.noise_whitened``)
     shape_row: tuple[float, NDArray[np.float64]] | None = None
     shape_within: tuple[float, NDArray[np.float64]] | None = None
     scored: dict[str, Scored] = {}
     if shape_cause is not None:
-        coef = _whitened_shape(data)
+        coef = fst.whitened_shape(data)
         inst = shape_cause.instruments(data)  # type: ignore[attr-defined]
         inst_codes = fs.codes_of(inst)
-        z = _noise_whitened(coef, inst_codes, wheel)
-        centred = _instrument_centred(z, inst_codes)
+        z = fst.noise_whitened(coef, inst_codes, wheel)
+        centred = fst.instrument_centred(z, inst_codes)
         # precision weights of the rows (``finder_shape_weights``): in the means, the
         # held-out errors and the resampled datasets alike
         w_shape = fsw.shape_weights(centred, data.base.sum(axis=1))
         data.cache["shape_weights"] = w_shape
         before = w_shape * np.sum(fs.held_out_shape(coef, None, folds, w_shape) ** 2, axis=1)
         after = w_shape * np.sum(fs.held_out_shape(coef, inst, folds, w_shape) ** 2, axis=1)
-        z_gain = _relative(
+        z_gain = fs.relative_gain(
             w_shape * np.sum(fs.held_out_shape(z, None, folds, w_shape) ** 2, axis=1),
             w_shape * np.sum(fs.held_out_shape(z, inst, folds, w_shape) ** 2, axis=1))
         sw_shape = np.sqrt(w_shape)[:, None] * np.ones_like(z)
         nm = fs.NuisanceModel.fit(sw_shape * centred, sw_shape, vehicle, wheel)
         draws = nm.draws(n_null, rng, used_dof=int(inst_codes.max()))
         sw_flat = sw_shape.reshape(-1)[:, None]
-        boot = fs.bootstrap_gains(sw_flat * _shape_design(data.n, None),
-                                  [sw_flat * _shape_design(data.n, inst)],
+        boot = fs.bootstrap_gains(sw_flat * fst.shape_design(data.n, None),
+                                  [sw_flat * fst.shape_design(data.n, inst)],
                                   draws, np.repeat(folds, 3))
         shape_row = (z_gain, boot[0])
         # its own random stream: the other causes' resampled datasets stay as they were
-        shape_within = _within_life_p(data, coef, inst, wheel, folds, n_null,
+        shape_within = fst.within_life_p(data, coef, inst, wheel, folds, n_null,
                                         np.random.default_rng(seed + 2))
-        scored[shape_cause.code] = Scored(shape_cause, before, after, _relative(before, after),
-                                           metric="shape")
+        scored[shape_cause.code] = Scored(shape_cause, before, after,
+                                          fs.relative_gain(before, after), metric="shape")
 
     # forward selection over the area causes
     selected: list[cz.Cause] = []
@@ -465,8 +356,8 @@ def diagnose(
                       for c in remaining]
         re_fit = fs.RandomEffectsFit(lambda v: fre.quasi_demean(data, v), base_re, alt_re,
                                      score=score_transform, scored=by_vehicle)
-        plain = np.array([_relative(before, rows[c.code]) for c in remaining])
-        observed = np.array([_relative(before_t, rows_t[c.code]) if v else plain[i]
+        plain = np.array([fs.relative_gain(before, rows[c.code]) for c in remaining])
+        observed = np.array([fs.relative_gain(before_t, rows_t[c.code]) if v else plain[i]
                              for i, (c, v) in enumerate(zip(remaining, by_vehicle,
                                                             strict=True))])
         # the nuisance is taken from the residuals of the baseline plus the leading
@@ -500,7 +391,7 @@ def diagnose(
                 # the gain (materiality, the verdict's order) in the rows' own metric, the
                 # p-values from the cause's test metric
                 scored[code] = Scored(next(c for c in remaining if c.code == code), before,
-                                       rows[code], _relative(before, rows[code]),
+                                       rows[code], fs.relative_gain(before, rows[code]),
                                        float(p_raw[i]), float(p_adj[i]), step)
             else:
                 s = scored[code]

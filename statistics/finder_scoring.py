@@ -91,6 +91,11 @@ def codes_of(values: NDArray[Any]) -> NDArray[np.int64]:
     return np.asarray(pd.factorize(pd.Series(values).astype(str))[0], dtype=np.int64)
 
 
+def relative_gain(before: Array, after: Array) -> float:
+    """Relative gain 1 - sum(after) / sum(before) of held-out errors (0 before -> 1e-300)."""
+    return float(1.0 - after.sum() / max(before.sum(), 1e-300))
+
+
 def held_out(data: cz.FinderData, cause: cz.Cause, folds: NDArray[np.int64]) -> Array:
     """(n, 2) held-out working residual e - phi (b + g(theta)) of ``cause`` over the folds."""
     out = np.zeros((data.n, 2))

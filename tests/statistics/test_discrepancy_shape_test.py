@@ -2,7 +2,7 @@
 
 An instrument's geometric signature is constant over a wheel's measurements, so it must
 stand out against the wheel-to-wheel scatter of the mean signature, which is strongly
-correlated between the basis directions (``discrepancy._noise_whitened``). Tested on two
+correlated between the basis directions (``finder_shape_test.noise_whitened``). Tested on two
 generators that hide the error differently: the twin's flange-tread offset of one
 instrument (0.2 mm, the strength the curve-space statistic named on 3 of 20 seeds) and
 fleet_twin_alt's lateral scale error about the flange back (0.5 %).
@@ -15,7 +15,8 @@ import pytest
 
 from tests.statistics.conftest import findings_summary
 from wearcast.statistics import finder_scoring as fs
-from wearcast.statistics.discrepancy import _instrument_centred, _noise_whitened, diagnose
+from wearcast.statistics.discrepancy import diagnose
+from wearcast.statistics.finder_shape_test import instrument_centred, noise_whitened
 from wearcast.statistics.generators import fleet_twin as ft
 from wearcast.statistics.generators import fleet_twin_alt as fa
 from wearcast.statistics.generators import scenarios
@@ -29,8 +30,8 @@ def test_noise_whitened_wheel_means_have_unit_covariance():
     mix = np.array([[1.0, 0.0, 0.0], [0.9, 0.3, 0.0], [0.5, 0.2, 0.1]])
     coef = (rng.normal(size=(60, 3)) @ mix.T)[fs.codes_of(wheels)] \
         + 0.05 * rng.normal(size=(300, 3)) + np.where(inst[:, None] == 1, 0.2, 0.0)
-    z = _noise_whitened(coef, inst, wheels)
-    c = _instrument_centred(z, inst)
+    z = noise_whitened(coef, inst, wheels)
+    c = instrument_centred(z, inst)
     means = np.array([c[wheels == w].mean(axis=0) for w in np.unique(wheels)])
     assert np.allclose(np.cov(means.T), np.eye(3), atol=1e-6)
     # a linear map: the instrument contrast survives, in units of the nuisance
