@@ -92,6 +92,22 @@ def wheel_depth_basis_by_slot(contacts: ClassContacts, law: WearLaw, y_grid_mm: 
                      for s in range(vol.shape[1])])
 
 
+def fastsim_on_loaded_patches(contacts: ClassContacts, fastsim_grid: int, friction: float
+                              ) -> tuple[tuple[NDArray[np.intp], ...], Any] | None:
+    """FASTSIM (``contact.fastsim``, CONTACT's flexibilities) on every loaded patch of the
+    classes' contacts, for the local application of a wear law on the wheel or the rail:
+    (the loaded patches' indices into the contacts' arrays, the FASTSIM result on a
+    ``fastsim_grid`` x ``fastsim_grid`` grid), or None when no patch is loaded."""
+    c = contacts
+    idx = np.nonzero(c.in_contact)
+    if idx[0].size == 0:
+        return None
+    xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
+        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_force_n"))
+    return idx, fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
+                        n_x=fastsim_grid, n_y=fastsim_grid)
+
+
 def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
                       application: str = "global", fastsim_grid: int = 20,
                       friction: float = 0.35) -> NDArray[np.float64]:
@@ -114,13 +130,10 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
         raise ValueError(f"application must be 'global' or 'local', got {application!r}")
     n_basis = 4 if law.name == "archard_kth" else 1
     out = np.zeros((n_class, n_basis, np.size(y_grid_mm)))
-    idx = np.nonzero(c.in_contact)
-    if idx[0].size == 0:
+    loaded = fastsim_on_loaded_patches(c, fastsim_grid, friction)
+    if loaded is None:
         return out
-    xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
-        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_force_n"))
-    fs = fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
-                 n_x=fastsim_grid, n_y=fastsim_grid)
+    idx, fs = loaded
     if law.name == "archard_kth":
         basis = local_archard_depth(fs, c.speed_m_s[idx[0]], c.wheel_y_mm[idx],
                                     radius_mm[idx], c.contact_angle_rad[idx], y_grid_mm,

@@ -24,9 +24,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.physics.class_contacts import ClassContacts
-from wearcast.physics.contact.fastsim import fastsim
-from wearcast.physics.curving import SHEAR_MODULUS_MPA
-from wearcast.physics.patch_wear import contact_volume_basis, law_coefficients
+from wearcast.physics.patch_wear import (
+    contact_volume_basis,
+    fastsim_on_loaded_patches,
+    law_coefficients,
+)
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
 from wearcast.physics.vocabulary import SIDES, CurveClass
 from wearcast.physics.wear_distribution import local_rate_depth, semi_elliptic_depth
@@ -91,17 +93,14 @@ def _local_rail_depth_per_passage(c: ClassContacts, law: WearLaw, rail_grid_mm: 
     per passage; each longitudinal strip is deposited at the patch's rail position
     (``wear_distribution.local_rate_depth`` with the circumference 2 pi R set to 1000 mm, one
     passage instead of the 1000 / (2 pi R_cp) passages per metre of a wheel point). The
-    FASTSIM call is the wheel's (``patch_wear.wheel_depth_basis``) and the rail frame's y
+    FASTSIM call is the wheel's (``patch_wear.fastsim_on_loaded_patches``) and the rail frame's y
     points the same way as the wheel's (gauge corner and flange negative).
     """
     out = np.zeros((c.normal_force_n.shape[0], np.size(rail_grid_mm)))
-    idx = np.nonzero(c.in_contact)
-    if idx[0].size == 0:
+    loaded = fastsim_on_loaded_patches(c, fastsim_grid, friction)
+    if loaded is None:
         return out
-    xi, eta, phi, a_mm, b_mm, normal_n = (np.asarray(getattr(c, f))[idx] for f in (
-        "xi", "eta", "phi_per_mm", "a_mm", "b_mm", "normal_force_n"))
-    fs = fastsim(xi, eta, phi, a_mm, b_mm, normal_n, friction, SHEAR_MODULUS_MPA,
-                 n_x=fastsim_grid, n_y=fastsim_grid)
+    idx, fs = loaded
     v = c.speed_m_s[idx[0]][:, None, None]
     rate = element_depth_rate_mm_per_m(law, fs.shear_traction_mpa, np.hypot(fs.sx, fs.sy),
                                        fs.pn_mpa, v)

@@ -274,8 +274,12 @@ def _gaps(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _FloatArray, 
     return np.where(np.isfinite(gap), gap, np.inf), y
 
 
-def _refine(gap: _FloatArray, idx: NDArray[np.intp]) -> tuple[_FloatArray, _FloatArray]:
-    """Parabolic refinement of a sampled minimum: (minimum value, offset in samples)."""
+def _three_samples(gap: _FloatArray, idx: NDArray[np.intp]
+                   ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray,
+                              NDArray[np.bool_]]:
+    """Each row's sampled minimum at ``idx`` and its neighbours (gm, g0, gp), their second
+    difference gm - 2 g0 + gp, and where a parabola through them has a minimum (an interior
+    sample, finite and positive curvature)."""
     rows = np.arange(gap.shape[0])
     m = gap.shape[1]
     g0 = gap[rows, idx]
@@ -284,6 +288,12 @@ def _refine(gap: _FloatArray, idx: NDArray[np.intp]) -> tuple[_FloatArray, _Floa
     with np.errstate(invalid="ignore"):
         curv = gm - 2.0 * g0 + gp
     ok = (idx > 0) & (idx < m - 1) & np.isfinite(curv) & (curv > 0)
+    return gm, g0, gp, curv, ok
+
+
+def _refine(gap: _FloatArray, idx: NDArray[np.intp]) -> tuple[_FloatArray, _FloatArray]:
+    """Parabolic refinement of a sampled minimum: (minimum value, offset in samples)."""
+    gm, g0, gp, curv, ok = _three_samples(gap, idx)
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.where(ok, 0.5 * (gm - gp) / np.where(ok, curv, 1.0), 0.0)
     t = np.clip(t, -0.5, 0.5)
@@ -329,12 +339,7 @@ def _min_gap_numpy(side: _Side, shift: _FloatArray, roll: _FloatArray, yaw: _Flo
         return (yw * c - zw * s) - slope * (-yw * s - zw * c)
 
     d0 = rate(idx)
-    g0 = gap[rows, idx]
-    gm = gap[rows, np.clip(idx - 1, 0, m - 1)]
-    gp = gap[rows, np.clip(idx + 1, 0, m - 1)]
-    with np.errstate(invalid="ignore"):
-        curv = gm - 2.0 * g0 + gp
-    ok = (idx > 0) & (idx < m - 1) & np.isfinite(curv) & (curv > 0)
+    gm, g0, gp, _, ok = _three_samples(gap, idx)
     dm = rate(np.clip(idx - 1, 0, m - 1))
     dp = rate(np.clip(idx + 1, 0, m - 1))
     return value, np.where(ok, _refined_rate(gm, g0, gp, dm, d0, dp, ok), d0)
