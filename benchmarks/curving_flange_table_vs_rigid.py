@@ -17,7 +17,7 @@ the ``minuetto`` preset) two blocks:
    carries that Y/Q, and the unsmoothed rigid gap at the patch's y at that shift.
 
 Run: ``.venv/bin/python benchmarks/curving_flange_table_vs_rigid.py [--inclination 0.05]
-[--bogie trailer]`` (about 1 min).
+[--bogie trailer] [--gap-smoothing masked]`` (about 1 min).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from wearcast.physics import gap_smoothing as gs
 from wearcast.physics.contact.geometry import rigid_wheel_gap
 from wearcast.physics.curving import solve_curving
 from wearcast.physics.curving_table import build_contact_table
@@ -59,7 +60,11 @@ def main() -> None:
     parser.add_argument("--inclination", type=float, default=None,
                         help="rail inclination (default: the preset's, 1/20)")
     parser.add_argument("--bogie", default="trailer", choices=("trailer", "motor"))
+    parser.add_argument("--gap-smoothing", default=gs.GAP_SMOOTHING,
+                        choices=gs.GAP_SMOOTHING_METHODS,
+                        help="how the contact table's gap is smoothed (physics/gap_smoothing.py)")
     args = parser.parse_args()
+    gs.GAP_SMOOTHING = args.gap_smoothing
     vehicle = vehicle_preset("minuetto", args.bogie)
     if args.inclination is not None:
         vehicle = replace(vehicle, rail_inclination=args.inclination)

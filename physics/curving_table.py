@@ -17,12 +17,17 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.ndimage import gaussian_filter1d
 
-from wearcast.physics.contact.geometry import WheelsetTrack, rigid_wheel_gap
+from wearcast.physics import gap_smoothing as gs
+from wearcast.physics.contact.geometry import (
+    WheelsetTrack,
+    rigid_wheel_gap,
+    rigid_wheel_gap_beyond_rail,
+)
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import N_SLOTS, candidate_slots
+from wearcast.physics.gap_smoothing import check_gap_smoothing, smooth_gap
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -446,7 +451,8 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
                         shift_step_mm: float = 0.1, wheel_step_mm: float = 0.2,
                         wheel_y_range_mm: tuple[float, float] = (-55.0, 45.0),
                         smoothing_mm: tuple[float, float] = GAP_SMOOTHING_MM,
-                        rail_right: str | RailShape | None = None) -> ContactTable:
+                        rail_right: str | RailShape | None = None,
+                        gap_smoothing: str | None = None) -> ContactTable:
     """Tabulate the wheel-rail gap function of one wheel over the wheelset's lateral shift.
 
     The gap comes from the rigid multi-point geometry (``contact.geometry``, the module checked
@@ -483,6 +489,8 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
         patches then become wide and soft and the worn-rail continuation, seed 000's fixed
         steps and seed 002's local wear no longer converge or hold, so it is not the default
         (README, known gaps). Below 0.5 mm the continuation fails at single radii.
+    gap_smoothing : ``gaussian`` or ``masked`` (``gap_smoothing``: how the wheel points with no
+        rail below take part in the smoothing); None: ``gap_smoothing.GAP_SMOOTHING``
 
     Returns
     -------
@@ -490,8 +498,9 @@ def build_contact_table(wheel_height_mm: Callable[[NDArray[np.float64]], NDArray
     placed with the gauge 1435 mm measured 14 mm below the top; gaps are vertical distances
     (valid while contact angles stay below ~75 deg; the S1002 flank is at 70 deg).
     """
+    method = check_gap_smoothing(gs.GAP_SMOOTHING if gap_smoothing is None else gap_smoothing)
     args = (wheel_height_mm, inclination, wheel_radius_m, max_shift_mm, shift_step_mm,
-            wheel_step_mm, wheel_y_range_mm, smoothing_mm)
+            wheel_step_mm, wheel_y_range_mm, smoothing_mm, method)
     if rail_right is None or same_rail(rail, rail_right):
         return _side_table(rail, None, *args)
     return replace(_side_table(rail, rail_right, *args),
@@ -507,8 +516,8 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
                 wheel_height_mm: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None,
                 inclination: float, wheel_radius_m: float, max_shift_mm: float,
                 shift_step_mm: float, wheel_step_mm: float,
-                wheel_y_range_mm: tuple[float, float], smoothing_mm: tuple[float, float]
-                ) -> ContactTable:
+                wheel_y_range_mm: tuple[float, float], smoothing_mm: tuple[float, float],
+                gap_smoothing: str) -> ContactTable:
     """The left wheel's table on ``rail`` with ``opposite`` as the right rail (None: the
     same rail, mirrored) (:func:`build_contact_table`)."""
     wheel = s1002_height_mm if wheel_height_mm is None else wheel_height_mm
@@ -522,18 +531,29 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
                            inclination, r0_mm, rail_right=opposite)
     # centre shifts wide enough to cover the contact-level grid (the roll adds r0 theta)
     centre = np.arange(-max_shift_mm - 1.0, max_shift_mm + 1.0 + 1e-9, shift_step_mm)
-    y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
+    inside_geo = None
+    if gap_smoothing == "masked":
+        # beyond the rail the rail's end faces continued, and each point's exact distance
+        # inside the rail's envelope: both continuous in the shift (``gap_smoothing``)
+        y_geo, raw_geo, roll, inside_geo = rigid_wheel_gap_beyond_rail(track, centre, "left")
+    else:
+        y_geo, raw_geo, roll = rigid_wheel_gap(track, centre, "left")
     contact_level = centre + r0_mm * roll
     shifts = np.arange(-max_shift_mm, max_shift_mm + 1e-9, shift_step_mm)
     order = np.argsort(y_geo)
     y_geo, raw_geo = y_geo[order], raw_geo[:, order]
-    raw_geo = np.where(np.isfinite(raw_geo), raw_geo, 100.0)
+    raw_geo = np.where(np.isfinite(raw_geo), raw_geo, gs.NO_RAIL_GAP_MM)
     # rows: linear in the contact-level shift; columns: onto the uniform wheel grid
     pos = np.interp(shifts, contact_level, np.arange(centre.size))
     k = np.clip(np.floor(pos).astype(int), 0, centre.size - 2)
     w = (pos - k)[:, None]
     rows = (1.0 - w) * raw_geo[k] + w * raw_geo[k + 1]
-    raw = _interp_rows(y_w, y_geo, rows, 100.0)
+    raw = _interp_rows(y_w, y_geo, rows, gs.NO_RAIL_GAP_MM)
+    inside = None
+    if inside_geo is not None:
+        inside_geo = inside_geo[:, order]
+        inside = _interp_rows(y_w, y_geo, (1.0 - w) * inside_geo[k] + w * inside_geo[k + 1],
+                              -gs.RAIL_EDGE_RAMP_MM)
     # the wheel's rigid rise so that the roll of the pair is (rise(y) - rise(-y)) / 1500 mm
     rigid_roll = np.interp(shifts, contact_level, roll)
     rigid_rise = TAPE_CIRCLE_HALF_SPACING_MM * rigid_roll
@@ -542,16 +562,12 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
     lo, hi = FLANK_SMOOTHING_Y_MM
     blend = np.clip((y_w - lo) / (hi - lo), 0.0, 1.0)  # 1 on the tread, 0 on the flank
     sigma = blend * smoothing_mm[0] + (1.0 - blend) * smoothing_mm[1]
-    gap = np.zeros_like(raw)
-    gap2 = np.zeros_like(raw)
     # one smoothing on tread and flange (the default): the blend of two equal filters is the
     # filter itself, computed once
-    scales = (((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
-              else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
-    for weight, sd in scales:
-        gap += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, mode="nearest")
-        gap2 += weight * gaussian_filter1d(raw, sd / wheel_step_mm, axis=1, order=2,
-                                           mode="nearest") / wheel_step_mm**2
+    scales: tuple[tuple[NDArray | float, float], ...] = (
+        ((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
+        else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
+    gap, gap2 = smooth_gap(raw, inside, scales, wheel_step_mm, gap_smoothing)
     log_ratio, app1, a1, b1 = _hertz_unit_table()
     return ContactTable(shift_mm=shifts, wheel_y_mm=y_w, gap_mm=gap, gap2_per_mm=gap2,
                          wheel_z_mm=z_w, wheel_slope=slope, rigid_rise_mm=rigid_rise,

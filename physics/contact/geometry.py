@@ -563,6 +563,44 @@ def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
     return y_wheel, gap - gap0[:, None], roll
 
 
+def rigid_wheel_gap_beyond_rail(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
+                                ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray]:
+    """:func:`rigid_wheel_gap` defined beyond the rail's ends too, for smoothing it.
+
+    Returns (y_wheel_mm (M,), gap_mm (N, M), roll_rad (N,), inside_mm (N, M)): the same pose
+    and the same gap over the rail; beyond the rail's envelope (the flange past the gauge face,
+    the tread past the field side) the rail's end faces are continued as straight lines at the
+    slope of their last 0.5 mm, so the gap is finite and continuous there (it rises steeply:
+    no contact). ``inside_mm`` is the track-y distance of each wheel point inside the rail's
+    envelope (positive with rail below, negative beyond either end), continuous in the shift
+    and not quantised by the wheel's or the rail's sampling [mm]."""
+    check_side(side)
+    y_wheel, gap, roll = rigid_wheel_gap(wt, shifts_mm, side)
+    shift, yaw = _pose_arrays(shifts_mm, 0.0)
+    chosen = _prepare(wt)[0 if side == "left" else 1]
+    _, y, z = _points(chosen, shift, roll, yaw, wt.nominal_radius_mm, chosen.y_ws,
+                      -chosen.z_ws, grid=True)
+    ry, rz = chosen.rail_y, chosen.rail_z
+    lo = int(np.searchsorted(ry, ry[0] + _END_FACE_MM))
+    hi = int(np.searchsorted(ry, ry[-1] - _END_FACE_MM)) - 1
+    slope_lo = (rz[lo] - rz[0]) / (ry[lo] - ry[0])
+    slope_hi = (rz[-1] - rz[hi]) / (ry[-1] - ry[hi])
+    z_rail = np.where(y < ry[0], rz[0] + slope_lo * (y - ry[0]),
+                      np.where(y > ry[-1], rz[-1] + slope_hi * (y - ry[-1]),
+                               np.interp(y, ry, rz)))
+    # the rigid pose's own reference: gap 0 at the primary contact, where rigid_wheel_gap's is
+    reference = np.where(np.isfinite(gap), (z - z_rail) - gap, np.nan)
+    gap0 = np.nanmedian(reference, axis=1)
+    extended = np.where(np.isfinite(gap), gap, z - z_rail - gap0[:, None])
+    inside = np.minimum(y - ry[0], ry[-1] - y)
+    return y_wheel, extended, roll, inside
+
+
+#: Length [mm] of track y over which the rail's end faces' slopes are taken
+#: (:func:`rigid_wheel_gap_beyond_rail`).
+_END_FACE_MM = 0.5
+
+
 #: Stride of the coarse roll solve that starts :func:`rigid_wheel_gap`'s (shifts).
 _ROLL_START_STRIDE = 8
 

@@ -5,6 +5,8 @@ import pytest
 from wearcast.physics.contact.geometry import (
     contact_points,
     contact_table,
+    rigid_wheel_gap,
+    rigid_wheel_gap_beyond_rail,
     s1002_60e1,
     wheel_gap,
 )
@@ -171,3 +173,27 @@ def test_min_gap_kernel_matches_numpy_reference():
         assert np.all(np.isfinite(got[0]))
         np.testing.assert_allclose(got[0], ref[0], rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(got[1], ref[1], rtol=1e-12, atol=1e-12)
+
+
+def test_gap_beyond_the_rail_continues_the_rigid_gap(wheelset):
+    # over the rail: rigid_wheel_gap's gap and pose; beyond its ends: finite, rising away from
+    # the rail (the end faces continued), and the distance inside the rail's envelope is
+    # positive exactly where there is rail below and moves with the shift continuously (the
+    # wheel points and the rail are sampled at 0.05 mm; the distance is not quantised by them)
+    shifts = np.arange(5.0, 9.0, 0.01)
+    y, gap, roll = rigid_wheel_gap(wheelset, shifts, "left")
+    y2, ext, roll2, inside = rigid_wheel_gap_beyond_rail(wheelset, shifts, "left")
+    assert np.array_equal(y, y2) and np.array_equal(roll, roll2)
+    on = np.isfinite(gap)
+    assert np.array_equal(ext[on], gap[on])
+    assert np.all(np.isfinite(ext))
+    assert np.all(inside[~on] <= 1e-9) and np.all(inside[on] >= -1e-9)
+    # at the gauge side the wheel's flange hangs beside the rail: the continued gap is large
+    gauge = (~on) & (y[None, :] < -30.0)
+    assert gauge.any() and np.all(ext[gauge] > 2.0)
+    # the distance of one wheel point grows with every 0.01 mm of shift (1.1-9 mm per mm with
+    # the roll of the climbing flange), never by a step of the samples' 0.05 mm and never
+    # standing still between them, as a distance counted in samples would
+    k = int(np.argmin(np.abs(y + 45.0)))
+    step = np.diff(inside[:, k])
+    assert np.all((step > 0.01) & (step < 0.1))

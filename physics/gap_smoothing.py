@@ -1,0 +1,134 @@
+"""Smoothing of the curving contact table's vertical gap along the wheel profile.
+
+The contact table (:mod:`wearcast.physics.curving_table`) smooths the rigid geometry's
+vertical gap of every wheel point over the rail with a Gaussian (2 mm): the raw gap of a
+nearly conformal tread has shallow double minima, and the Newton solve of the curving needs
+contact candidates that move continuously with the shift. Wheel points with no rail below them
+(the flange beyond the rail's gauge face) have no vertical gap. Two methods
+(``GAP_SMOOTHING``, or ``gap_smoothing=`` of ``curving_table.build_contact_table``):
+
+* ``gaussian`` (the default): those points are filled with ``NO_RAIL_GAP_MM`` and the plain
+  Gaussian filter runs over the whole row. The fill is averaged into the flank's gap and drags
+  the smoothed minimum 4-6 mm down to the flange root (README, known gaps: on the Aosta line
+  the leading wheel then wears a root groove and its flange thickness hardly moves).
+* ``masked`` (stop 29, opt-in): normalised convolution over the points with rail below
+  (:func:`masked_gaussian`, Knutsson-Westin 1993), the certainty of each point a C1 ramp over
+  ``RAIL_EDGE_RAMP_MM`` of its exact distance inside the rail's envelope
+  (``contact.geometry.rigid_wheel_gap_beyond_rail``), so the weights move continuously with
+  the shift; off the rail a wall rising to ``NO_RAIL_GAP_MM`` with the missing coverage. The
+  flange contact then lies within 0.1-0.5 mm (1:20) and 0.1-1.0 mm (1:40) of the rigid
+  geometry's, but the whole-vehicle loop is not step-converged with it and fails more often
+  on worn profiles, so it is not the default.
+
+Set ``GAP_SMOOTHING`` before any table is built: the cached tables
+(``curving_table.contact_table_for`` ...) do not key on it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import gaussian_filter1d
+
+#: Methods of :func:`smooth_gap` (module docstring).
+GAP_SMOOTHING_METHODS = ("gaussian", "masked")
+
+#: The method the contact tables use unless ``gap_smoothing`` is given (module docstring).
+GAP_SMOOTHING = "gaussian"
+
+#: Vertical gap [mm] of wheel points with no rail below them (the flange beyond the gauge
+#: face): the ``gaussian`` method's fill, the ``masked`` method's wall. They cannot touch.
+NO_RAIL_GAP_MM = 100.0
+
+#: Width [mm] (track y) of the ramp of the rail's coverage inside the rail's ends (``masked``):
+#: a wheel point this far or farther inside the rail's envelope has full weight in the
+#: smoothing, one beyond the envelope none.
+RAIL_EDGE_RAMP_MM = 1.0
+
+
+def check_gap_smoothing(method: str) -> str:
+    """``method`` if it is one of ``GAP_SMOOTHING_METHODS``, else ValueError naming it."""
+    if method not in GAP_SMOOTHING_METHODS:
+        raise ValueError(f"gap_smoothing must be one of {GAP_SMOOTHING_METHODS}, got {method!r}")
+    return method
+
+
+def masked_gaussian(weighted_values: NDArray[np.float64], mask: NDArray[np.float64],
+                    sigma_samples: float
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gaussian smoothing along the last axis over the masked samples only (normalised
+    convolution, Knutsson-Westin 1993), with certainty m in [0, 1] per sample and the values
+    already weighted by it (m v): S = G*(m v) / G*(m), and its second derivative
+    S'' = (N'' - 2 S' D' - S D'') / D with N = G*(m v), D = G*(m), S' = (N' - S D') / D
+    [per sample^2] (D', D'' taken relative to a full mask). Where the whole kernel lies on the
+    mask it is the plain Gaussian filter and its second derivative (D = 1, D' = D'' = 0).
+    Off the mask the returned values are meaningless (D may vanish); the caller replaces them.
+
+    Parameters
+    ----------
+    weighted_values : (..., n) the samples times their certainty, m v (finite; 0 where m = 0)
+    mask : (..., n) certainty m of each sample in [0, 1] (0: takes no part)
+    sigma_samples : standard deviation of the Gaussian [samples]
+
+    Returns
+    -------
+    (smoothed, second derivative per sample^2), each (..., n)
+    """
+    m = np.asarray(mask, dtype=float)
+    n0, n1, n2 = (gaussian_filter1d(weighted_values, sigma_samples, axis=-1, order=o,
+                                    mode="nearest")
+                  for o in (0, 1, 2))
+    # the derivatives of D relative to a full mask: scipy's truncated derivative kernels do not
+    # sum to exactly zero, and the plain filter's second derivative keeps that (so does this
+    # one where the mask is full: D' = D'' = 0 there)
+    full = np.ones(m.shape[-1])
+    d0, d1, d2 = (gaussian_filter1d(m, sigma_samples, axis=-1, order=o, mode="nearest")
+                  - (0.0 if o == 0 else gaussian_filter1d(full, sigma_samples, order=o,
+                                                          mode="nearest"))
+                  for o in (0, 1, 2))
+    d0 = np.where(d0 > 1e-12, d0, 1.0)
+    s0 = n0 / d0
+    s1 = (n1 - s0 * d1) / d0
+    s2 = (n2 - 2.0 * s1 * d1 - s0 * d2) / d0
+    return s0, s2
+
+
+def _smooth_step(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The C1 step 3 t^2 - 2 t^3 of t = clip(x, 0, 1): 0 for x <= 0, 1 for x >= 1."""
+    t = np.clip(x, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def smooth_gap(raw_mm: NDArray[np.float64], inside_mm: NDArray[np.float64] | None,
+               scales: tuple[tuple[NDArray[np.float64] | float, float], ...],
+               wheel_step_mm: float, method: str
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The smoothed gap (n_shift, n_wheel) [mm] and its second derivative along the wheel
+    [1/mm].
+
+    raw_mm : the rigid gap on the wheel grid, ``NO_RAIL_GAP_MM`` (``gaussian``) or the rail's
+        end faces continued (``masked``) where no rail lies below [mm]
+    inside_mm : each wheel point's distance inside the rail's envelope (``masked`` only) [mm]
+    scales : (weight, standard deviation [mm]) of each Gaussian, the weights summing to 1 at
+        every wheel point (the tread and flange scales blended)
+    method : ``gaussian`` or ``masked`` (module docstring)
+    """
+    check_gap_smoothing(method)
+    gap = np.zeros_like(raw_mm)
+    gap2 = np.zeros_like(raw_mm)
+    if method == "gaussian":
+        for weight, sd in scales:
+            gap += weight * gaussian_filter1d(raw_mm, sd / wheel_step_mm, axis=1, mode="nearest")
+            gap2 += weight * gaussian_filter1d(raw_mm, sd / wheel_step_mm, axis=1, order=2,
+                                               mode="nearest") / wheel_step_mm**2
+        return gap, gap2
+    if inside_mm is None:
+        raise ValueError("the masked gap smoothing needs each point's distance inside the rail")
+    coverage = _smooth_step(inside_mm / RAIL_EDGE_RAMP_MM)
+    for weight, sd in scales:
+        g0, g2 = masked_gaussian(coverage * raw_mm, coverage, sd / wheel_step_mm)
+        gap += weight * g0
+        gap2 += weight * g2 / wheel_step_mm**2
+    # no rail below: no contact, a wall of NO_RAIL_GAP_MM rising continuously with the missing
+    # coverage (the candidates cannot sit on it, and the gap stays continuous in the shift)
+    return coverage * gap + (1.0 - coverage) * NO_RAIL_GAP_MM, coverage * gap2
