@@ -1,7 +1,7 @@
 """The whole-vehicle wear loop against MEASURED wheels: the Minuetto on Aosta - Pre Saint Didier.
 
 Run: .venv/bin/python benchmarks/validate_aosta_measured.py [--km 3600] [--first-step 0.8]
-     [--halvings 2] [--patch-width hertz]
+     [--halvings 2] [--patch-width hertz] [--gap-smoothing masked [--rail-edge-ramp-mm 3]]
 
 Seed 003 Table 2 (reference/published/aosta_measured_FH_FT_QR.csv) prints FH, FT and qR of
 three ALn 501 Minuetto units (DM061, DM068, DM082), each AVERAGED OVER ALL ITS WHEELS, at
@@ -60,8 +60,14 @@ def main() -> None:
                         choices=gs.GAP_SMOOTHING_METHODS,
                         help="how the contact table's gap is smoothed (physics/gap_smoothing.py); "
                              "the picture is written only with the default")
+    parser.add_argument("--rail-edge-ramp-mm", type=float, default=gs.RAIL_EDGE_RAMP_MM,
+                        help="width of the masked smoothing's coverage ramp inside the rail's "
+                             "ends [mm] (physics/gap_smoothing.py; 3: the loop-robust opt-in)")
     args = parser.parse_args()
+    if not args.rail_edge_ramp_mm > 0:
+        parser.error("--rail-edge-ramp-mm must be positive")
     gs.GAP_SMOOTHING = args.gap_smoothing
+    gs.RAIL_EDGE_RAMP_MM = args.rail_edge_ramp_mm
     measured_csv = REFERENCE / "aosta_measured_FH_FT_QR.csv"
     track_csv = REFERENCE / "aosta_statistical_track_nclass7.csv"
     if not measured_csv.exists() or not track_csv.exists():
@@ -111,7 +117,7 @@ def main() -> None:
                  "vs the whole-vehicle loop (USFD, Table 3 classes)")
     fig.tight_layout()
     IMG.mkdir(parents=True, exist_ok=True)
-    if args.gap_smoothing == "gaussian":
+    if args.gap_smoothing == "gaussian":  # (the ramp acts on the masked method only)
         fig.savefig(IMG / "aosta_measured_vs_loop.png", dpi=110)
     plt.close(fig)
 
