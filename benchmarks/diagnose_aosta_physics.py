@@ -1,6 +1,7 @@
 """Physics diagnosis of the whole-vehicle loop on the measured Minuetto wheels (seed 003 Table 2).
 
 Run: .venv/bin/python benchmarks/diagnose_aosta_physics.py [--step 0.8] [--km 8000] [--workers 2]
+[--gap-smoothing masked --rail-edge-ramp-mm 3]
 
 The model: ``physics.vehicle_wear_simulation`` (minuetto, two motor + two trailer bogies, both
 running directions, all wheels averaged as measured) on seed 003's Table 3 classes with its
@@ -28,6 +29,7 @@ from typing import Any
 
 import pandas as pd
 
+from wearcast.physics import gap_smoothing as gs
 from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
 from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
 from wearcast.statistics.physics_diagnosis import (
@@ -47,9 +49,13 @@ TRACK_CSV = REFERENCE / "aosta_statistical_track_nclass7.csv"
 _RUN: dict[str, Any] = {}
 
 
-def _setup(km: float, step: float) -> None:
+def _setup(km: float, step: float, gap_smoothing: str = gs.GAP_SMOOTHING,
+           rail_edge_ramp_mm: float = gs.RAIL_EDGE_RAMP_MM) -> None:
     from validate_aosta_measured import aosta_classes  # benchmarks/ on sys.path when run
 
+    # the contact tables' gap smoothing (physics/gap_smoothing.py), set in every process
+    gs.GAP_SMOOTHING = gs.check_gap_smoothing(gap_smoothing)
+    gs.RAIL_EDGE_RAMP_MM = rail_edge_ramp_mm
     _RUN.update(km=km, step=step, contacts={}, rails={},
                 classes=aosta_classes(pd.read_csv(TRACK_CSV, comment="#")))
 
@@ -93,7 +99,7 @@ def _attempt(params: Mapping[str, Any]) -> Any:
         return exc
 
 
-def parallel_runs(workers: int, km: float, step: float):
+def parallel_runs(workers: int, km: float, step: float, smoothing: tuple[str, float]):
     """A ``run_all`` for :func:`diagnose_physics` making the runs in ``workers`` processes."""
 
     def run_all(_simulate: Any, sets: Sequence[Mapping[str, Any]]) -> list[Any]:
@@ -101,7 +107,8 @@ def parallel_runs(workers: int, km: float, step: float):
         # the rail state's group first: it holds the chain of rail steps and two runs, the
         # longest task; started last it would run alone at the end (longest task first)
         groups = ([rail] if rail else []) + [[p] for p in sets if not p.get("rail_tonnage_mt")]
-        with ProcessPoolExecutor(workers, initializer=_setup, initargs=(km, step)) as pool:
+        with ProcessPoolExecutor(workers, initializer=_setup,
+                                 initargs=(km, step, *smoothing)) as pool:
             done = [r for g in pool.map(_run_group, groups) for r in g]
         order = [p for g in groups for p in g]
         return [done[order.index(p)] for p in sets]
@@ -117,7 +124,15 @@ def main() -> None:
                         help="processes making the loop runs (1: one after the other)")
     parser.add_argument("--causes", default=",".join(c.name for c in CATALOGUE),
                         help="comma-separated causes of the catalogue (default: all)")
+    parser.add_argument("--gap-smoothing", default=gs.GAP_SMOOTHING,
+                        choices=gs.GAP_SMOOTHING_METHODS,
+                        help="the contact tables' gap smoothing (physics/gap_smoothing.py)")
+    parser.add_argument("--rail-edge-ramp-mm", type=float, default=gs.RAIL_EDGE_RAMP_MM,
+                        help="coverage ramp of the masked smoothing [mm] (gap_smoothing)")
     args = parser.parse_args()
+    if not args.rail_edge_ramp_mm > 0:
+        parser.error("--rail-edge-ramp-mm must be positive")
+    smoothing = (args.gap_smoothing, args.rail_edge_ramp_mm)
     wanted = args.causes.split(",")
     unknown = set(wanted) - {c.name for c in CATALOGUE}
     if unknown:
@@ -127,8 +142,8 @@ def main() -> None:
         print(f"skipped: {REFERENCE} not found")
         return
     measured = pd.read_csv(MEASURED_CSV, comment="#")
-    _setup(args.km, args.step)
-    make = (parallel_runs(args.workers, args.km, args.step) if args.workers > 1
+    _setup(args.km, args.step, *smoothing)
+    make = (parallel_runs(args.workers, args.km, args.step, smoothing) if args.workers > 1
             else run_sequentially)
     runs_s = [0.0]
 
