@@ -140,6 +140,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from wearcast.physics import gap_smoothing as gs  # noqa: E402
 from wearcast.physics.class_contacts import PATCH_WIDTHS  # noqa: E402
 from wearcast.physics.rail_feedback import FEEDBACKS, simulate_rail_steps  # noqa: E402
 from wearcast.physics.vocabulary import CurveClass
@@ -457,7 +458,16 @@ def main() -> None:
     parser.add_argument("--application", default="local", choices=("local", "global"),
                         help="rail steps: the wear law per FASTSIM element on wheel and rail "
                              "(seed 003 §4.1-4.2) or per patch (semi-elliptic)")
+    parser.add_argument("--gap-smoothing", default=gs.GAP_SMOOTHING,
+                        choices=gs.GAP_SMOOTHING_METHODS,
+                        help="the contact tables' gap smoothing (physics/gap_smoothing.py)")
+    parser.add_argument("--rail-edge-ramp-mm", type=float, default=gs.RAIL_EDGE_RAMP_MM,
+                        help="coverage ramp of the masked smoothing [mm] (gap_smoothing)")
     args = parser.parse_args()
+    if not args.rail_edge_ramp_mm > 0:
+        parser.error("--rail-edge-ramp-mm must be positive")
+    gs.GAP_SMOOTHING = args.gap_smoothing
+    gs.RAIL_EDGE_RAMP_MM = args.rail_edge_ramp_mm
     if not REFERENCE.exists():
         print(f"skipped: {REFERENCE} not found (needs ../shared/reference beside the repo)")
         return
