@@ -27,7 +27,7 @@ from wearcast.physics.contact.geometry import (
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import N_SLOTS, candidate_slots
-from wearcast.physics.gap_smoothing import check_gap_smoothing, smooth_gap
+from wearcast.physics.gap_smoothing import check_gap_smoothing, smooth_gap, smoothstep
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -215,7 +215,7 @@ class ContactTable:
                                                           axis=-1), axis=-1), axis=-1)
         rise = (np.minimum(np.take_along_axis(g, left_max, axis=-1),
                            np.take_along_axis(g, right_max, axis=-1)) - g)[..., 1:-1]
-        maturity_all = _smoothstep(rise / PROMINENCE_MM)
+        maturity_all = smoothstep(rise / PROMINENCE_MM)
         # the gaps' origin: the deepest refined minimum of the whole row
         interior = np.broadcast_to(cols[1:-1], inner.shape)
         gc_all = refine(interior)[2]
@@ -248,7 +248,7 @@ class ContactTable:
         #     w_k = m_k f_k / (eps + m_k f_k + sum_j c_kj m_j f_j exp(-(g_j - g_k) / SHARE_GAP_MM)).
         # An isolated mature candidate with its slot secure has weight 1.
         fade = np.where(np.isfinite(key_excl),
-                        _smoothstep((key_excl - np.where(found, key, 0.0)) / SLOT_FADE_MM), 1.0)
+                        smoothstep((key_excl - np.where(found, key, 0.0)) / SLOT_FADE_MM), 1.0)
         maturity = np.where(found, np.take_along_axis(maturity_all, np.where(found, idx, 0),
                                                       axis=-1) * fade, 0.0)
         pairs = [(p, q) for p in range(n_slots) for q in range(p + 1, n_slots)]
@@ -262,7 +262,7 @@ class ContactTable:
             barrier_pairs = np.max(np.where(between, g[..., None, :], -np.inf), axis=-1)
             g0p = g0[..., [p for p, _ in pairs]]
             g0q = g0[..., [q for _, q in pairs]]
-            merged_pairs = 1.0 - _smoothstep((barrier_pairs - np.maximum(g0p, g0q))
+            merged_pairs = 1.0 - smoothstep((barrier_pairs - np.maximum(g0p, g0q))
                                              / SEPARATION_MM)
             for m, (p, q) in enumerate(pairs):
                 merged[..., p, q] = merged_pairs[..., m]
@@ -304,12 +304,6 @@ class ContactTable:
             "a1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_a1) / scale,
             "b1_mm": np.interp(lr, self.hertz_log_ratio, self.hertz_b1) / scale,
         }
-
-
-def _smoothstep(x: NDArray) -> NDArray:
-    """C1 ramp from 0 (x <= 0) to 1 (x >= 1)."""
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
 
 
 def conical_wheel(conicity: float) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:

@@ -102,8 +102,9 @@ def masked_gaussian(weighted_values: NDArray[np.float64], mask: NDArray[np.float
     return s0, s2
 
 
-def _smooth_step(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The C1 step 3 t^2 - 2 t^3 of t = clip(x, 0, 1): 0 for x <= 0, 1 for x >= 1."""
+def smoothstep(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The C1 step 3 t^2 - 2 t^3 of t = clip(x, 0, 1): 0 for x <= 0, 1 for x >= 1 (also the
+    contact table's candidate maturity and slot fades, ``curving_table``)."""
     t = np.clip(x, 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
@@ -133,7 +134,7 @@ def smooth_gap(raw_mm: NDArray[np.float64], inside_mm: NDArray[np.float64] | Non
         return gap, gap2
     if inside_mm is None:
         raise ValueError("the masked gap smoothing needs each point's distance inside the rail")
-    coverage = _smooth_step(inside_mm / RAIL_EDGE_RAMP_MM)
+    coverage = smoothstep(inside_mm / RAIL_EDGE_RAMP_MM)
     for weight, sd in scales:
         g0, g2 = masked_gaussian(coverage * raw_mm, coverage, sd / wheel_step_mm)
         gap += weight * g0
