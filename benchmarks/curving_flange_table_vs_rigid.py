@@ -15,9 +15,16 @@ the ``minuetto`` preset) two blocks:
    from N and the lateral creep force), the lateral creep coefficient mu_y = Fy / N, the
    smallest contact angle at which Nadal's relation Y/Q = (tan d - mu_y) / (1 + mu_y tan d)
    carries that Y/Q, and the unsmoothed rigid gap at the patch's y at that shift.
+3. The Manchester trailer (S1002 on 60E1 1:40, cant 100 mm) at 150-600 m: the leading
+   high-rail wheel's most loaded patch from the table (its Hertz ellipse on the smoothed gap:
+   y, angle, N, b, peak pressure p0, tau_max of FASTSIM) against the one contact pipeline at
+   the same pose (``solve_curving(contact_pipeline=True)``: the multi-point geometry, the
+   non-Hertzian normal contact where the patch is not elliptic, FASTSIM on the patch; the
+   pipeline matches CONTACT on the Manchester benchmark, README). The patch's pressure and
+   tau_max, not only its position, decide the wear.
 
 Run: ``.venv/bin/python benchmarks/curving_flange_table_vs_rigid.py [--inclination 0.05]
-[--bogie trailer] [--gap-smoothing masked]`` (about 1 min).
+[--bogie trailer] [--gap-smoothing masked] [--rail-edge-ramp-mm 3]`` (about 1 min).
 """
 
 from __future__ import annotations
@@ -63,8 +70,14 @@ def main() -> None:
     parser.add_argument("--gap-smoothing", default=gs.GAP_SMOOTHING,
                         choices=gs.GAP_SMOOTHING_METHODS,
                         help="how the contact table's gap is smoothed (physics/gap_smoothing.py)")
+    parser.add_argument("--rail-edge-ramp-mm", type=float, default=gs.RAIL_EDGE_RAMP_MM,
+                        help="the masked smoothing's ramp of the rail's coverage [mm]")
     args = parser.parse_args()
     gs.GAP_SMOOTHING = args.gap_smoothing
+    gs.RAIL_EDGE_RAMP_MM = args.rail_edge_ramp_mm
+    print(f"gap smoothing {gs.GAP_SMOOTHING}"
+          + (f", rail-edge ramp {gs.RAIL_EDGE_RAMP_MM:g} mm" if gs.GAP_SMOOTHING == "masked"
+             else ""))
     vehicle = vehicle_preset("minuetto", args.bogie)
     if args.inclination is not None:
         vehicle = replace(vehicle, rail_inclination=args.inclination)
@@ -114,6 +127,31 @@ def main() -> None:
         print(f"{radius:5.0f} | {shift:5.2f} | {res.wheel_y_mm[0, high, k]:6.1f} "
               f"{np.degrees(d[k]):5.1f} {n[k] / 1e3:5.1f} {res.b_mm[0, high, k]:5.2f} | "
               f"{ratio:4.2f} | {mu_y:4.2f} | {nadal:5.1f} | {at_patch:6.3f}")
+    _table_against_pipeline()
+
+
+def _table_against_pipeline() -> None:
+    """Block 3 (module docstring)."""
+    trailer = vehicle_preset("manchester", "trailer")
+    print("\nleading high-rail wheel, manchester trailer, cant 100 mm: table vs pipeline at the "
+          "table's pose")
+    print("R m | table: y, angle, N kN, b mm, p0 MPa, tau_max MPa | "
+          "pipeline: y, angle, N kN, b mm, pmax MPa, tau_max MPa")
+    for radius in (150.0, 250.0, 400.0, 600.0):
+        res = solve_curving(trailer, radius, cant_mm=100.0, contact_pipeline=True)
+        high = 0 if res.high_rail_side == "left" else 1
+        p = res.pipeline
+        assert p is not None
+        k = int(np.argmax(res.normal_force_n[0, high]))
+        m = int(np.argmax(p["normal_force_n"][0, high]))
+        print(f"{radius:5.0f} | {res.wheel_y_mm[0, high, k]:6.1f} "
+              f"{np.degrees(res.contact_angle_rad[0, high, k]):5.1f} "
+              f"{res.normal_force_n[0, high, k] / 1e3:5.1f} {res.b_mm[0, high, k]:5.2f} "
+              f"{res.p0_mpa[0, high, k]:6.0f} {res.tau_max_mpa[0, high, k]:6.0f} | "
+              f"{p['wheel_y_mm'][0, high, m]:6.1f} "
+              f"{np.degrees(p['contact_angle_rad'][0, high, m]):5.1f} "
+              f"{p['normal_force_n'][0, high, m] / 1e3:5.1f} {p['b_mm'][0, high, m]:5.2f} "
+              f"{p['peak_pressure_mpa'][0, high, m]:6.0f} {p['tau_max_mpa'][0, high, m]:6.0f}")
 
 
 if __name__ == "__main__":

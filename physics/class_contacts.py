@@ -87,6 +87,16 @@ def _operating_point(c: CurveClass, unbalanced_acceleration_m_s2: float,
     return (radius_m, float(c.cant_mm), round(case.speed_m_s, 9))
 
 
+def _no_class_converged(points: Sequence[tuple]) -> CurvingConvergenceError:
+    """The error when no operating point converged, naming the sharpest curve's radius (inf:
+    tangent track only) and every radius tried."""
+    radii = sorted(p[0] for p in points if p[0] is not None)
+    tried = ", ".join(f"{r:g}" for r in radii) + (", tangent" if len(radii) < len(points) else "")
+    return CurvingConvergenceError(
+        f"quasi-static curving did not converge for any class (radii tried: {tried} m)",
+        radii[0] if radii else np.inf, float("nan"))
+
+
 def _curvature(point: tuple) -> float:
     return 0.0 if point[0] is None else 1.0 / point[0]
 
@@ -206,8 +216,7 @@ def class_contacts_all_wheels(vehicle: BogieVehicle, classes: Sequence[CurveClas
     states.update({p: r.saturation_state for p, r in solved.items() if r is not None})
     good = [p for p, r in solved.items() if r is not None]
     if not good and not prev:
-        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
-                                      np.inf, float("nan"))
+        raise _no_class_converged(unique)
     out = {}
     fallbacks = 0
     stacks: dict[str, NDArray] = {}  # the solved points' fields, stacked once for all wheels
@@ -262,8 +271,7 @@ def _wheel_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], points
     speed = np.zeros(n)
     fallbacks = 0
     if not good and previous is None:
-        raise CurvingConvergenceError("quasi-static curving did not converge for any class",
-                                      np.inf, float("nan"))
+        raise _no_class_converged(list(solved))
     # per class: the solved operating point whose contacts it takes (the nearest converged one
     # on a first update), or -1 to keep the previous update's contacts
     order = [p for p in solved if solved[p] is not None]
