@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +43,8 @@ from wearcast.physics.vehicles import BogieVehicle
 from wearcast.physics.vocabulary import AXLES, SIDES, CurveClass
 
 #: Patch-width models of :func:`class_contacts`.
-PATCH_WIDTHS = ("hertz", "kik_piotrowski")
+PatchWidth = Literal["hertz", "kik_piotrowski"]
+PATCH_WIDTHS: tuple[PatchWidth, ...] = get_args(PatchWidth)
 
 
 @dataclass(frozen=True)

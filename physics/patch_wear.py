@@ -25,6 +25,7 @@ from wearcast.physics.class_contacts import ClassContacts
 from wearcast.physics.contact.fastsim import fastsim
 from wearcast.physics.curving import SHEAR_MODULUS_MPA
 from wearcast.physics.wear_distribution import (
+    check_application,
     local_archard_depth,
     local_rate_depth,
     semi_elliptic_depth,
@@ -119,6 +120,7 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
     seed 003 §4.2, ``wear_laws.element_depth_rate_mm_per_m``). The wheel's share of the law's
     volume (``wear_laws.wheel_rail_split``) is applied here.
     """
+    check_application(application)
     wheel_share, _ = wheel_rail_split(law)
     c = contacts
     n_class = c.normal_force_n.shape[0]
@@ -126,8 +128,6 @@ def wheel_depth_basis(contacts: ClassContacts, law: WearLaw, y_grid_mm: NDArray,
     if application == "global":
         vol, shape = _global_volume_and_shape(c, law, y_grid_mm)
         return wheel_share * np.einsum("csb,csn->cbn", vol, shape)
-    if application != "local":
-        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
     n_basis = 4 if law.name == "archard_kth" else 1
     out = np.zeros((n_class, n_basis, np.size(y_grid_mm)))
     loaded = fastsim_on_loaded_patches(c, fastsim_grid, friction)

@@ -50,7 +50,12 @@ from wearcast.physics.profiles.measured_rail import (
     shape_facts,
     upper_envelope,
 )
-from wearcast.physics.profiles.rails import incline, rail_profile, resample_by_arc_length
+from wearcast.physics.profiles.rails import (
+    RAIL_NAMES,
+    incline,
+    rail_profile,
+    resample_by_arc_length,
+)
 
 #: A lateral datum offset up to this is accepted unfitted [mm].
 DATUM_TOLERANCE_MM = 1.0
@@ -66,7 +71,8 @@ NEGATIVE_VERTICAL_LIMIT_MM = -0.5
 #: Farthest a 45-degree crossing is looked for from the reference point [mm].
 CORNER_SEARCH_MM = 15.0
 
-REFERENCE_NAMES = ("60E1", "UIC60", "60E2")
+#: The reference heads known by name: the named rails of ``profiles.rails``.
+REFERENCE_NAMES = RAIL_NAMES
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,11 @@ from wearcast.physics.patch_wear import (
 )
 from wearcast.physics.vehicles import GRAVITY_M_S2, BogieVehicle
 from wearcast.physics.vocabulary import SIDES, CurveClass
-from wearcast.physics.wear_distribution import local_rate_depth, semi_elliptic_depth
+from wearcast.physics.wear_distribution import (
+    check_application,
+    local_rate_depth,
+    semi_elliptic_depth,
+)
 from wearcast.physics.wear_laws import WearLaw, element_depth_rate_mm_per_m, wheel_rail_split
 
 
@@ -139,8 +143,7 @@ def rail_depth_per_vehicle_all_wheels(contacts: Mapping[tuple[int, str], ClassCo
     coeffs = law_coefficients(law)
     n_class = len(classes)
     side_depth: dict[str, NDArray] = {s: np.zeros((n_class, np.size(rail_grid_mm))) for s in SIDES}
-    if application not in ("global", "local"):
-        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    check_application(application)
     for (_, side), c in contacts.items():
         if application == "local":
             side_depth[side] += rail_share * _local_rail_depth_per_passage(

@@ -31,6 +31,7 @@ over the tape circle; depths in mm, positive = material removed.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, cast, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,6 +40,23 @@ from scipy.ndimage import uniform_filter1d
 
 from wearcast.physics.contact.fastsim import FastsimResult
 from wearcast.physics.wear_laws import ArchardKTH, kth_zone
+
+#: How a patch's wear is laid on the profile: ``global`` (its worn volume spread
+#: semi-elliptically, seed 004 eqs. 3-5) or ``local`` (per element of the FASTSIM grid, seed
+#: 002 eqs. 4-5).
+Application = Literal["global", "local"]
+APPLICATIONS: tuple[Application, ...] = get_args(Application)
+#: Methods of :class:`Smoothing`.
+SmoothingMethod = Literal["moving_average", "spline", "none"]
+SMOOTHING_METHODS: tuple[SmoothingMethod, ...] = get_args(SmoothingMethod)
+
+
+def check_application(application: str) -> Application:
+    """``application`` itself when it is ``global`` or ``local``; a ValueError naming it
+    otherwise."""
+    if application not in APPLICATIONS:
+        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    return cast(Application, application)
 
 
 def _grid_step(y_grid_mm: NDArray[np.float64]) -> float:
@@ -355,7 +373,7 @@ class Smoothing:
     clip_negative: bool = True
 
     def __post_init__(self) -> None:
-        if self.method not in ("moving_average", "spline", "none"):
+        if self.method not in SMOOTHING_METHODS:
             raise ValueError("smoothing method must be 'moving_average', 'spline' or 'none'")
         if self.window_mm <= 0 or self.lam <= 0:
             raise ValueError("window_mm and lam must be positive")

@@ -50,7 +50,7 @@ shear traction.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -89,7 +89,7 @@ COEFFICIENT_SCOPES = ("per_body", "wheel_and_rail")
 
 UsfdJump = Literal["continuous", "as_printed"]
 LawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
-LAW_NAMES: tuple[str, ...] = ("archard_kth", "krause_poll", "usfd", "tau_max")
+LAW_NAMES: tuple[LawName, ...] = get_args(LawName)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any, Literal, cast, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,7 +49,12 @@ from wearcast.physics.rail_wear_per_vehicle import (
 )
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
 from wearcast.physics.vocabulary import CurveClass, Direction
-from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear, worn_volume_mm3
+from wearcast.physics.wear_distribution import (
+    Smoothing,
+    apply_normal_wear,
+    check_application,
+    worn_volume_mm3,
+)
 from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_simulation import WearSimulation
 
@@ -109,6 +114,12 @@ def as_loop_classes(route_classes: Any) -> list[CurveClass]:
     return out
 
 
+#: How the wheel steps of :class:`WearSteps` are sized: by the largest depth per step
+#: (``adaptive``) or by a fixed distance (``fixed``).
+StepMode = Literal["adaptive", "fixed"]
+STEP_MODES: tuple[StepMode, ...] = get_args(StepMode)
+
+
 @dataclass(frozen=True)
 class WearSteps:
     """Step control.
@@ -136,7 +147,7 @@ class WearSteps:
     max_substeps: int = 20
 
     def __post_init__(self) -> None:
-        if self.mode not in ("adaptive", "fixed"):
+        if self.mode not in STEP_MODES:
             raise ValueError(f"steps mode must be 'adaptive' or 'fixed', got {self.mode!r}")
         if self.n_steps < 1:
             raise ValueError("n_steps must be >= 1")
@@ -240,8 +251,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     else:
         y = np.asarray(initial_profile[0], dtype=float)
         z = np.asarray(initial_profile[1], dtype=float)
-    if application not in ("global", "local"):
-        raise ValueError(f"application must be 'global' or 'local', got {application!r}")
+    check_application(application)
     if mean_wheel and not rail_from_all_wheels:
         raise ValueError("mean_wheel needs rail_from_all_wheels (the contacts of all four "
                          "wheels)")

@@ -45,7 +45,7 @@ Conventions
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from typing import cast
+from typing import Literal, cast, get_args
 
 import numpy as np
 import pandas as pd
@@ -72,7 +72,8 @@ TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measur
 MEASURES = WEAR_MEASURES
 _KMH = 3.6
 #: Contact models a table's wear measures can come from (module docstring).
-CONTACT_MODELS = ("table", "pipeline", "pipeline_equilibrium")
+ContactModel = Literal["table", "pipeline", "pipeline_equilibrium"]
+CONTACT_MODELS: tuple[ContactModel, ...] = get_args(ContactModel)
 
 
 ClassLike = CurveClass | Mapping[str, object]

@@ -308,6 +308,7 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
     from wearcast.service import diagnosis_store
     from wearcast.service.diagnosis_schemas import DiagnoseIn
     from wearcast.statistics import discrepancy_report
+    from wearcast.statistics.json_values import finite_or_none
 
     body = _validated(DiagnoseIn, {"filter": _json_option(filter, "filter"),
                                    "save_as": save_as, "causes": cause or None})
@@ -325,11 +326,11 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
                   f"({out.n_measurements} measurements, {out.n_groups} groups)")
     for column in ("cause", "relative gain [95 % CI]", "p (max-T)", "reported", "summary"):
         table.add_column(column)
-    for f in out.findings:
+    for f in run.diagnosis.findings:  # the core's findings, as out.findings holds them
         g = f.gain
-        gain = "—" if g.relative is None else (
-            f"{100 * g.relative:.1f} % [{100 * (g.ci95_low or 0):.1f}, "
-            f"{100 * (g.ci95_high or 0):.1f}]")
+        gain = "—" if finite_or_none(g.relative) is None else (
+            f"{100 * g.relative:.1f} % [{100 * (finite_or_none(g.ci95_low) or 0):.1f}, "
+            f"{100 * (finite_or_none(g.ci95_high) or 0):.1f}]")
         p = f.evidence.get("p_value")
         table.add_row(f.cause, gain, "—" if p is None else f"{p:.2g}",
                       "yes" if f.significant and f.material else "no", f.summary)

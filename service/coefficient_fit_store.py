@@ -27,28 +27,27 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from wearcast.physics.vocabulary import Axle, BogieType, Side
+from wearcast.physics.wear_distribution import Application
 from wearcast.service import models_db as db
 from wearcast.service.db import SessionFactory
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.schema_base import FieldsError, Strict, exactly_one
 from wearcast.service.simulation_schemas import SimulationClassIn, SmoothingIn
+from wearcast.statistics.coefficient_fit import FIT_LAWS, FitMethod
 
 log = logging.getLogger(__name__)
 
 KIND = "coefficient_fit"
-MethodName = Literal["exact", "GA", "PSO", "TS", "SA", "DE"]
 Zone = Literal[1, 2, 3, 4]
 #: Default search box per zone (seed 000 §V for zones 1-3; zone 4 around the map mean 350e-4).
 DEFAULT_BOUNDS = {1: (1e-4, 10e-4), 2: (30e-4, 40e-4), 3: (1e-4, 10e-4), 4: (300e-4, 400e-4)}
-#: Laws whose coefficients can be fitted (``statistics.coefficient_fit.FIT_LAWS``).
-FIT_LAWS = ("archard_kth", "tau_max")
 #: Fields that belong to one law only (a request for another law that sets them is refused).
 ARCHARD_FIELDS = ("zones", "bounds", "start")
 TAU_MAX_FIELDS = ("tau_threshold_mpa", "tau_coefficient_bounds", "tau_coefficient_start")
 
 
-def _default_methods() -> list[MethodName]:
+def _default_methods() -> list[FitMethod]:
     return ["exact"]
 
 
@@ -99,7 +98,7 @@ class CoefficientFitIn(Strict):
         "mileage of the measured wear [km]; default the measurement's"))
     law: str = Field(default="archard_kth", description=(
         "wear law whose coefficients are fitted: archard_kth (KTH zones) or tau_max (c_tau)"))
-    methods: list[MethodName] = Field(default_factory=_default_methods, min_length=1,
+    methods: list[FitMethod] = Field(default_factory=_default_methods, min_length=1,
                                       max_length=6)
     zones: list[Zone] = Field(default_factory=_default_zones, min_length=1, max_length=4,
                               description="fitted KTH zones")
@@ -115,7 +114,7 @@ class CoefficientFitIn(Strict):
     tau_coefficient_start: float | None = Field(default=None, gt=0, le=1.0, description=(
         "tau_max only: start of c_tau [mm/(m MPa)]; default the placeholder 1e-6"))
     step_km: float = Field(default=5000.0, gt=0, le=1e6)
-    application: Literal["global", "local"] = "global"
+    application: Application = "global"
     axle: Axle = 1
     side: Side = "right"
     smoothing: SmoothingIn | None = None

@@ -7,6 +7,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
+from wearcast.physics.contact.fastsim import Bound
+from wearcast.physics.contact.normal_contact import NormalMethod
+from wearcast.physics.profiles.rails import RailName
 from wearcast.physics.vocabulary import Side
 from wearcast.service.profile_schemas import MeasuredProfilesIn
 from wearcast.service.schema_base import FieldsError, Strict, at_most_one
@@ -45,7 +48,7 @@ class ContactIn(MeasuredProfilesIn):
     canted, as CONTACT's MBench_UIC60_v3.prr)."""
 
     wheel_file: ProfileFileIn | None = None
-    rail: Literal["60E1", "UIC60", "60E2"] = "60E1"
+    rail: RailName = "60E1"
     rail_file: ProfileFileIn | None = None
     inclination: float = Field(default=1.0 / 40.0, ge=0, le=0.1, description=(
         "rail inclination as a slope (1/40 = 0.025)"))
@@ -57,12 +60,12 @@ class ContactIn(MeasuredProfilesIn):
     friction: float = Field(default=0.3, gt=0, le=1)
     shear_modulus_mpa: float = Field(default=82_000.0, gt=1_000, le=300_000)
     poisson: float = Field(default=0.28, ge=0, lt=0.5)
-    normal_method: Literal["auto", "bem", "bem-coarse", "kp", "hertz"] = Field(
+    normal_method: NormalMethod = Field(
         default="auto", description=(
             "normal problem: auto (Hertz where the patch is elliptic, else the coarse "
             "boundary-element solution), bem, bem-coarse, kp (Kik-Piotrowski), hertz"))
     fastsim_grid: int = Field(default=40, ge=8, le=100)
-    traction_bound: Literal["parabolic", "elliptic"] = "parabolic"
+    traction_bound: Bound = "parabolic"
 
     @model_validator(mode="after")
     def _one_wheel_one_rail(self) -> ContactIn:

@@ -307,6 +307,7 @@ def _diagnose(session: Session, out: Path, model_id: int,
               report_name: str = "diagnosis_report.html") -> DemoDiagnosis:
     """Run the discrepancy finder on every stored measurement (issue 4), print the verdict
     and findings, write the HTML report, save the extended model and predict with it."""
+    from wearcast.physics.vocabulary import BOGIE_TYPES
     from wearcast.service import diagnosis_store, prediction_store
     from wearcast.service.diagnosis_schemas import DiagnoseIn
     from wearcast.service.prediction_schemas import PredictIn
@@ -341,7 +342,7 @@ def _diagnose(session: Session, out: Path, model_id: int,
         if reason:
             echo(f"  {reason}")
         lines = []
-        for bogie in ("motor", "trailer"):
+        for bogie in BOGIE_TYPES:
             for mid, label in ((model_id, "calibrated"), (int(saved.id), "extended")):
                 p = prediction_store.predict(session, mid, PredictIn(
                     route_id=route, bogie_type=bogie, axle=1, side="left",

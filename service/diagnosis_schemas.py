@@ -12,8 +12,10 @@ from wearcast.physics.vocabulary import (
     Region,
     Wheelset,
 )
+from wearcast.service.dataclass_schemas import from_dataclass
 from wearcast.service.model_schemas import ModelOut
 from wearcast.service.schema_base import FieldsError, Filter, Strict
+from wearcast.statistics.findings import Finding, Gain
 
 
 class ProgressionAreasIn(Strict):
@@ -74,24 +76,14 @@ class DiagnoseIn(Strict):
         return self
 
 
+@from_dataclass(Gain)
 class GainOut(BaseModel):
-    before_error: float | None
-    after_error: float | None
-    relative: float | None
-    ci95_low: float | None
-    ci95_high: float | None
-    calibrated_error: float | None
-    metric: str
+    """A finding's gain: the fields of ``statistics.findings.Gain``."""
 
 
+@from_dataclass(Finding)
 class FindingOut(BaseModel):
-    cause: str
-    summary: str
-    evidence: dict[str, Any]
-    extension: dict[str, Any]
-    gain: GainOut
-    significant: bool
-    material: bool
+    """One cause the finder tried: the fields of ``statistics.findings.Finding``."""
 
 
 class DiagnosisOut(BaseModel):

@@ -31,7 +31,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import measurement_store, model_loading, model_store, route_store
 from wearcast.service import models_db as db
-from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.statistics import discrepancy, discrepancy_report, extension, hybrid
 from wearcast.statistics.causes import CATALOGUE
@@ -252,18 +252,11 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
     return row, note
 
 
-def _gain(g: dict[str, Any]) -> GainOut:
-    return GainOut(**g)
-
-
 def diagnosis_out(session: Session, model_id: int, run: DiagnosisRun,
                   saved: db.Model | None = None, save_reason: str | None = None
                   ) -> DiagnosisOut:
     d = run.diagnosis.to_dict()
-    findings = [FindingOut(cause=f["cause"], summary=f["summary"], evidence=f["evidence"],
-                           extension=f["extension"], gain=_gain(f["gain"]),
-                           significant=f["significant"], material=f["material"])
-                for f in d["findings"]]
+    findings = [FindingOut.model_validate(f) for f in d["findings"]]
     return DiagnosisOut(
         model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
         n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],

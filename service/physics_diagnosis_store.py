@@ -31,7 +31,7 @@ from wearcast.service import measurement_store
 from wearcast.service import models_db as db
 from wearcast.service import physics_model_store as store
 from wearcast.service.db import SessionFactory, transaction
-from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut, GainOut
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut
 from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
 from wearcast.service.physics_schemas import MAX_STEPS_PER_RUN
@@ -276,10 +276,7 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
 def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
          factory: SessionFactory) -> DiagnosisOut:
     d = diagnosis.to_dict()
-    findings = [FindingOut(cause=f["cause"], summary=f["summary"], evidence=f["evidence"],
-                           extension=f["extension"], gain=GainOut(**f["gain"]),
-                           significant=f["significant"], material=f["material"])
-                for f in d["findings"]]
+    findings = [FindingOut.model_validate(f) for f in d["findings"]]
     saved_model = None
     if saved is not None:
         with factory() as session:

@@ -14,12 +14,14 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Discriminator, Field, JsonValue, Tag, field_validator
 
+from wearcast.physics.class_contacts import PatchWidth
 from wearcast.physics.vehicles import preset_names
+from wearcast.physics.wear_distribution import Application
+from wearcast.physics.wear_laws import LawName
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.model_schemas import ModelIn
 from wearcast.service.profile_schemas import TrackRailIdsIn
 from wearcast.service.schema_base import Filter, Strict
-from wearcast.service.simulation_schemas import WearLawName
 
 #: Largest simulated mileage of a physics model's run [km].
 MAX_SIMULATED_KM = 1_000_000.0
@@ -65,8 +67,8 @@ class PhysicsSimulationIn(Strict):
         "factor on the wear of flange patches (lubrication < 1)"))
     friction: float | None = Field(default=None, gt=0, lt=1.5, description=(
         "wheel-rail friction replacing the preset's"))
-    patch_width: Literal["hertz", "kik_piotrowski"] = "hertz"
-    application: Literal["global", "local"] = "global"
+    patch_width: PatchWidth = "hertz"
+    application: Application = "global"
     traction_torque_nm: float | None = Field(default=None, ge=-50_000, le=50_000, description=(
         "driving (+) or braking (-) torque on every axle of the motor bogies [N m], held over "
         "the whole route (the line's mean tractive effort); default: the preset's (none)"))
@@ -93,7 +95,7 @@ class PhysicsModelIn(TrackRailIdsIn):
         json_schema_extra={"enum": list[JsonValue](preset_names())})  # refused by _preset
     route_id: int | Annotated[str, Field(max_length=200)] | None = Field(default=None,
         description="a stored route (id or name): its curve classes are simulated")
-    law: WearLawName = Field(default="usfd", description=(
+    law: LawName = Field(default="usfd", description=(
         "wear law (physics/wear_laws.py); default seed 003's USFD, as the Aosta validation"))
     calibration: PhysicsCalibrationIn = Field(default_factory=PhysicsCalibrationIn)
     simulation: PhysicsSimulationIn = Field(default_factory=PhysicsSimulationIn)

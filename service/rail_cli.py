@@ -6,7 +6,7 @@ commands share.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, get_args
 
 import typer
 from rich.table import Table
@@ -32,9 +32,10 @@ def rail_import(
     """Import the rail profiles of a MiniProf file (a repeated file creates nothing)."""
     from wearcast.service import rail_store
     from wearcast.service.cli import _session, _show, raise_field
+    from wearcast.service.readers.miniprof_rail import GaugeSide
 
-    if gauge_side not in (None, "negative_x", "positive_x"):
-        raise_field("gauge_side", "must be negative_x or positive_x")
+    if gauge_side is not None and gauge_side not in get_args(GaugeSide):
+        raise_field("gauge_side", f"must be {' or '.join(get_args(GaugeSide))}")
     with _session() as (database, session):
         result = rail_store.import_rail_file(
             session, file.read_bytes(), file.name, name=name,

@@ -7,7 +7,9 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from wearcast.physics.profiles.measured_rail import RailKind
 from wearcast.physics.rail_head_wear import RailHeadWear
+from wearcast.service.readers.miniprof_rail import GaugeSide, NotRailKind
 
 
 class RailFrameOut(BaseModel):
@@ -15,7 +17,7 @@ class RailFrameOut(BaseModel):
     instrument's origin kept (mirrored / sign-fixed only, ``gauge_side``/``y_down``); the top
     of the head, the gauge point 14 mm below it, the head width there (both sides measured)."""
 
-    gauge_side: Literal["negative_x", "positive_x"]
+    gauge_side: GaugeSide
     gauge_side_source: str
     y_down: bool
     top_mm: tuple[float, float]
@@ -40,7 +42,7 @@ class RailOut(BaseModel):
     name: str
     source_file: str
     part: int | None
-    kind: Literal["rail", "roller"]
+    kind: RailKind
     origin: Literal["instrument", "drawing"]
     layout: str
     measured_on: dt.date | None
@@ -68,7 +70,7 @@ class RailSkippedOut(BaseModel):
     """A profile of an uploaded file that is not imported as a rail, and why."""
 
     part: int | None
-    kind: Literal["wheel", "other"]
+    kind: NotRailKind
     reason: str
 
 

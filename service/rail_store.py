@@ -27,6 +27,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.physics.profiles.measured_rail import (
     NOMINAL_GAUGE_POINT_Y_MM,
+    RAIL_KINDS,
     MeasuredRail,
     orient,
     shape_facts,
@@ -202,8 +203,8 @@ def import_rail_file(session: Session, data: bytes, file_name: str, *,
         raise import_file_error(exc) from exc
     sha256 = hashlib.sha256(data).hexdigest()
     skipped = [RailSkippedOut(part=p.number, kind=p.kind, reason=p.kind_reason)  # type: ignore[arg-type]
-               for p in parsed.parts if p.kind not in ("rail", "roller")]
-    wanted = [p for p in parsed.parts if p.kind in ("rail", "roller")]
+               for p in parsed.parts if p.kind not in RAIL_KINDS]
+    wanted = [p for p in parsed.parts if p.kind in RAIL_KINDS]
     if not wanted:
         raise Unprocessable("file", f"{file_name} holds no rail profile: " + "; ".join(
             (f"part {s.part}: " if s.part is not None else "") + s.reason for s in skipped))

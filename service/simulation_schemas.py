@@ -4,21 +4,23 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import Field, model_validator
 
+from wearcast.physics.class_contacts import PatchWidth
 from wearcast.physics.vocabulary import (
     Axle,
     BogieType,
     Direction,
     Side,
 )
+from wearcast.physics.wear_distribution import Application, SmoothingMethod
+from wearcast.physics.wear_laws import LawName
+from wearcast.physics.wear_loop import StepMode
 from wearcast.service.job_schemas import JobStatusOut
 from wearcast.service.profile_schemas import TrackRailsIn
 from wearcast.service.schema_base import Strict, exactly_one
-
-WearLawName = Literal["archard_kth", "krause_poll", "usfd", "tau_max"]
 
 
 class SimulationClassIn(Strict):
@@ -32,7 +34,7 @@ class SimulationClassIn(Strict):
 class StepsIn(Strict):
     """Wheel steps: ``adaptive`` (max depth per step, seed 003's D_step) or ``fixed`` km."""
 
-    mode: Literal["adaptive", "fixed"] = "adaptive"
+    mode: StepMode = "adaptive"
     count: int = Field(default=20, ge=1, le=200, description="number of wheel steps")
     depth_per_step_mm: float | None = Field(default=None, gt=0, le=5)
     step_km: float | None = Field(default=None, gt=0, le=1e6)
@@ -41,7 +43,7 @@ class StepsIn(Strict):
 
 
 class SmoothingIn(Strict):
-    method: Literal["moving_average", "spline", "none"] = "moving_average"
+    method: SmoothingMethod = "moving_average"
     window_mm: float | None = Field(default=None, gt=0, le=50)
 
 
@@ -54,9 +56,9 @@ class SimulationIn(TrackRailsIn):
     route_id: int | str | None = None
     classes: list[SimulationClassIn] | None = Field(default=None, min_length=1,
                                                     max_length=200)
-    law: WearLawName = "archard_kth"
-    application: Literal["global", "local"] = "global"
-    patch_width: Literal["hertz", "kik_piotrowski"] = Field(default="hertz", description=(
+    law: LawName = "archard_kth"
+    application: Application = "global"
+    patch_width: PatchWidth = Field(default="hertz", description=(
         "contact patch width: hertz (the curving model's ellipse) or kik_piotrowski (widened to "
         "the unsmoothed gap: conformal flange-root patches become wide and mild)"))
     steps: StepsIn = Field(default_factory=StepsIn)

@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, Field, model_validator
 
+from wearcast.physics.wear_tables import ContactModel
 from wearcast.service.profile_schemas import TrackRailsIn
 from wearcast.service.schema_base import Strict, exactly_one
 
@@ -65,7 +66,7 @@ class WearTableComputeIn(TrackRailsIn):
         "wheel-rail friction coefficient (default: the preset's)"))
     tangent_speed_kmh: float = Field(default=100.0, gt=0, le=500)
     max_speed_kmh: float | None = Field(default=None, gt=0, le=500)
-    contact_model: Literal["table", "pipeline", "pipeline_equilibrium"] = Field(
+    contact_model: ContactModel = Field(
         default="table", description=(
             "contacts the wear measures come from: the contact table's Hertz ellipses at the "
             "curving equilibrium (`table`); the one contact pipeline's patches (non-Hertzian "

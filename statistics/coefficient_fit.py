@@ -53,7 +53,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -74,9 +74,13 @@ from wearcast.statistics.coefficient_search import FULL_LOOP_BUDGETS, SEARCHES, 
 SEED_000_BOUNDS = ((1e-4, 10e-4), (30e-4, 40e-4), (1e-4, 10e-4))
 #: Seed 000 §VI "traditional" method: the means of the ranges [-].
 SEED_000_MEAN_K = (5e-4, 35e-4, 5e-4, 350e-4)
-METHODS = ("exact", "GA", "PSO", "TS", "SA", "DE")
+#: Fitting methods: exact bounded least squares and the searches of seed 000 (GA, PSO, TS, SA,
+#: DE; ``coefficient_search.SEARCHES``).
+FitMethod = Literal["exact", "GA", "PSO", "TS", "SA", "DE"]
+METHODS: tuple[FitMethod, ...] = get_args(FitMethod)
 #: Laws whose coefficients :func:`calibrate` fits.
-FIT_LAWS = ("archard_kth", "tau_max")
+FitLaw = Literal["archard_kth", "tau_max"]
+FIT_LAWS: tuple[FitLaw, ...] = get_args(FitLaw)
 #: Default search box of the tau_max coefficient c_tau [mm/(m MPa)]: two decades either side of
 #: the placeholder 1e-6 of ``WearLaw`` (no paper publishes c_tau; seed 001 only ranks tau_max).
 TAU_MAX_BOUNDS = ((1e-8, 1e-4),)

@@ -7,13 +7,13 @@ and the physics diagnosis (:mod:`wearcast.statistics.physics_diagnosis`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wearcast.statistics.json_values import json_value
+from wearcast.statistics.json_values import fields_json
 
 
 def bootstrap_gain_interval(before_by_group: ArrayLike, after_by_group: ArrayLike,
@@ -34,31 +34,32 @@ def bootstrap_gain_interval(before_by_group: ArrayLike, after_by_group: ArrayLik
 
 @dataclass(frozen=True)
 class Gain:
-    """Held-out error before (the baseline) and after (the cause's extension).
-
-    before_error, after_error : mean held-out error per measurement in the unit of ``metric``
-        (the hybrid finder: log-area working residual squared and summed over both regions,
-        or the wear-curve shape residual [mm²·points]; the physics diagnosis: squared FT, FH and
-        qR error [mm²])
-    relative : 1 - after / before; ci95_low, ci95_high : bootstrap interval over groups
-    metric : 'log_area', 'wear_curve_shape' or 'ft_fh_qr_squared_error_mm2'
-    calibrated_error : error of the model exactly as calibrated (hybrid finder, area metric)
-    """
+    """Held-out error of the finder's baseline (before) and of the cause's extension (after),
+    and the relative gain with its bootstrap interval over the test groups."""
 
     before_error: float
+    """mean held-out error per measurement of the baseline, in the unit of ``metric`` (the
+    hybrid finder: log-area working residual squared and summed over both regions, or the
+    wear-curve shape residual [mm²·points]; the physics diagnosis: squared FT, FH and qR error
+    [mm²])"""
     after_error: float
+    """mean held-out error per measurement with the cause's extension, in the unit of
+    ``metric``"""
     relative: float
+    """relative gain 1 - after_error / before_error [-]"""
     ci95_low: float
+    """lower end of the 95 % percentile-bootstrap interval of ``relative`` over the test
+    groups [-]"""
     ci95_high: float
+    """upper end of the 95 % bootstrap interval of ``relative`` [-]"""
+    calibrated_error: float | None = field(default=None, kw_only=True)
+    """error of the model exactly as calibrated (hybrid finder, area metric; else None)"""
     metric: str
-    calibrated_error: float | None = None
+    """what the errors measure: ``log_area``, ``wear_curve_shape`` or
+    ``ft_fh_qr_squared_error_mm2``"""
 
     def to_dict(self) -> dict[str, Any]:
-        return {"before_error": json_value(self.before_error),
-                "after_error": json_value(self.after_error),
-                "relative": json_value(self.relative), "ci95_low": json_value(self.ci95_low),
-                "ci95_high": json_value(self.ci95_high),
-                "calibrated_error": json_value(self.calibrated_error), "metric": self.metric}
+        return fields_json(self)
 
 
 @dataclass(frozen=True)
@@ -67,18 +68,25 @@ class Finding:
     test rejects) and ``material`` (its relative gain is large enough)."""
 
     cause: str
+    """code of the cause in the finder's catalogue"""
     summary: str
+    """the finding in plain words: the fitted effect and the held-out gain"""
     evidence: dict[str, Any]
+    """the test behind the finding: its p-values (raw and adjusted across the catalogue) and
+    what the finder reports with them (the test, effect sizes, intervals, test groups)"""
     extension: dict[str, Any]
+    """the extension the cause adds to the model, fitted (its parameters; what a saved
+    model keeps)"""
     gain: Gain
+    """held-out error before and after the extension"""
     significant: bool
+    """the cause's test rejects "no effect" (p-value adjusted across the catalogue below
+    the finder's alpha)"""
     material: bool
+    """the relative gain is at least the finder's smallest material gain"""
 
     def to_dict(self) -> dict[str, Any]:
-        return {"cause": self.cause, "summary": self.summary,
-                "evidence": json_value(self.evidence), "extension": json_value(self.extension),
-                "gain": self.gain.to_dict(), "significant": self.significant,
-                "material": self.material}
+        return fields_json(self)
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,11 @@
 """Values made writable as JSON: nested values with numpy scalars and arrays made plain
-Python (:func:`json_value`), and numbers with non-finite floats as null (one number, or a
-numpy array as a list).
+Python (:func:`json_value`), numbers with non-finite floats as null (one number, or a
+numpy array as a list), and a dataclass's fields (:func:`fields_json`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -47,3 +48,15 @@ def json_value(value: Any, *, infinity_as_text: bool = False) -> Any:
             return "inf" if value > 0 else "-inf"
         return None
     return value
+
+
+def fields_json(obj: Any) -> dict[str, Any]:
+    """Every field of the dataclass instance ``obj``, in the dataclass's order, as
+    :func:`json_value` writes it (a nested dataclass as its own fields): the JSON form the
+    HTTP answers derived from the dataclass publish (``service.dataclass_schemas``)."""
+    out = {}
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        is_instance = dataclasses.is_dataclass(value) and not isinstance(value, type)
+        out[f.name] = fields_json(value) if is_instance else json_value(value)
+    return out

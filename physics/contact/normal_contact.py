@@ -72,6 +72,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -100,7 +101,8 @@ _FloatArray = NDArray[np.float64]
 #: ``gap_fit_residual``), chosen from the errors of Hertz against the BEM (module docstring).
 HERTZ_GAP_RESIDUAL = 0.03
 #: Methods of ``patch_normal_contact``.
-METHODS = ("bem", "bem-coarse", "kp", "hertz", "auto")
+NormalMethod = Literal["auto", "bem", "bem-coarse", "kp", "hertz"]
+METHODS: tuple[NormalMethod, ...] = get_args(NormalMethod)
 #: Elements per direction of the "bem-coarse" grid (over the rigid interpenetration region).
 COARSE_ELEMENTS = 24
 #: Smallest approach [mm] the search for the approach carrying a wheel load starts from.

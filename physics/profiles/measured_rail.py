@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -218,6 +219,12 @@ def rail_points(y_mm: ArrayLike, z_mm: ArrayLike, what: str
         raise ValueError(f"{what} points must be finite")
     return y, z
 
+
+#: What a measured rail is (:class:`MeasuredRail`): a track rail or a roller of a roller rig.
+RailKind = Literal["rail", "roller"]
+RAIL_KINDS: tuple[RailKind, ...] = get_args(RailKind)
+
+
 @dataclass(frozen=True, eq=False)
 class MeasuredRail(ContentIdentity):
     """A measured rail head, points in the rail frame (see the module docstring) [mm].
@@ -237,7 +244,7 @@ class MeasuredRail(ContentIdentity):
 
     def __post_init__(self) -> None:
         y, z = rail_points(self.y_mm, self.z_mm, "measured rail")
-        if self.kind not in ("rail", "roller"):
+        if self.kind not in RAIL_KINDS:
             raise ValueError(f"kind must be 'rail' or 'roller', got {self.kind!r}")
         if self.inclination is not None and not 0.0 <= self.inclination <= 0.2:
             raise ValueError(f"inclination must be a slope between 0 and 0.2 (1/5), got "

@@ -18,13 +18,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache, lru_cache
-from typing import Protocol
+from typing import Literal, Protocol, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 #: Depth below the rail top down to which the 1:20 flank is modelled [mm].
 RAIL_FLANK_DEPTH_MM = 35.0
+#: The named rail heads (EN 13674-1): 60E1, its alias UIC60, and 60E2.
+RailName = Literal["60E1", "UIC60", "60E2"]
+RAIL_NAMES: tuple[RailName, ...] = get_args(RailName)
 #: Flank slope dy/dz of both rails (1:20), EN 13674-1.
 _FLANK_DY_DZ = 1.0 / 20.0
 

@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 
+from wearcast.physics.vocabulary import Side
 from wearcast.service.readers.errors import ImportFileError
 
 TAPE_CIRCLE_X_MM = 70.0
@@ -75,7 +76,7 @@ class MiniProfFile:
     x_mm: np.ndarray
     y_mm: np.ndarray
     measured_on: date | None
-    side_hint: Literal["left", "right"] | None
+    side_hint: Side | None
     instrument_serial: str | None
     instrument_parameters: dict[str, float] | None
     parts: tuple[MiniProfPart, ...] = ()
@@ -171,7 +172,7 @@ def _parse_date(text: str | None) -> date | None:
         return None
 
 
-def _side(text: str | None) -> Literal["left", "right"] | None:
+def _side(text: str | None) -> Side | None:
     value = (text or "").strip().lstrip("%").strip().lower()
     if value in ("l", "left"):
         return "left"

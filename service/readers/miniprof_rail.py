@@ -35,6 +35,7 @@ import numpy as np
 
 from wearcast.physics.profiles.measured_rail import (
     DEPTH_EVIDENCE_MM,
+    RailKind,
     RailShapeFacts,
     orient,
     shape_facts,
@@ -55,7 +56,9 @@ from wearcast.service.readers.miniprof import (
 
 RAIL_FILE_EXTENSIONS = (".ban", ".mpt")
 GaugeSide = Literal["negative_x", "positive_x"]
-RailKind = Literal["rail", "roller", "wheel", "other"]
+#: What a profile of a rail file is: a rail head (``MeasuredRail``'s kinds) or not one.
+NotRailKind = Literal["wheel", "other"]
+PartKind = RailKind | NotRailKind
 _ADDED = re.compile(r"\badd(ed|ing)?\b|\bby hand\b|\bmanual", re.IGNORECASE)
 
 
@@ -87,7 +90,7 @@ class RailPart:
     header: dict[str, str]
     x_mm: np.ndarray
     y_mm: np.ndarray
-    kind: RailKind
+    kind: PartKind
     kind_reason: str
     y_down: bool
     y_sense_evidence: str
@@ -263,7 +266,7 @@ def _part(mp: MiniProfFile, number: int | None, header: dict[str, str], x: np.nd
     except ValueError:
         warnings.append(f"{label}: RailGaugePoint={gauge_depth!r} is not a number (ignored)")
     if _is_wheel(mp, number):
-        kind: RailKind = "wheel"
+        kind: PartKind = "wheel"
         reason = ("a wheel: it has a flange and a taperline where the wheel reader looks for "
                   "them; import it through POST /v1/measurements/import")
     else:

@@ -11,7 +11,7 @@ wear (``?reference=`` to take it against another head).
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated
 
 from fastapi import APIRouter, File, Form, Query, UploadFile
 
@@ -19,6 +19,7 @@ from wearcast.service import rail_store
 from wearcast.service.deps import SessionDep, SettingsDep
 from wearcast.service.errors import Unprocessable
 from wearcast.service.rail_schemas import RailImportOut, RailOut
+from wearcast.service.readers.miniprof_rail import GaugeSide
 
 router = APIRouter(tags=["rails"])
 
@@ -28,7 +29,7 @@ def import_rail(
     session: SessionDep, settings: SettingsDep,
     file: Annotated[UploadFile, File(description="MiniProf rail file (.ban, .mpt)")],
     name: Annotated[str | None, Form(max_length=200)] = None,
-    gauge_side: Annotated[Literal["negative_x", "positive_x"] | None, Form(description=(
+    gauge_side: Annotated[GaugeSide | None, Form(description=(
         "instrument-X side of the gauge face (default: from the file)"))] = None,
     inclination: Annotated[str | None, Form(description="laying inclination, e.g. 1/40")]
     = None,
