@@ -100,6 +100,41 @@ class CurvingConvergenceError(RuntimeError):
 
 
 
+#: Residual [scaled] of a state whose wheelset leaves the contact table (:class:`_OnTable`).
+_OFF_TABLE_RESIDUAL = 1e3
+#: Columns of the state holding the wheelsets' lateral shifts of their contact frames [mm]
+#: (``bogie_equations``: per wheelset shift, yaw, rolling ratio and the two approaches).
+_SHIFT_COLUMNS = [0, 5]
+
+
+class _OnTable:
+    """A ``CompiledBogie`` restricted to the contact table's range of shift: a state with a
+    wheelset's contact shift beyond it gets the residual ``_OFF_TABLE_RESIDUAL`` in every
+    equation, so no solver accepts it or steps to it. Beyond its range the table repeats its
+    last row (``ContactTable.candidates``): the contacts stop moving with the shift, the
+    wheelset has no lateral stiffness there and the equations hold at spurious states (a
+    worn metro_b wheel on a worn rail at 300 m: Newton's first step from centred wheelsets
+    went to -41 m and converged there, residual 2e-8)."""
+
+    def __init__(self, bogie: CompiledBogie, table: ContactTable):
+        self.bogie = bogie
+        sides = (table,) if table.right is None else (table, table.right)
+        self.limit_mm = min(min(-float(t.shift_mm[0]), float(t.shift_mm[-1])) for t in sides)
+
+    def _off(self, q: NDArray) -> NDArray[np.bool_]:
+        return np.any(np.abs(q[:, _SHIFT_COLUMNS]) > self.limit_mm, axis=-1)[:, None]
+
+    def residual(self, q: NDArray, params: NDArray) -> NDArray[np.float64]:
+        """``CompiledBogie.residual``, ``_OFF_TABLE_RESIDUAL`` off the table."""
+        return np.where(self._off(q), _OFF_TABLE_RESIDUAL, self.bogie.residual(q, params))
+
+    def jacobian(self, q: NDArray, params: NDArray, steps: NDArray
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``CompiledBogie.jacobian`` with the residual of :meth:`residual`."""
+        res, jac = self.bogie.jacobian(q, params, steps)
+        return np.where(self._off(q), _OFF_TABLE_RESIDUAL, res), jac
+
+
 # --------------------------------------------------------------------------------------------
 # Public solvers
 # --------------------------------------------------------------------------------------------
@@ -251,13 +286,13 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
             p_start[k] = p_end[k]
 
     # bogie_residual with the saturation law, compiled (bogie_residual is its reference)
-    saturation = CompiledBogie(vehicle, table)
+    saturation = _OnTable(CompiledBogie(vehicle, table), table)
     q, norm, ok = continuation_batch(saturation.residual, q0, p_start, p_end, tol,
                                      jac=saturation.jacobian)
     q_saturation = q.copy()
     if creep_grid is not None and np.any(ok):
         # the saturation law's equilibrium is the start of Newton with FASTSIM's forces
-        fastsim = CompiledBogie(vehicle, table, creep_grid)
+        fastsim = _OnTable(CompiledBogie(vehicle, table, creep_grid), table)
         rows = np.nonzero(ok)[0]
         q_f, norm_f, ok_f = newton_batch(fastsim.residual, q[rows], p_end[rows], tol,
                                           max_iter=30, jac=fastsim.jacobian)
