@@ -93,6 +93,11 @@ def rails_worn_to_tonnages(vehicle: BogieVehicle | str, route_classes: Any,
         depth = step.rail_depth_per_vehicle_mm[0]
         while pending and pending[0] <= done_mt + step_mt:
             t = pending.pop(0)
+            if t == done_mt + step_mt:
+                # the end of the step: the step's own rail (seed 003 eq. 4), not its depth
+                # scaled back from the tonnage (t -> passages rounds in the last bit)
+                rails[t] = replace(step.rails[1], name=f"worn {t:g} Mt")
+                continue
             passages = (t - done_mt) * 1e6 / mass_t
             rails[t] = wear_rail(rail, step.rail_y_mm, passages * depth,
                                  float(veh.rail_inclination), name=f"worn {t:g} Mt")
