@@ -26,9 +26,16 @@ Model (Wickens / Elkins-Gostling style steady curving, solved as a nonlinear equ
   ``contact.hertz``), attributed to the flange when wheel y < -30 mm.
 * Creepages in each wheel's local frame (lateral axis towards that wheel's field side, the
   right wheel's frame mirrored so both wheels are described alike): xi = 1 - kappa y_c - (1+e)
-  r/r0, eta = -s psi cos(delta), phi = (-(1+e) sin(delta)/r0 + s kappa cos(delta)) [1/m]; s = +1
-  left, -1 right; y_c the contact's distance from the track centre line. Creep forces of the
-  equilibrium: FASTSIM (``contact.fastsim``, CONTACT's flexibilities, 16 x 16) on each patch;
+  r/r0, eta = -s psi / cos(delta), phi = (-(1+e) sin(delta)/r0 + s kappa cos(delta)) [1/m];
+  s = +1 left, -1 right; y_c the contact's distance from the track centre line. The lateral
+  creepage carries the contact point's lead: the contact of a wheel yawed by psi lies about
+  r tan(delta) psi ahead of or behind the axle (the rigid geometry with yaw,
+  ``contact.geometry``), where the wheel's rotation moves the surface normal to the axle at
+  V psi tan(delta); with the lateral slip -V psi this is -psi / cos(delta) in the contact plane
+  (Wickens 2003; equal within 5 % to the exact kinematics of ``contact.creepages`` at the
+  geometry's contact points, tests/physics/test_curving_creepages.py). Before stop 30 it was
+  -s psi cos(delta), the lead left out: 3x too small at 55 deg, 9x at 70 deg (the flank).
+  Creep forces of the equilibrium: FASTSIM (``contact.fastsim``, CONTACT's flexibilities, 16 x 16) on each patch;
   the continuation runs with Kalker's linear theory saturated by Shen-Hedrick-Elkins
   (``contact.creep``, smooth, spin included) and its equilibrium starts Newton with FASTSIM;
   tau_max from FASTSIM on the final state.
@@ -138,7 +145,10 @@ def bogie_contacts(table: ContactTable, y_mm, psi, e, d_mm, kappa, r0, mu,
     ratio = (1.0 + e)[..., None, None]
     ss = s[:, None]
     xi = 1.0 - k * ss * col["lateral_mm"] / 1000.0 - ratio * col["radius_m"] / r0
-    eta = -ss * psi[..., None, None] * cos
+    # the contact point of a yawed wheel leads the axle by about -r tan(delta) psi, so the
+    # wheel's rotation adds a normal slip V psi tan(delta) to the lateral -V psi: in the contact
+    # plane -psi (cos(delta) + sin(delta) tan(delta)) = -psi / cos(delta) (module docstring)
+    eta = -ss * psi[..., None, None] / cos
     phi = (-ratio * sin / r0 + ss * k * cos) / 1000.0
     loaded = normal > 0
     a_safe, b_safe = np.where(loaded, a, 1.0), np.where(loaded, b, 1.0)

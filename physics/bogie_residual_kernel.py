@@ -200,7 +200,7 @@ def _wheelset_sums(qrow, w, k, tab, tab_right, consts, memory, memory_right, g_r
             a = cols[5] * n13
             b = cols[6] * n13
             xi = 1.0 - k * sgn * lateral / 1000.0 - ratio * radius / r0
-            eta = -sgn * psi * cos
+            eta = -sgn * psi / cos  # the contact point's lead (bogie_equations)
             phi = (-ratio * sin / r0 + sgn * k * cos) / 1000.0
             if creep_grid == 0:
                 fx, fy, mz, _ = saturated_creep_one(xi, eta, phi, a, b, normal, consts[MU],

@@ -7,18 +7,20 @@ contact candidates that move continuously with the shift. Wheel points with no r
 (the flange beyond the rail's gauge face) have no vertical gap. Two methods
 (``GAP_SMOOTHING``, or ``gap_smoothing=`` of ``curving_table.build_contact_table``):
 
-* ``gaussian`` (the default): those points are filled with ``NO_RAIL_GAP_MM`` and the plain
-  Gaussian filter runs over the whole row. The fill is averaged into the flank's gap and drags
-  the smoothed minimum 4-6 mm down to the flange root (README, known gaps: on the Aosta line
-  the leading wheel then wears a root groove and its flange thickness hardly moves).
-* ``masked`` (stop 29, opt-in): normalised convolution over the points with rail below
-  (:func:`masked_gaussian`, Knutsson-Westin 1993), the certainty of each point a C1 ramp over
-  ``RAIL_EDGE_RAMP_MM`` of its exact distance inside the rail's envelope
+* ``masked`` (the default since stop 30): normalised convolution over the points with rail
+  below (:func:`masked_gaussian`, Knutsson-Westin 1993), the certainty of each point a C1 ramp
+  over ``RAIL_EDGE_RAMP_MM`` of its exact distance inside the rail's envelope
   (``contact.geometry.rigid_wheel_gap_beyond_rail``), so the weights move continuously with
   the shift; off the rail a wall rising to ``NO_RAIL_GAP_MM`` with the missing coverage. The
-  flange contact then lies within 0.1-0.5 mm (1:20) and 0.1-1.0 mm (1:40) of the rigid
-  geometry's, but the whole-vehicle loop is not step-converged with it and fails more often
-  on worn profiles, so it is not the default.
+  loaded flange patch then matches the one contact pipeline in its own force equilibrium
+  (the Manchester trailer at 150-600 m: position 0.3-0.9 mm, angle 0.2 deg, b within 15 %,
+  tau_max within 30 %; ``benchmarks/curving_flange_table_vs_rigid.py`` block 3,
+  ``tests/physics/test_curving_flange_contact.py``).
+* ``gaussian`` (the default before stop 30): those points are filled with ``NO_RAIL_GAP_MM``
+  and the plain Gaussian filter runs over the whole row. The fill is averaged into the flank's
+  gap: the loaded flange-root patch is in place but about 10x too narrow (b 0.6 against
+  5.4-5.7 mm) with tau_max 3-6x too high, and the unloaded first touch lies 4-6 mm down at
+  the root (README, known gaps).
 
 Set ``GAP_SMOOTHING`` before any table is built: the cached tables
 (``curving_table.contact_table_for`` ...) do not key on it.
@@ -34,7 +36,7 @@ from scipy.ndimage import gaussian_filter1d
 GAP_SMOOTHING_METHODS = ("gaussian", "masked")
 
 #: The method the contact tables use unless ``gap_smoothing`` is given (module docstring).
-GAP_SMOOTHING = "gaussian"
+GAP_SMOOTHING = "masked"
 
 #: Vertical gap [mm] of wheel points with no rail below them (the flange beyond the gauge
 #: face): the ``gaussian`` method's fill, the ``masked`` method's wall. They cannot touch.
@@ -44,15 +46,14 @@ NO_RAIL_GAP_MM = 100.0
 #: a wheel point this far or farther inside the rail's envelope has full weight in the
 #: smoothing, one beyond the envelope none. A module setting read at table build (like
 #: ``GAP_SMOOTHING``; the cached tables do not key on it); the ``gaussian`` method ignores it.
-#: 1 mm (the default) keeps the flange contact as close to the rigid geometry's as the module
-#: docstring says. Opt-in 3 mm (1.5 x the smoothing's 2 mm standard deviation, so the normalised
+#: 3 mm (the default; 1.5 x the smoothing's 2 mm standard deviation, so the normalised
 #: convolution's denominator G*(m) varies on the patch scale, not below it): the smoothed gap
 #: of a FLANK-WORN wheel keeps one minimum moving continuously with the shift, and the Aosta
-#: whole-vehicle loop is step-converged with class fallbacks near the default's, at the price
-#: of a flange contact 1.3-1.8 mm (1:40) and 1.8-2.4 mm (1:20) root-wards of the rigid one
-#: (still on the flank; the Gaussian default is 3-6 mm off). Measured by helper flange12c:
-#: ``benchmarks/validate_aosta_measured.py --gap-smoothing masked --rail-edge-ramp-mm 3``.
-RAIL_EDGE_RAMP_MM = 1.0
+#: whole-vehicle loop is step-converged (helper flange12c, stop 29), with the unloaded first
+#: touch 1.3-1.8 mm (1:40) and 1.8-2.4 mm (1:20) root-wards of the rigid one (still on the
+#: flank; the Gaussian method is 3-6 mm off). A 1 mm ramp keeps that first touch within
+#: 0.1-1.0 mm but the loop is not step-converged with it.
+RAIL_EDGE_RAMP_MM = 3.0
 
 
 def check_gap_smoothing(method: str) -> str:

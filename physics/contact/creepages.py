@@ -14,7 +14,9 @@ contact plane towards the wheel's field side, e_n the rail's outward normal):
 a_out the axle direction pointing out of the track through that wheel, s = +1 for the left and
 -1 for the right wheel (each wheel in its own mirrored frame). For small angles
 xi = omega r / V - (1 - kappa y) (y the contact's track y, + left: the inner wheel of a curve
-travels less than V, the outer more), eta = psi cos(delta) and
+travels less than V, the outer more), eta = psi cos(delta) for a contact point under the axle
+(x = 0) and psi / cos(delta) at the contact point of a yawed wheel, which leads the axle by
+about -r tan(delta) psi (``geometry``), and
 phi = -sin(delta +/- roll)/r - s kappa cos(delta) (the contact angle relative to the axle;
 + for the left wheel) (seed 000 §III, seed 002 §2; Kalker 1967; the curve terms as in the
 quasi-static curving of ``curving``, Wickens 2003).

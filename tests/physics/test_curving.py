@@ -230,14 +230,16 @@ def test_scipy_polish_survives_non_finite_probes():
     assert np.all(np.isfinite(q)) and ok == (norm < 1e-9)
 
 
-def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
+def test_kik_piotrowski_width_widens_narrow_patches_only():
     # Minuetto (S1002 on 60E1 1:20) in a 162 m curve: the leading outer wheel touches the rail
     # in the flange root (S1002 section D, concave R13) on the gauge corner (convex R13), a
-    # conformal pair whose smoothed-gap Hertz ellipse is < 1 mm wide at p_mean > 3 GPa. The
-    # unsmoothed gap within 0.55 x the approach (Kik & Piotrowski 1996) spans several mm there;
-    # on the Hertzian tread patch of the tangent class it stays within 25 % of Hertz's b (KP with
-    # epsilon = 0.55 is ~5 % wider than Hertz for a circular patch, more for our circular
-    # estimate of the approach on elongated ellipses).
+    # conformal pair. With the masked table (stop 30) the smoothed gap's Hertz ellipse there is
+    # already wide (measured b 8.19 mm at 90 kN; the former Gaussian table's was < 1 mm wide at
+    # p_mean > 3 GPa), and the Kik-Piotrowski width (the unsmoothed gap within 0.55 x the
+    # approach, Kik & Piotrowski 1996) never narrows a patch: it keeps b there. On the Hertzian
+    # tread patch of the tangent class it widens b by less than 25 % (KP with epsilon = 0.55 is
+    # ~5 % wider than Hertz for a circular patch, more for our circular estimate of the
+    # approach on elongated ellipses; measured 3.30 -> 3.88 mm).
     from wearcast.physics.class_contacts import class_contacts
     from wearcast.physics.profiles.s1002 import s1002_height_mm
     from wearcast.physics.vocabulary import CurveClass
@@ -252,9 +254,9 @@ def test_kik_piotrowski_width_widens_conformal_flange_root_patches_only():
     root = hertz.in_contact[0] & (hertz.wheel_y_mm[0] < -30.0)
     tread = hertz.in_contact[1]
     assert root.any() and tread.any()
-    assert np.all(hertz.b_mm[0][root] < 1.0)
-    assert np.all(kp.b_mm[0][root] > 3.0 * hertz.b_mm[0][root])
-    assert np.all(kp.b_mm[1][tread] >= hertz.b_mm[1][tread])
+    assert np.all(hertz.b_mm[0][root] > 5.0)
+    assert np.all(kp.b_mm[0][root] >= hertz.b_mm[0][root])
+    assert np.all(kp.b_mm[1][tread] > 1.1 * hertz.b_mm[1][tread])
     assert np.all(kp.b_mm[1][tread] < 1.25 * hertz.b_mm[1][tread])
     # everything else (equilibrium, forces, creepages, a) is the curving model's
     for name in ("normal_force_n", "a_mm", "xi", "eta", "wheel_y_mm"):

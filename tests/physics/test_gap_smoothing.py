@@ -64,11 +64,11 @@ def test_the_masked_smoothing_keeps_the_tread_and_is_continuous_in_the_shift():
 
 
 def test_the_rail_edge_ramp_acts_on_the_masked_table_only(monkeypatch):
-    # RAIL_EDGE_RAMP_MM is a module setting read at table build: the Gaussian default ignores
-    # it bit for bit; a 3 mm ramp (the loop-robust opt-in) moves the masked flange contact
-    # root-wards (towards +y) but keeps it on the flank, short of the 3-6 mm of the Gaussian
-    # default (measured 1.3-1.8 mm at 1:40; tests/physics/test_curving_flange_contact.py holds
-    # the 1 mm ramp's accuracy)
+    # RAIL_EDGE_RAMP_MM is a module setting read at table build: the Gaussian method ignores
+    # it bit for bit; the default 3 mm ramp (loop-robust) puts the masked flange contact
+    # root-wards (towards +y) of a 1 mm ramp's but keeps it on the flank, short of the 3-6 mm
+    # of the Gaussian method (measured 1.3-1.8 mm at 1:40;
+    # tests/physics/test_curving_flange_contact.py holds both ramps' accuracy)
     from wearcast.physics import gap_smoothing as gs
 
     def flange_y(method: str) -> float:
@@ -80,9 +80,10 @@ def test_the_rail_edge_ramp_acts_on_the_masked_table_only(monkeypatch):
         return cv.build_contact_table(None, "60E1", 1 / 40, 0.43,
                                       gap_smoothing="gaussian").gap_mm
 
-    narrow_masked, narrow_gauss = flange_y("masked"), gaussian_gap()
-    monkeypatch.setattr(gs, "RAIL_EDGE_RAMP_MM", 3.0)
+    assert gs.RAIL_EDGE_RAMP_MM == 3.0
     wide_masked, wide_gauss = flange_y("masked"), gaussian_gap()
+    monkeypatch.setattr(gs, "RAIL_EDGE_RAMP_MM", 1.0)
+    narrow_masked, narrow_gauss = flange_y("masked"), gaussian_gap()
     np.testing.assert_array_equal(wide_gauss, narrow_gauss)
     assert 0.5 < wide_masked - narrow_masked < 3.0
     assert wide_masked < flange_y("gaussian") - 1.0

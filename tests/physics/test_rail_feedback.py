@@ -239,11 +239,16 @@ def test_high_and_low_rails_are_worn_and_fed_back_each_under_its_own_wheels(rail
         simulate_rail_steps("metro_b", CURVES, feedback="both")
 
 
-def test_worn_rail_makes_the_flange_contact_more_conformal(rail_steps):
+def test_worn_rail_makes_the_flange_contact_milder(rail_steps):
     # Seed 003 §6.4: the mileage grows with the rail step "explained by a better conformity
     # between wheel and rail surfaces". On the new wheel in the 300 m curve, the leading outer
-    # wheel's flange patch on the worn rail is wider, at lower mean pressure, and its
-    # frictional power per area (the USFD wear index) is lower than on the new rail.
+    # wheel's flange patch on the worn rail (one rail step) carries less of the load at a lower
+    # contact angle, and its frictional power per area (the USFD wear index) and its total
+    # frictional power are lower than on the new rail. Measured with the masked table and the
+    # contact point's lead in the lateral creepage (stop 30): new / worn rail 43.4 / 34.2 deg,
+    # Fn 48.8 / 30.2 kN, T-gamma 221 / 103 N, per area 2.45 / 2.27 N/mm^2. (With the former
+    # Gaussian table, whose flange-root patch was ~10x too narrow, the worn rail's patch came
+    # out wider and at a lower mean pressure instead.)
     veh = vehicle_preset("metro_b")
     y = _grid(WHEEL_GRID_MM)
     z = s1002_height_mm(y)
@@ -255,10 +260,12 @@ def test_worn_rail_makes_the_flange_contact_more_conformal(rail_steps):
         i = int(np.argmax(c.normal_force_n[0]))
         assert np.degrees(c.contact_angle_rad[0, i]) > 30.0  # the flange patch
         area = np.pi * c.a_mm[0, i] * c.b_mm[0, i]
-        patch[label] = (c.b_mm[0, i], c.normal_force_n[0, i] / area, c.t_gamma_n[0, i] / area)
-    assert patch["worn"][0] > 1.1 * patch["new"][0]
-    assert patch["worn"][1] < 0.9 * patch["new"][1]
-    assert patch["worn"][2] < patch["new"][2]
+        patch[label] = (c.contact_angle_rad[0, i], c.normal_force_n[0, i], c.t_gamma_n[0, i],
+                        c.t_gamma_n[0, i] / area)
+    assert patch["worn"][0] < patch["new"][0] - np.radians(4.0)
+    assert patch["worn"][1] < 0.85 * patch["new"][1]
+    assert patch["worn"][2] < 0.75 * patch["new"][2]
+    assert patch["worn"][3] < patch["new"][3]
 
 
 def test_a_vehicle_on_a_worn_rail_and_bad_options():

@@ -222,7 +222,9 @@ def test_flange_factor_basis_from_one_spread_equals_the_per_slot_solves(law):
     bogie = vehicle_bogies("metro_b")[0][0]
     lo, hi, h = vws.WHEEL_GRID_MM
     y = np.linspace(lo, hi, int(round((hi - lo) / h)) + 1)
-    sharp = [*ROUTE, CurveClass(150.0, 60.0, None, "left", 0.1)]
+    # 150 m: flange patches; 1000 m: a two-point tread contact of the leading high-rail wheel
+    sharp = [*ROUTE, CurveClass(150.0, 60.0, None, "left", 0.1),
+             CurveClass(1000.0, 0.0, None, "left", 0.1)]
     contacts, _ = vws.class_contacts_all_wheels(bogie, sharp, y, s1002_height_mm(y))
     wl = WearLaw(name=law)
     # flange patches (the factor acts) and a two-point contact (several slots) among them
