@@ -36,9 +36,9 @@ Model (Wickens / Elkins-Gostling style steady curving, solved as a nonlinear equ
   geometry's contact points, tests/physics/test_curving_creepages.py). Before stop 30 it was
   -s psi cos(delta), the lead left out: 3x too small at 55 deg, 9x at 70 deg (the flank).
   Creep forces of the equilibrium: FASTSIM (``contact.fastsim``, CONTACT's flexibilities,
-  16 x 16) on each patch; the continuation runs with Kalker's linear theory saturated by Shen-Hedrick-Elkins
-  (``contact.creep``, smooth, spin included) and its equilibrium starts Newton with FASTSIM;
-  tau_max from FASTSIM on the final state.
+  16 x 16) on each patch; the continuation runs with Kalker's linear theory saturated by
+  Shen-Hedrick-Elkins (``contact.creep``, smooth, spin included) and its equilibrium starts
+  Newton with FASTSIM; tau_max from FASTSIM on the final state.
 * Primary suspension per axle box (longitudinal k_px at +-b1, lateral k_py); the secondary
   suspension carries the body share's unbalanced force and a yaw stiffness to the body chord
   (front bogie: body yaw -kappa L/2 relative to the bogie's tangent).
