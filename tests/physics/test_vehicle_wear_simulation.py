@@ -75,18 +75,28 @@ def test_wear_scale_and_flange_lubrication_act_in_the_right_direction(symmetric)
 
 
 @pytest.mark.slow
-def test_traction_torque_acts_on_the_motor_bogie_only(symmetric):
-    # 0.3 of metro_b's motor-axle adhesion torque (2 mu Q r = 16.0 kN m): the motor wheels'
-    # flange wear changes (measured when written: Sd at 1,500 km 32.255 -> 32.459 mm, the
-    # longitudinal creep force takes adhesion the steering needed), the trailer's moves only
-    # by the shared adaptive step (< 0.02 mm)
-    driven = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
-                                   depth_per_step_mm=STEP,
-                                   options=VehicleWearOptions(traction_torque_nm=4800.0))
+def test_traction_torque_acts_on_the_motor_bogie_only():
+    # 0.3 of metro_b's motor-axle adhesion torque (2 mu Q r = 16.0 kN m) over one 200 km step
+    # (the same mileage for both runs, so the shared adaptive step does not enter): the motor
+    # wheels wear more (the longitudinal creep force takes adhesion the steering needed;
+    # measured worn area 2.575 -> 2.756 mm^2, +7.1 %, stop 30), the trailer's wear is bit for
+    # bit the same. (Over 1,500 km in 1 mm steps the end Sd also moved the trailer's by up to
+    # 0.05 mm through the shared step, and halving the step changed the motor's effect 5x:
+    # the end Sd is not the measure to test this on.)
+    runs = {torque: simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=200.0,
+                                          depth_per_step_mm=STEP,
+                                          options=VehicleWearOptions(traction_torque_nm=torque))
+            for torque in (None, 4800.0)}
+    plain, driven = runs[None], runs[4800.0]
+    assert plain.mileage_km.tolist() == driven.mileage_km.tolist() == [0.0, 200.0]
+
+    def worn_area(sim):
+        return np.trapezoid(sim.initial_profile_mm - sim.profiles_mm, sim.y_mm, axis=1)
+
     motor = [i for i, w in enumerate(driven.wheels) if w.startswith("motor")]
     trailer = [i for i, w in enumerate(driven.wheels) if w.startswith("trailer")]
-    assert abs(driven.sd_mm[-1, motor] - symmetric.sd_mm[-1, motor]).min() > 0.1
-    assert np.allclose(driven.sd_mm[-1, trailer], symmetric.sd_mm[-1, trailer], atol=0.02)
+    assert np.all(worn_area(driven)[motor] > 1.03 * worn_area(plain)[motor])
+    np.testing.assert_array_equal(driven.profiles_mm[trailer], plain.profiles_mm[trailer])
     with pytest.raises(ValueError, match="traction_torque_nm"):
         VehicleWearOptions(traction_torque_nm=float("nan"))
 
