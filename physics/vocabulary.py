@@ -40,6 +40,11 @@ DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
 RAILS: tuple[Rail, ...] = get_args(Rail)
 RUNNING_MODES: tuple[RunningMode, ...] = get_args(RunningMode)
 WEAR_MEASURES: tuple[WearMeasure, ...] = get_args(WearMeasure)
+#: Columns of the curve-radius table (docs/conventions.md "Curve-radius table CSV"): the wear
+#: measure of each bogie type, wheelset, rail, radius and region; built by
+#: ``physics.wear_tables``, read by ``statistics.wear_tables``.
+WEAR_TABLE_COLUMNS: tuple[str, ...] = ("bogie_type", "wheelset", "rail", "radius_m", "region",
+                                       "measure", "value")
 AXLES: tuple[Axle, ...] = get_args(Axle)
 
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm].

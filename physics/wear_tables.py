@@ -59,7 +59,7 @@ from wearcast.physics.curving import (
     solve_curving_cases,
 )
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
-from wearcast.physics.vocabulary import SIDES, WEAR_MEASURES, CurveClass
+from wearcast.physics.vocabulary import SIDES, WEAR_MEASURES, WEAR_TABLE_COLUMNS, CurveClass
 from wearcast.physics.wear_measures import (
     krause_poll_index,
     kth_archard_index,
@@ -67,8 +67,8 @@ from wearcast.physics.wear_measures import (
     t_gamma_per_area,
 )
 
-#: Columns of the curve-radius table (docs/conventions.md "Curve-radius table CSV").
-TABLE_COLUMNS = ["bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value"]
+#: Columns of the curve-radius table (``vocabulary.WEAR_TABLE_COLUMNS``), as a list.
+TABLE_COLUMNS = list(WEAR_TABLE_COLUMNS)
 MEASURES = WEAR_MEASURES
 _KMH = 3.6
 #: Contact models a table's wear measures can come from (module docstring).

@@ -21,10 +21,18 @@ from typing import Any, cast
 import numpy as np
 import pandas as pd
 
-from wearcast.physics.vocabulary import BOGIE_TYPES, RAILS, REGIONS, WEAR_MEASURES, WHEELSETS
+from wearcast.physics.vocabulary import (
+    BOGIE_TYPES,
+    RAILS,
+    REGIONS,
+    WEAR_MEASURES,
+    WEAR_TABLE_COLUMNS,
+    WHEELSETS,
+)
 from wearcast.statistics.frames import check_frame
 
-TABLE_COLUMNS = ("bogie_type", "wheelset", "rail", "radius_m", "region", "measure", "value")
+#: Columns of the curve-radius table (``vocabulary.WEAR_TABLE_COLUMNS``).
+TABLE_COLUMNS = WEAR_TABLE_COLUMNS
 #: Relative slack on the table's smallest radius (rounding of uploaded radii) [-].
 RADIUS_RTOL = 1e-9
 
