@@ -112,5 +112,8 @@ class DiagnosisOut(BaseModel):
     expected_progression: dict[str, Any] | None = Field(default=None, description=(
         "the null's expected progression when one was given: its source and the factor "
         "g = A / (k s) per bogie type/wheelset/region at its mileages; null: linear in mileage"))
+    null_fit: dict[str, Any] | None = Field(default=None, description=(
+        "physics models: the null model's own fit — wear_scale (the fitted wear-coefficient "
+        "scale), rms_mm and the measured series it was fitted on; null for hybrid models"))
     saved_model: ModelOut | None = None
     save_reason: str | None = Field(default=None, description="why save_as saved nothing")

@@ -224,7 +224,7 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
         saved, reason = _save(factory, model, model_spec, diagnosis, request.save_as,
                               spec, route["classes"], simulate, segments)
     out = _out(model.id, diagnosis, saved, reason, factory)
-    return out.model_dump(mode="json") | {"null_fit": diagnosis.null_fit}
+    return out.model_copy(update={"null_fit": diagnosis.null_fit}).model_dump(mode="json")
 
 
 def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagnosis: Any,

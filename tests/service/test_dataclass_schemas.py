@@ -25,7 +25,6 @@ NOT_PUBLISHED = {
     "residuals": "the report's residual frame (GET .../diagnose/report draws it)",
     "covariates": "the report's covariates per residual row",
     "predictions": "the report's predicted-vs-measured pairs",
-    "null_fit": "the physics null model's own fit: not in the answer (for the lead to decide)",
 }
 
 
