@@ -346,11 +346,12 @@ def _load_script():
 
 def test_bundled_example_fleet_is_what_the_script_writes(tmp_path):
     """The bundled files are the script's output: byte for byte, except that a profile
-    coordinate may differ by one in its last printed digit (in at most 10 rows). numpy's vectorised
-    exp/sin loops and their scalar tails can differ by one ulp, and which elements take which
-    path depends on the array's memory alignment, so a value on a rounding boundary prints
-    either way from one process to the next (seen once in a full run: z 11.931 against 11.932
-    in one row of 38,400)."""
+    coordinate may differ by one in its last printed digit (in at most 0.1 % of the rows, 38 of
+    38,400; a real change of the generator moves thousands). numpy's vectorised exp/sin loops
+    and their scalar tails can differ by one ulp, and which elements take which path depends on
+    the array's memory alignment, so a value on a rounding boundary prints either way from one
+    process to the next (seen: z 11.931 against 11.932 in one row; 12 rows in a fresh-clone CI
+    run at stop 30, where the bound was 10 rows)."""
     _load_script().main(["--out", str(tmp_path)])
     for name in ("routes.json", "wear_table.csv", "README.md"):
         assert (tmp_path / name).read_bytes() == (EXAMPLE_DIR / name).read_bytes(), name
@@ -366,7 +367,7 @@ def test_bundled_example_fleet_is_what_the_script_writes(tmp_path):
         for x, y in zip(a[a != b], b[a != b], strict=True):  # one in the last printed digit
             last_digit = 10.0 ** -len(y.partition(".")[2])
             assert abs(float(x) - float(y)) <= 1.0001 * last_digit, (column, x, y)
-        assert (a != b).sum() <= 10, (column, int((a != b).sum()))
+        assert (a != b).sum() <= 0.001 * len(a), (column, int((a != b).sum()))
     assert (EXAMPLE_DIR / "profiles.csv").stat().st_size < 3.2e6
 
 
