@@ -88,6 +88,10 @@ SIDE_SIGN = np.array([1.0, -1.0])
 # state layout: [y1, psi1, e1, dL1, dR1, y2, psi2, e2, dL2, dR2, yb, psib]
 # scaled units: y [mm], psi [mrad], e [1e-3], d [mm]
 N_STATE = 12
+#: Unknowns per wheelset in the state (y, psi, e, dL, dR) and the columns of the two
+#: wheelsets' lateral shifts y.
+N_WHEELSET_UNKNOWNS = 5
+WHEELSET_SHIFT_COLUMNS = (0, N_WHEELSET_UNKNOWNS)
 
 
 @dataclass(frozen=True)
@@ -210,7 +214,7 @@ def bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, 
     ``curving_contacts``) instead of the table's."""
     kappa = np.asarray(kappa, dtype=float)
     a_unb = np.asarray(a_unb, dtype=float)
-    ws = q[..., :10].reshape(q.shape[:-1] + (2, 5))
+    ws = q[..., :2 * N_WHEELSET_UNKNOWNS].reshape(q.shape[:-1] + (2, N_WHEELSET_UNKNOWNS))
     y = ws[..., 0]
     psi = ws[..., 1] * 1e-3
     e = ws[..., 2] * 1e-3
