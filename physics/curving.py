@@ -20,7 +20,11 @@ is in its concept modules:
 This module solves it. Solution from straight track with continuation in the load parameter
 (curvature, unbalanced acceleration and torque scaled together from 0), a batched damped
 Newton method with ``scipy.optimize.root`` (hybr) as fallback, first with the smooth saturation
-law (``contact.creep``), then from that equilibrium with FASTSIM's forces; failure raises
+law (``contact.creep``), then from that equilibrium with FASTSIM's forces. Where the curve of
+equilibria folds back in the load parameter (a hollow-worn tread: the centred tangent
+equilibrium turns back within ~1/2,000 km of curvature) the natural continuation stops at the
+fold; those cases are followed along the curve through its folds by pseudo-arclength
+continuation (``equilibrium_solvers.arclength_continuation_batch``). Failure raises
 :class:`CurvingConvergenceError`. Linear-theory check: Boocock (1969), Wickens (2003).
 """
 
@@ -65,7 +69,12 @@ from wearcast.physics.curving_table import conical_wheel as conical_wheel
 from wearcast.physics.curving_table import contact_table_for as contact_table_for
 from wearcast.physics.curving_table import measured_wheel_table_for as measured_wheel_table_for
 from wearcast.physics.curving_table import vehicle_contact_table
-from wearcast.physics.equilibrium_solvers import continuation_batch, newton_batch, scipy_polish
+from wearcast.physics.equilibrium_solvers import (
+    arclength_continuation_batch,
+    continuation_batch,
+    newton_batch,
+    scipy_polish,
+)
 from wearcast.physics.pipeline_equilibrium import PIPELINE_TOLERANCE as PIPELINE_TOLERANCE
 from wearcast.physics.pipeline_equilibrium import (
     pipeline_force_equilibrium,
@@ -288,6 +297,14 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     saturation = _OnTable(CompiledBogie(vehicle, table), table)
     q, norm, ok = continuation_batch(saturation.residual, q0, p_start, p_end, tol,
                                      jac=saturation.jacobian)
+    # where the curve of equilibria folds back in the load (a hollow-worn tread: the centred
+    # tangent equilibrium turns back at ~1/2,000 km of curvature), follow it through the folds
+    folded = np.nonzero(~ok & np.any(p_start != p_end, axis=-1))[0]
+    if folded.size:
+        q_a, norm_a, ok_a = arclength_continuation_batch(
+            saturation.residual, q0[folded], p_start[folded], p_end[folded], tol,
+            jac=saturation.jacobian)
+        q[folded[ok_a]], norm[folded[ok_a]], ok[folded[ok_a]] = q_a[ok_a], norm_a[ok_a], True
     q_saturation = q.copy()
     if creep_grid is not None and np.any(ok):
         # the saturation law's equilibrium is the start of Newton with FASTSIM's forces

@@ -1,5 +1,6 @@
 """Batched solvers of the curving equilibrium: damped Newton with forward-difference Jacobians,
-MINPACK's Powell hybrid as a fallback, and continuation in the load parameters.
+MINPACK's Powell hybrid as a fallback, continuation in the load parameters, and
+pseudo-arclength continuation through folds where the natural continuation stops.
 
 Generic in the residual: ``fun(q (N, n), params (N, p)) -> residual (N, n)``, many independent
 equilibria solved at once (``curving.solve_curving_cases_or_none``).
@@ -159,8 +160,169 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=N
         q[idx[ok]] = q_new[ok]
         t[idx[ok]] = t_try[ok]
         step[idx[ok]] = np.minimum(step[idx[ok]] * 2.0, 1.0)
-        step[idx[~ok]] /= 2.0
+        # halve the step that was tried (t_try may have been cut at t = 1)
+        step[idx[~ok]] = (t_try[~ok] - t[idx[~ok]]) / 2.0
         halvings[idx[~ok]] += 1
         norm[idx] = n_new
         failed[idx[~ok]] = (halvings[idx[~ok]] > max_halvings) | no_path[idx[~ok]]
     return q, norm, ~failed
+
+
+#: Scale of the load parameter t in the arclength (t_scale t against the unknowns, which are
+#: O(1-10) in mm, mrad and 1e-3): a step of arclength 1 moves t by at most 1 / ARC_T_SCALE.
+ARC_T_SCALE = 10.0
+
+
+def _augmented(jac, fun, q, tau, p_start, dp, h=1e-6):
+    """Residual (N, n) and Jacobian (N, n, n + 1) of R(q, p_start + tau / ARC_T_SCALE dp) in
+    the unknowns (q, tau): ``jac``'s forward differences in q plus one in tau."""
+    params = p_start + (tau / ARC_T_SCALE)[:, None] * dp
+    steps = h * np.maximum(1.0, np.abs(q))
+    r, jq = jac(q, params, steps)
+    r_t = fun(q, p_start + ((tau + h) / ARC_T_SCALE)[:, None] * dp)
+    return r, np.concatenate([jq, ((r_t - r) / h)[:, :, None]], axis=2)
+
+
+def _tangent(jm, v_prev):
+    """Unit tangent (N, n + 1) of the solution curve: J w = 0 with w . v_prev = 1 (the
+    orientation kept from the previous tangent, so the curve is followed through folds)."""
+    nb, n, _ = jm.shape
+    a = np.concatenate([jm, v_prev[:, None, :]], axis=1)
+    b = np.zeros((nb, n + 1))
+    b[:, -1] = 1.0
+    w = _solve_rows(a, b)
+    return w / np.linalg.norm(w, axis=-1, keepdims=True)
+
+
+def _solve_rows(a, b):
+    """a x = b row by row (batched solve; least squares for a singular row)."""
+    try:
+        return np.linalg.solve(a, b[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return np.stack([np.linalg.lstsq(m, v, rcond=None)[0] for m, v in zip(a, b,
+                                                                             strict=True)])
+
+
+def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5, ds_max=3.0,
+                                 ds_min=1e-4, max_steps=300, corrector_iter=8, t_min=-2.0):
+    """Pseudo-arclength continuation of R(q, p) = 0 along p = p_start + t (p_end - p_start),
+    t from 0 to 1, for many independent rows: it follows the solution curve through folds
+    (turning points in t), where :func:`continuation_batch` stops.
+
+    Keller's pseudo-arclength method ([Keller 1977], [Allgower–Georg 2003] ch. 2 in
+    docs/references.md): the unknowns are (q, tau) with tau = ARC_T_SCALE t; each step predicts
+    along the unit tangent w (J w = 0, w . w_prev = 1) by the arclength ds and corrects by
+    Newton on [R(q, tau) = 0, w . (x - x_pred) = 0]; a corrector that does not reach ``tol`` in
+    ``corrector_iter`` iterations halves ds (the row fails below ``ds_min``), a converged step
+    lengthens it by 1.5 (at most ``ds_max``). Where tau passes ARC_T_SCALE the state is
+    interpolated to t = 1 and solved there by Newton. A row first solves t = 0 from
+    ``q_start`` and sets out towards increasing t; a curve that turns back below ``t_min``
+    (the start's branch leads away from the end) is followed once more from the start the
+    other way round (an S-shaped curve of a start on its middle branch reaches t = 1 over
+    the fold at negative t). ``jac``: as :func:`newton_batch`'s (required: the tangent needs
+    J).
+    Returns (q, residual norms at p_end, converged) like :func:`continuation_batch`; a row
+    that fails keeps ``q_start`` and its last residual norm.
+
+    Which equilibrium this finds: the one connected to the start through the folds. Past a
+    fold a real system jumps to another branch (hysteresis); the connected one is where the
+    quasi-static curving of a hollow-worn wheel ends up in the usual case that the branch
+    through the folds carries on to t = 1 (the caller checks the answer like any other).
+    """
+    q0 = np.array(q_start, dtype=float)
+    p_start = np.asarray(p_start, dtype=float)
+    dp = np.asarray(p_end, dtype=float) - p_start
+    nb = len(q0)
+    q_out = q0.copy()
+    norm_out = np.full(nb, np.inf)
+    ok_out = np.zeros(nb, dtype=bool)
+    q, norm, ok0 = newton_batch(fun, q0, p_start, tol, jac=jac)
+    norm_out[:] = norm
+    rows = np.nonzero(ok0)[0]
+    for orientation in (1.0, -1.0):
+        if rows.size == 0:
+            break
+        q_r, n_r, ok_r, back = _follow_curve(fun, jac, q[rows], p_start[rows], dp[rows], tol,
+                                             orientation, ds0, ds_max, ds_min, max_steps,
+                                             corrector_iter, t_min)
+        q_out[rows[ok_r]] = q_r[ok_r]
+        norm_out[rows] = n_r
+        ok_out[rows] = ok_r
+        rows = rows[back]
+    return q_out, norm_out, ok_out
+
+
+def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_min, max_steps,
+                  corrector_iter, t_min):
+    """One pass of :func:`arclength_continuation_batch` from the equilibria q at t = 0,
+    setting out towards increasing t (``orientation`` 1) or decreasing t (-1). Returns (q at
+    t = 1, residual norms (inf where not reached), converged, turned back below t_min)."""
+    nb, n = q.shape
+    q_out = q.copy()
+    norm_out = np.full(nb, np.inf)
+    ok_out = np.zeros(nb, dtype=bool)
+    rows = np.arange(nb)
+    x = np.concatenate([q, np.zeros((nb, 1))], axis=1)
+    _, jm = _augmented(jac, fun, x[:, :n], x[:, n], p_start, dp)
+    e_t = np.zeros_like(x)
+    e_t[:, n] = 1.0
+    v = orientation * _tangent(jm, e_t)
+    ds = np.full(rows.size, ds0)
+    steps = np.zeros(rows.size, dtype=int)
+    active = np.ones(rows.size, dtype=bool)
+    finish_q = np.zeros((rows.size, n))
+    finished = np.zeros(rows.size, dtype=bool)
+    while np.any(active):
+        a = np.nonzero(active)[0]
+        steps[a] += 1
+        xp = x[a] + ds[a, None] * v[a]
+        xc = xp.copy()
+        conv = np.zeros(a.size, dtype=bool)
+        jm_c = np.zeros((a.size, n, n + 1))
+        for _ in range(corrector_iter):
+            todo = np.nonzero(~conv)[0]
+            if todo.size == 0:
+                break
+            r, jm = _augmented(jac, fun, xc[todo, :n], xc[todo, n], p_start[rows[a[todo]]],
+                               dp[rows[a[todo]]])
+            jm_c[todo] = jm
+            arc = np.einsum("ij,ij->i", v[a[todo]], xc[todo] - xp[todo])
+            done = (np.linalg.norm(r, axis=-1) < tol) & (np.abs(arc) < 1e-9)
+            conv[todo[done]] = True
+            go = todo[~done]
+            if go.size == 0:
+                break
+            g = np.concatenate([r[~done], arc[~done, None]], axis=1)
+            aug = np.concatenate([jm[~done], v[a[go]][:, None, :]], axis=1)
+            xc[go] = xc[go] + _solve_rows(aug, -g)
+            bad = ~np.all(np.isfinite(xc[go]), axis=1)
+            xc[go[bad]] = xp[go[bad]]
+        # rows whose corrector converged: a step along the curve
+        good, fail = a[conv], a[~conv]
+        ds[fail] /= 2.0
+        active[fail[ds[fail] < ds_min]] = False
+        if good.size:
+            x_new = xc[conv]
+            past = x_new[:, n] >= ARC_T_SCALE
+            for k in np.nonzero(past)[0]:
+                i = good[k]
+                w = (ARC_T_SCALE - x[i, n]) / (x_new[k, n] - x[i, n])
+                finish_q[i] = x[i, :n] + w * (x_new[k, :n] - x[i, :n])
+                finished[i] = True
+                active[i] = False
+            on = ~past
+            if np.any(on):
+                g_on = good[on]
+                v[g_on] = _tangent(jm_c[conv][on], v[g_on])
+                x[g_on] = x_new[on]
+                ds[g_on] = np.minimum(ds[g_on] * 1.5, ds_max)
+        back = x[:, n] < ARC_T_SCALE * t_min
+        active &= (steps < max_steps) & ~back
+    if np.any(finished):
+        f = np.nonzero(finished)[0]
+        q_f, n_f, ok_f = newton_batch(fun, finish_q[f], p_start[rows[f]] + dp[rows[f]], tol,
+                                      jac=jac)
+        q_out[rows[f[ok_f]]] = q_f[ok_f]
+        norm_out[rows[f]] = n_f
+        ok_out[rows[f]] = ok_f
+    return q_out, norm_out, ok_out, x[:, n] < ARC_T_SCALE * t_min

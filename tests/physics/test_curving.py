@@ -350,7 +350,12 @@ def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
         conv[1] = False
         return q, norm, conv
 
+    def fail_all(fun, q0, p_start, p_end, tol, **kw):
+        return q0.copy(), np.full(len(q0), np.inf), np.zeros(len(q0), dtype=bool)
+
     monkeypatch.setattr(cv, "continuation_batch", fail_second)
+    # the arclength continuation rescues a case the natural one lost; here it fails too
+    monkeypatch.setattr(cv, "arclength_continuation_batch", fail_all)
     skipped = cv.solve_curving_cases_or_none(trailer, cases)
     assert skipped[1] is None
     for got, want in zip((skipped[0], skipped[2]), (ok[0], ok[2]), strict=True):
@@ -438,3 +443,23 @@ def test_table_rows_onto_the_wheel_grid_are_numpy_interp():
     x = np.concatenate([np.arange(-55.0, 45.0001, 0.2), xp[:40], [xp[0], xp[-1], -70.0, 70.0]])
     ref = np.stack([np.interp(x, xp, row, left=100.0, right=100.0) for row in fp])
     assert np.array_equal(_interp_rows(x, xp, fp, 100.0), ref)
+
+
+def test_a_case_the_natural_continuation_loses_is_followed_by_arclength(trailer, monkeypatch):
+    # a case whose continuation stops (at a fold, on hollow-worn treads) is followed along the
+    # curve of equilibria by the arclength continuation, to the same equilibrium here
+    cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0)]
+    ok = cv.solve_curving_cases_or_none(trailer, cases)
+    real = cv.continuation_batch
+
+    def fail_first(fun, q0, p_start, p_end, tol, **kw):
+        q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
+        conv = conv.copy()
+        conv[0] = False
+        return q, norm, conv
+
+    monkeypatch.setattr(cv, "continuation_batch", fail_first)
+    rescued = cv.solve_curving_cases_or_none(trailer, cases)
+    assert rescued[0] is not None and ok[0] is not None
+    np.testing.assert_allclose(rescued[0].wheelset_shift_mm, ok[0].wheelset_shift_mm, atol=1e-4)
+    np.testing.assert_allclose(rescued[0].tau_max_mpa, ok[0].tau_max_mpa, rtol=1e-4, atol=1e-6)

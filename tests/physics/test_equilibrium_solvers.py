@@ -95,3 +95,73 @@ def test_the_polish_finiteness_check_is_the_element_test_also_on_overflow_and_na
               np.zeros((2, 3))):
         assert es._all_finite(a) == bool(np.all(np.isfinite(a)))
 
+
+
+def test_a_failed_step_cut_at_the_end_is_really_halved(monkeypatch):
+    """A step that reaches past t = 1 is cut there; when it fails, the next attempt from the
+    same t is half the step that was tried, not the same cut step again (stop 30's C1634-L3
+    on a worn rail repeated t 0.969 -> 1 until its halvings ran out)."""
+    attempts: list[tuple[float, float]] = []
+
+    def fake_newton(fun, q, params, tol, **_):
+        t_from, t_try = q[:, 0], params[:, 0]
+        attempts.extend(zip(t_from.tolist(), t_try.tolist(), strict=True))
+        ok = np.where(t_from < 0.5, t_try - t_from <= 0.5, t_try - t_from <= 0.1)
+        return np.where(ok[:, None], params, q), np.where(ok, 0.0, 1.0), ok
+
+    monkeypatch.setattr(es, "newton_batch", fake_newton)
+    monkeypatch.setattr(es, "scipy_polish", lambda fun, q, p, tol, jac=None: (q, 1.0, False))
+    q, norm, ok = es.continuation_batch(lambda q, p: q - p, np.zeros((1, 1)),
+                                        np.zeros((1, 1)), np.ones((1, 1)), 1e-9)
+    assert ok[0] and q[0, 0] == 1.0
+    assert len(attempts) == len(set(attempts)), attempts
+
+
+def _s_curve(q, p):
+    """q^3 - 3 q - p: an S-shaped curve of equilibria in p, folds at (q, p) = (-1, 2) and
+    (1, -2)."""
+    return q ** 3 - 3.0 * q - p
+
+
+def _s_curve_jac(q, p, steps):
+    return _s_curve(q, p), (3.0 * q ** 2 - 3.0)[:, :, None]
+
+
+def test_arclength_continuation_follows_the_curve_through_its_folds():
+    # from the lower branch (q = -sqrt 3 at p = 0) to p = 3: the natural continuation stops at
+    # the fold p = 2; the curve through both folds reaches the upper branch's root q = 2.1038
+    q0 = np.array([[-np.sqrt(3.0)], [0.0], [2.0]])
+    p0 = np.array([[0.0], [0.0], [2.0]])
+    p1 = np.array([[3.0], [3.0], [5.0]])
+    _, _, ok_natural = es.continuation_batch(_s_curve, q0[:1], p0[:1], p1[:1], 1e-10,
+                                             jac=_s_curve_jac)
+    assert not ok_natural[0]
+    q, norm, ok = es.arclength_continuation_batch(_s_curve, q0, p0, p1, 1e-10,
+                                                  jac=_s_curve_jac)
+    assert ok.all() and np.all(norm < 1e-10)
+    upper = np.roots([1.0, 0.0, -3.0, -3.0]).real.max()
+    # row 1 starts on the middle branch: towards increasing p it folds back at p = 2 and runs
+    # off to p -> -inf; set out the other way it turns at p = -2 and reaches the upper branch
+    assert abs(q[0, 0] - upper) < 1e-9 and abs(q[1, 0] - upper) < 1e-9
+    # a row already on a branch without folds is solved where natural continuation goes
+    assert abs(_s_curve(q[2:], p1[2:])[0, 0]) < 1e-10 and q[2, 0] > 2.0
+
+
+def test_arclength_rows_are_independent():
+    q0 = np.array([[-np.sqrt(3.0)], [0.0], [2.0]])
+    p0 = np.array([[0.0], [0.0], [2.0]])
+    p1 = np.array([[3.0], [3.0], [5.0]])
+    q_all, _, ok_all = es.arclength_continuation_batch(_s_curve, q0, p0, p1, 1e-10,
+                                                       jac=_s_curve_jac)
+    for k in range(3):
+        q_k, _, ok_k = es.arclength_continuation_batch(_s_curve, q0[k:k + 1], p0[k:k + 1],
+                                                       p1[k:k + 1], 1e-10, jac=_s_curve_jac)
+        assert ok_k[0] == ok_all[k] and abs(q_k[0, 0] - q_all[k, 0]) < 1e-9
+
+
+def test_arclength_reports_a_row_without_an_equilibrium_as_failed():
+    # q^2 + 1 + p has no root at all, not even at the start: not converged, q_start kept
+    q, norm, ok = es.arclength_continuation_batch(
+        _no_root, np.array([[0.3, -0.2]]), np.zeros((1, 2)), np.array([[0.5, 0.5]]), 1e-9,
+        jac=lambda q, p, s: (_no_root(q, p), np.stack([np.diag(2.0 * r) for r in q])))
+    assert not ok[0] and norm[0] > 1.0 and np.array_equal(q, [[0.3, -0.2]])

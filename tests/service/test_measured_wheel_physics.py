@@ -150,3 +150,26 @@ def test_a_wheel_id_or_an_uploaded_profile_start_there_too(setup: dict,
         "name": "t", "vehicle": "manchester", "radii": [{"radius_m": 400}],
         "wheel_id": "no-such-wheel"})
     assert r.status_code == 404 and "wheel_id" in r.text
+
+
+def test_a_worn_wheel_on_a_measured_worn_rail_has_a_table_in_sharp_curves(setup: dict) -> None:
+    """The real worn wheel (whl_left_iter288, 100,000 km here) on the real worn rail
+    avg_low2.ban: stop 30 answered 422 at 250 m, the continuation repeating its last cut
+    step (tests/physics/test_equilibrium_solvers.py) instead of halving it."""
+    from tests.conftest import REFERENCE_DIR
+
+    client = setup["client"]
+    rail = client.post("/v1/rails/import", files={
+        "file": ("avg_low2.ban", (REFERENCE_DIR / "miniprof" / "avg_low2.ban").read_bytes())})
+    assert rail.status_code in (200, 201), rail.text
+    body = rail.json()
+    rail_id = body["created"][0]["id"] if body.get("created") else body["duplicates"][0]["id"]
+    r = client.post("/v1/wear-tables/compute", json={
+        "name": "worn on worn", "vehicle": "manchester", "rail_id": rail_id,
+        "measurement_id": setup["measurement_id"],
+        "radii": [{"radius_m": r} for r in (150, 200, 250, 300)]})
+    assert r.status_code == 201, r.text
+    flange = [row["value"] for row in r.json()["rows"]
+              if row["region"] == "flange" and row["measure"] == "tau_max"]
+    assert flange and all(np.isfinite(v) and v >= 0.0 for v in flange)
+    assert max(flange) > 0.0
