@@ -253,15 +253,20 @@ def test_gap_beyond_the_rail_kernel_equals_its_numpy_form(right_rail, side):
 
 
 @pytest.mark.parametrize("right_rail", [None, "60E2"])
-def test_masked_contact_table_equals_the_numpy_gap_beyond_the_rail(right_rail, monkeypatch):
+def test_masked_contact_table_equals_its_numpy_and_scipy_form(right_rail, monkeypatch):
     # the curving contact table with the masked gap smoothing (the default), built from the
-    # compiled gap beyond the rail, is the one built from its numpy form to 1e-9 mm (1e-9 /mm
-    # for g''): S1002 on 60E1 at 1:40, and with a 60E2 right rail (both wheels' tables)
+    # compiled gap beyond the rail and the compiled Gaussian filters, is the one built from
+    # their numpy and scipy forms (the computation before them) to 1e-9 mm (1e-9 /mm for g'';
+    # bit for bit on x86-64): S1002 on 60E1 at 1:40, and with a 60E2 right rail (both wheels'
+    # tables)
     import wearcast.physics.curving_table as ct
+    from tests.physics.test_gap_smoothing_kernel import _masked_gaussian_scipy
+    from wearcast.physics import gap_smoothing as gs
 
     new = ct.build_contact_table(None, "60E1", 1.0 / 40.0, rail_right=right_rail,
                                  gap_smoothing="masked")
     monkeypatch.setattr(ct, "rigid_wheel_gap_beyond_rail", _gap_beyond_rail_numpy)
+    monkeypatch.setattr(gs, "masked_gaussian", _masked_gaussian_scipy)
     old = ct.build_contact_table(None, "60E1", 1.0 / 40.0, rail_right=right_rail,
                                  gap_smoothing="masked")
     pairs = [(new, old)] if right_rail is None else [(new, old), (new.right, old.right)]
