@@ -24,13 +24,18 @@ contact candidates that move continuously with the shift. Wheel points with no r
 
 Set ``GAP_SMOOTHING`` before any table is built: the cached tables
 (``curving_table.contact_table_for`` ...) do not key on it.
+
+Both methods' Gaussian filters (and their derivatives) come from the compiled
+``gap_smoothing_kernel.gaussian_rows``: scipy's ``gaussian_filter1d`` (mode ``nearest``) bit
+for bit, the three orders in one pass over the rows.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import gaussian_filter1d
+
+from wearcast.physics.gap_smoothing_kernel import gaussian_rows, gaussian_taps
 
 #: Methods of :func:`smooth_gap` (module docstring).
 GAP_SMOOTHING_METHODS = ("gaussian", "masked")
@@ -63,6 +68,19 @@ def check_gap_smoothing(method: str) -> str:
     return method
 
 
+def _gaussian_orders(values: NDArray[np.float64], sigma_samples: float
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``values`` (..., n) filtered along the last axis with a Gaussian of ``sigma_samples``
+    [samples] and with its first and second derivatives, mode ``nearest`` (values per
+    sample^order): scipy's ``gaussian_filter1d`` of orders 0, 1, 2, bit for bit, from the
+    compiled ``gap_smoothing_kernel.gaussian_rows``."""
+    v = np.asarray(values, dtype=float)
+    rows = np.ascontiguousarray(v.reshape(-1, v.shape[-1]))
+    taps = (gaussian_taps(float(sigma_samples), o) for o in (0, 1, 2))
+    f0, f1, f2 = gaussian_rows(rows, *taps)
+    return f0.reshape(v.shape), f1.reshape(v.shape), f2.reshape(v.shape)
+
+
 def masked_gaussian(weighted_values: NDArray[np.float64], mask: NDArray[np.float64],
                     sigma_samples: float
                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -85,17 +103,13 @@ def masked_gaussian(weighted_values: NDArray[np.float64], mask: NDArray[np.float
     (smoothed, second derivative per sample^2), each (..., n)
     """
     m = np.asarray(mask, dtype=float)
-    n0, n1, n2 = (gaussian_filter1d(weighted_values, sigma_samples, axis=-1, order=o,
-                                    mode="nearest")
-                  for o in (0, 1, 2))
+    n0, n1, n2 = _gaussian_orders(weighted_values, sigma_samples)
     # the derivatives of D relative to a full mask: scipy's truncated derivative kernels do not
     # sum to exactly zero, and the plain filter's second derivative keeps that (so does this
     # one where the mask is full: D' = D'' = 0 there)
-    full = np.ones(m.shape[-1])
-    d0, d1, d2 = (gaussian_filter1d(m, sigma_samples, axis=-1, order=o, mode="nearest")
-                  - (0.0 if o == 0 else gaussian_filter1d(full, sigma_samples, order=o,
-                                                          mode="nearest"))
-                  for o in (0, 1, 2))
+    _, full1, full2 = _gaussian_orders(np.ones(m.shape[-1]), sigma_samples)
+    d0, d1, d2 = _gaussian_orders(m, sigma_samples)
+    d1, d2 = d1 - full1, d2 - full2
     d0 = np.where(d0 > 1e-12, d0, 1.0)
     s0 = n0 / d0
     s1 = (n1 - s0 * d1) / d0
@@ -129,9 +143,9 @@ def smooth_gap(raw_mm: NDArray[np.float64], inside_mm: NDArray[np.float64] | Non
     gap2 = np.zeros_like(raw_mm)
     if method == "gaussian":
         for weight, sd in scales:
-            gap += weight * gaussian_filter1d(raw_mm, sd / wheel_step_mm, axis=1, mode="nearest")
-            gap2 += weight * gaussian_filter1d(raw_mm, sd / wheel_step_mm, axis=1, order=2,
-                                               mode="nearest") / wheel_step_mm**2
+            g0, _, g2 = _gaussian_orders(raw_mm, sd / wheel_step_mm)
+            gap += weight * g0
+            gap2 += weight * g2 / wheel_step_mm**2
         return gap, gap2
     if inside_mm is None:
         raise ValueError("the masked gap smoothing needs each point's distance inside the rail")

@@ -535,11 +535,11 @@ def wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left",
     return y_wheel, gap - gap0[:, None]
 
 
-def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
-                    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """:func:`wheel_gap` without yaw, with the solved roll: (y_wheel_mm (M,), gap_mm (N, M),
-    roll_rad (N,)) [mm, mm, rad]. The gap is 0 at each wheel's primary contact (rigid pose);
-    the curving model's contact table is built from it (``curving.build_contact_table``)."""
+def _rigid_pose(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str
+                ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _Side]:
+    """The rigid pose without yaw at each shift: (shift_mm (N,), roll_rad (N,), gap0_mm (N,),
+    the chosen side's samples), gap0 the solved minimum gap of both wheels at height 0 (the
+    wheelset lowers by it to touch) [mm, rad, mm]."""
     check_side(side)
     shift, yaw = _pose_arrays(shifts_mm, 0.0)
     sides = _prepare(wt)
@@ -554,13 +554,22 @@ def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
         roll_c, _ = _solve_roll(sides, shift[coarse], yaw[coarse], wt.nominal_radius_mm)
         start = np.interp(shift, shift[coarse], roll_c)
     roll, gap0 = _solve_roll(sides, shift, yaw, wt.nominal_radius_mm, start=start)
-    chosen = sides[0] if side == "left" else sides[1]
-    # _gaps's rows without yaw from the compiled kernel (the same numbers, bit for bit)
-    gap = gap_rows_no_yaw(chosen.y_ws, chosen.z_ws, chosen.rail_y, chosen.rail_z,
-                          np.ascontiguousarray(shift), np.cos(roll), np.sin(roll),
-                          float(wt.nominal_radius_mm))
+    return shift, roll, gap0, sides[0] if side == "left" else sides[1]
+
+
+def rigid_wheel_gap(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
+                    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+    """:func:`wheel_gap` without yaw, with the solved roll: (y_wheel_mm (M,), gap_mm (N, M),
+    roll_rad (N,)) [mm, mm, rad]. The gap is 0 at each wheel's primary contact (rigid pose);
+    the curving model's contact table is built from it (``curving.build_contact_table``)."""
+    shift, roll, gap0, chosen = _rigid_pose(wt, shifts_mm, side)
+    # _gaps's rows without yaw, less gap0, from the compiled kernel (the same numbers, bit for
+    # bit)
+    gap, _ = gap_rows_no_yaw(chosen.y_ws, chosen.z_ws, chosen.rail_y, chosen.rail_z,
+                             np.ascontiguousarray(shift), np.cos(roll), np.sin(roll),
+                             float(wt.nominal_radius_mm), gap0, (0.0, 0.0), False)
     y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
-    return y_wheel, gap - gap0[:, None], roll
+    return y_wheel, gap, roll
 
 
 def rigid_wheel_gap_beyond_rail(wt: WheelsetTrack, shifts_mm: ArrayLike, side: str = "left"
@@ -573,27 +582,20 @@ def rigid_wheel_gap_beyond_rail(wt: WheelsetTrack, shifts_mm: ArrayLike, side: s
     slope of their last 0.5 mm, so the gap is finite and continuous there (it rises steeply:
     no contact). ``inside_mm`` is the track-y distance of each wheel point inside the rail's
     envelope (positive with rail below, negative beyond either end), continuous in the shift
-    and not quantised by the wheel's or the rail's sampling [mm]."""
-    check_side(side)
-    y_wheel, gap, roll = rigid_wheel_gap(wt, shifts_mm, side)
-    shift, yaw = _pose_arrays(shifts_mm, 0.0)
-    chosen = _prepare(wt)[0 if side == "left" else 1]
-    _, y, z = _points(chosen, shift, roll, yaw, wt.nominal_radius_mm, chosen.y_ws,
-                      -chosen.z_ws, grid=True)
+    and not quantised by the wheel's or the rail's sampling [mm]. Both from one pass of the
+    compiled kernel ``min_gap_kernel.gap_rows_no_yaw`` (``beyond_rail``), referred to the solved
+    pose's gap like :func:`rigid_wheel_gap`'s."""
+    shift, roll, gap0, chosen = _rigid_pose(wt, shifts_mm, side)
     ry, rz = chosen.rail_y, chosen.rail_z
     lo = int(np.searchsorted(ry, ry[0] + _END_FACE_MM))
     hi = int(np.searchsorted(ry, ry[-1] - _END_FACE_MM)) - 1
-    slope_lo = (rz[lo] - rz[0]) / (ry[lo] - ry[0])
-    slope_hi = (rz[-1] - rz[hi]) / (ry[-1] - ry[hi])
-    z_rail = np.where(y < ry[0], rz[0] + slope_lo * (y - ry[0]),
-                      np.where(y > ry[-1], rz[-1] + slope_hi * (y - ry[-1]),
-                               np.interp(y, ry, rz)))
-    # the rigid pose's own reference: gap 0 at the primary contact, where rigid_wheel_gap's is
-    reference = np.where(np.isfinite(gap), (z - z_rail) - gap, np.nan)
-    gap0 = np.nanmedian(reference, axis=1)
-    extended = np.where(np.isfinite(gap), gap, z - z_rail - gap0[:, None])
-    inside = np.minimum(y - ry[0], ry[-1] - y)
-    return y_wheel, extended, roll, inside
+    end_slopes = (float((rz[lo] - rz[0]) / (ry[lo] - ry[0])),
+                  float((rz[-1] - rz[hi]) / (ry[-1] - ry[hi])))
+    gap, inside = gap_rows_no_yaw(chosen.y_ws, chosen.z_ws, ry, rz,
+                                  np.ascontiguousarray(shift), np.cos(roll), np.sin(roll),
+                                  float(wt.nominal_radius_mm), gap0, end_slopes, True)
+    y_wheel, _ = chosen.wheel.point(chosen.s_wheel)
+    return y_wheel, gap, roll, inside
 
 
 #: Length [mm] of track y over which the rail's end faces' slopes are taken

@@ -165,19 +165,31 @@ def min_gap_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
 def gap_rows_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
                     rail_y: NDArray[np.float64], rail_z: NDArray[np.float64],
                     shift: NDArray[np.float64], cos_roll: NDArray[np.float64],
-                    sin_roll: NDArray[np.float64], r0: float) -> NDArray[np.float64]:
+                    sin_roll: NDArray[np.float64], r0: float, gap0_mm: NDArray[np.float64],
+                    end_slopes: tuple[float, float], beyond_rail: bool
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Vertical gaps (N, M) [mm] of the wheel samples (wheelset frame, [mm]) over the rail's
-    upper envelope at height 0, per pose (lateral shift [mm], cos and sin of the roll): what
-    ``geometry._gaps`` computes without yaw, with its arithmetic (the sample turned and
-    shifted as ``geometry._points``, the rail by np.interp's formula, inf where no rail is
-    below), one row at a time instead of (N, M) temporaries. The cos and sin come from the
-    caller (numpy's), so the rows equal ``_gaps``'s bit for bit."""
+    upper envelope at height 0 less each pose's ``gap0_mm`` (N,) [mm], per pose (lateral shift
+    [mm], cos and sin of the roll): what ``geometry._gaps`` computes without yaw, with its
+    arithmetic (the sample turned and shifted as ``geometry._points``, the rail by np.interp's
+    formula, inf where no rail is below), one row at a time instead of (N, M) temporaries. The
+    cos and sin come from the caller (numpy's), so with ``gap0_mm`` 0 the rows equal
+    ``_gaps``'s bit for bit.
+
+    With ``beyond_rail`` the rail's end faces are continued as straight lines at
+    ``end_slopes`` (dz/dy at the envelope's first and last point [-]) where no rail is below,
+    so the gap is finite there too, and the second result is the track-y distance [mm] of each
+    sample inside the envelope (N, M) (positive with rail below, negative beyond either end;
+    ``geometry.rigid_wheel_gap_beyond_rail``); without it, an empty (0, 0) array.
+    Returns (gap_mm, inside_mm)."""
     n = shift.size
     m = y_ws.size
     k = rail_y.size
     y_lo = rail_y[0]
     y_hi = rail_y[k - 1]
+    slope_lo, slope_hi = end_slopes
     out = np.empty((n, m))
+    inside = np.empty((n, m) if beyond_rail else (0, 0))
     dz_dy = (rail_z[1:] - rail_z[:-1]) / (rail_y[1:] - rail_y[:-1])  # np.interp's slopes
     for i in range(n):
         c = cos_roll[i]
@@ -188,8 +200,14 @@ def gap_rows_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
             vertical = z_ws[p]
             y = shift[i] + lateral * c - vertical * s
             z = r0 + lateral * s + vertical * c
+            if beyond_rail:
+                inside[i, p] = min(y - y_lo, y_hi - y)
             if y < y_lo or y > y_hi or math.isnan(y):
                 g = np.inf
+                if beyond_rail and y < y_lo:  # before the envelope's first point: its face
+                    g = z - (rail_z[0] + slope_lo * (y - y_lo))
+                elif beyond_rail and y > y_hi:  # beyond its last point
+                    g = z - (rail_z[k - 1] + slope_hi * (y - y_hi))
             elif y == y_hi:
                 g = z - rail_z[k - 1]
             else:
@@ -197,5 +215,5 @@ def gap_rows_no_yaw(y_ws: NDArray[np.float64], z_ws: NDArray[np.float64],
                 g = z - (dz_dy[j] * (y - rail_y[j]) + rail_z[j])
                 if math.isnan(g):
                     g = z - interp_on_interval(y, rail_y, rail_z, j)
-            out[i, p] = g if math.isfinite(g) else np.inf
-    return out
+            out[i, p] = (g if math.isfinite(g) else np.inf) - gap0_mm[i]
+    return out, inside

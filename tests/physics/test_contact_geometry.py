@@ -1,4 +1,6 @@
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -197,3 +199,79 @@ def test_gap_beyond_the_rail_continues_the_rigid_gap(wheelset):
     k = int(np.argmin(np.abs(y + 45.0)))
     step = np.diff(inside[:, k])
     assert np.all((step > 0.01) & (step < 0.1))
+
+
+def _gap_beyond_rail_numpy(wt, shifts, side):
+    """The numpy form :func:`rigid_wheel_gap_beyond_rail` had before its compiled kernel
+    (``min_gap_kernel.gap_rows_no_yaw`` with ``beyond_rail``): every wheel point placed on the full
+    (shift, point) grid again, the rail's end faces continued, and the reference gap taken as
+    the median over the points with rail below of their gap less rigid_wheel_gap's."""
+    import wearcast.physics.contact.geometry as geo
+
+    y_wheel, gap, roll = rigid_wheel_gap(wt, shifts, side)
+    shift, yaw = geo._pose_arrays(shifts, 0.0)
+    chosen = geo._prepare(wt)[0 if side == "left" else 1]
+    _, y, z = geo._points(chosen, shift, roll, yaw, wt.nominal_radius_mm, chosen.y_ws,
+                          -chosen.z_ws, grid=True)
+    ry, rz = chosen.rail_y, chosen.rail_z
+    lo = int(np.searchsorted(ry, ry[0] + geo._END_FACE_MM))
+    hi = int(np.searchsorted(ry, ry[-1] - geo._END_FACE_MM)) - 1
+    slope_lo = (rz[lo] - rz[0]) / (ry[lo] - ry[0])
+    slope_hi = (rz[-1] - rz[hi]) / (ry[-1] - ry[hi])
+    z_rail = np.where(y < ry[0], rz[0] + slope_lo * (y - ry[0]),
+                      np.where(y > ry[-1], rz[-1] + slope_hi * (y - ry[-1]),
+                               np.interp(y, ry, rz)))
+    reference = np.where(np.isfinite(gap), (z - z_rail) - gap, np.nan)
+    gap0 = np.nanmedian(reference, axis=1)
+    extended = np.where(np.isfinite(gap), gap, z - z_rail - gap0[:, None])
+    return y_wheel, extended, roll, np.minimum(y - ry[0], ry[-1] - y)
+
+
+@pytest.mark.parametrize("right_rail", [None, "60E2"])
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_gap_beyond_the_rail_kernel_equals_its_numpy_form(right_rail, side):
+    # the compiled pass (gap, end faces and distance inside the rail in one loop, referred to
+    # the roll solve's gap) gives the numpy form's numbers: bit for bit over the rail and for
+    # the distance, to rounding (1e-12 mm) beyond the rail, where the numpy form took its
+    # reference gap as a median of (z - z_rail) - gap over the points; on S1002/60E1 and on
+    # a track whose right rail is another profile (60E2), both wheels, shifts to the flange
+    # climbing on either side and the table's coarse-start roll solve (N > 32)
+    from wearcast.physics.profiles.measured import rail_curve
+
+    wt = s1002_60e1()
+    if right_rail is not None:
+        wt = replace(wt, rail_right=rail_curve(right_rail), _cache={})
+    shifts = np.arange(-12.0, 12.0 + 1e-9, 0.1)
+    y, ext, roll, inside = rigid_wheel_gap_beyond_rail(wt, shifts, side)
+    y_ref, ext_ref, roll_ref, inside_ref = _gap_beyond_rail_numpy(wt, shifts, side)
+    assert np.array_equal(y, y_ref) and np.array_equal(roll, roll_ref)
+    assert np.array_equal(inside, inside_ref)
+    on = inside >= 0.0
+    assert (~on).any() and on.any()
+    assert np.array_equal(ext[on], ext_ref[on])
+    np.testing.assert_allclose(ext[~on], ext_ref[~on], rtol=0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("right_rail", [None, "60E2"])
+def test_masked_contact_table_equals_its_numpy_and_scipy_form(right_rail, monkeypatch):
+    # the curving contact table with the masked gap smoothing (the default), built from the
+    # compiled gap beyond the rail and the compiled Gaussian filters, is the one built from
+    # their numpy and scipy forms (the computation before them) to 1e-9 mm (1e-9 /mm for g'';
+    # bit for bit on x86-64): S1002 on 60E1 at 1:40, and with a 60E2 right rail (both wheels'
+    # tables)
+    import wearcast.physics.curving_table as ct
+    from tests.physics.test_gap_smoothing_kernel import _masked_gaussian_scipy
+    from wearcast.physics import gap_smoothing as gs
+
+    new = ct.build_contact_table(None, "60E1", 1.0 / 40.0, rail_right=right_rail,
+                                 gap_smoothing="masked")
+    monkeypatch.setattr(ct, "rigid_wheel_gap_beyond_rail", _gap_beyond_rail_numpy)
+    monkeypatch.setattr(gs, "masked_gaussian", _masked_gaussian_scipy)
+    old = ct.build_contact_table(None, "60E1", 1.0 / 40.0, rail_right=right_rail,
+                                 gap_smoothing="masked")
+    pairs = [(new, old)] if right_rail is None else [(new, old), (new.right, old.right)]
+    for got, ref in pairs:
+        assert got is not None and ref is not None
+        for name in ("gap_mm", "gap2_per_mm", "rigid_rise_mm", "shift_mm"):
+            np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=0.0,
+                                       atol=1e-9, err_msg=name)

@@ -63,8 +63,9 @@ def test_gap_rows_kernel_equals_the_numpy_gaps(tracks):
     for wt in tracks.values():
         for side in geo._prepare(wt):
             ref, _ = geo._gaps(side, shift, roll, np.zeros(200), 460.0)
-            got = gap_rows_no_yaw(side.y_ws, side.z_ws, side.rail_y, side.rail_z, shift,
-                                  np.cos(roll), np.sin(roll), 460.0)
+            got, _ = gap_rows_no_yaw(side.y_ws, side.z_ws, side.rail_y, side.rail_z, shift,
+                                     np.cos(roll), np.sin(roll), 460.0, np.zeros(200),
+                                     (0.0, 0.0), False)
             assert np.isinf(ref).any() and np.isfinite(ref).any()
             np.testing.assert_array_equal(got, ref)
 
