@@ -336,24 +336,30 @@ def test_kik_piotrowski_width_of_all_patches_at_once_equals_one_at_a_time():
     assert np.any(want > args[4])  # some patches widened beyond Hertz
 
 
+def _continuation_failing(row: int):
+    """``curving.continuation_batch`` that reports case ``row`` as not converged."""
+    real = cv.continuation_batch
+
+    def fake(fun, q0, p_start, p_end, tol, **kw):
+        q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
+        conv = conv.copy()
+        conv[row] = False
+        return q, norm, conv
+
+    return fake
+
+
 def test_failed_cases_are_skipped_in_one_batch(trailer, monkeypatch):
     # The wear loop's fallback: a case that does not converge comes back as None and the others
     # are solved in the same batch (the old path re-solved the whole batch per failure).
     cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0, 1200.0)]
     ok = cv.solve_curving_cases_or_none(trailer, cases)
     assert all(r is not None for r in ok)
-    real = cv.continuation_batch
-
-    def fail_second(fun, q0, p_start, p_end, tol, **kw):
-        q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
-        conv = conv.copy()
-        conv[1] = False
-        return q, norm, conv
 
     def fail_all(fun, q0, p_start, p_end, tol, **kw):
         return q0.copy(), np.full(len(q0), np.inf), np.zeros(len(q0), dtype=bool)
 
-    monkeypatch.setattr(cv, "continuation_batch", fail_second)
+    monkeypatch.setattr(cv, "continuation_batch", _continuation_failing(1))
     # the arclength continuation rescues a case the natural one lost; here it fails too
     monkeypatch.setattr(cv, "arclength_continuation_batch", fail_all)
     skipped = cv.solve_curving_cases_or_none(trailer, cases)
@@ -450,15 +456,7 @@ def test_a_case_the_natural_continuation_loses_is_followed_by_arclength(trailer,
     # curve of equilibria by the arclength continuation, to the same equilibrium here
     cases = [cv.curve_case(r, 100.0, None, "left") for r in (300.0, 600.0)]
     ok = cv.solve_curving_cases_or_none(trailer, cases)
-    real = cv.continuation_batch
-
-    def fail_first(fun, q0, p_start, p_end, tol, **kw):
-        q, norm, conv = real(fun, q0, p_start, p_end, tol, **kw)
-        conv = conv.copy()
-        conv[0] = False
-        return q, norm, conv
-
-    monkeypatch.setattr(cv, "continuation_batch", fail_first)
+    monkeypatch.setattr(cv, "continuation_batch", _continuation_failing(0))
     rescued = cv.solve_curving_cases_or_none(trailer, cases)
     assert rescued[0] is not None and ok[0] is not None
     np.testing.assert_allclose(rescued[0].wheelset_shift_mm, ok[0].wheelset_shift_mm, atol=1e-4)
