@@ -50,7 +50,7 @@ def main(folder: Path) -> None:
         dt = time.perf_counter() - t0
         where = f"{wheel} on {'avg_low2.ban' if rail_on else '60E1'}"
         if r.status_code != 201:
-            print(f"  {where:<32s} {r.status_code} {r.json().get('detail')}")
+            print(f"  {where:<32s} {r.status_code} in {dt:5.2f} s {r.json().get('detail')}")
             continue
         table = r.json()
         tau = max((row["value"] for row in table["rows"] if row["region"] == "flange"
