@@ -143,21 +143,14 @@ def _table_against_pipeline() -> None:
     for radius in (150.0, 250.0, 400.0, 600.0):
         res = solve_curving(trailer, radius, cant_mm=100.0, contact_pipeline=True,
                             pipeline_equilibrium=True)
-        high = 0 if res.high_rail_side == "left" else 1
-        p = res.pipeline
-        assert p is not None
-        k = int(np.argmax(res.normal_force_n[0, high]))
-        m = int(np.argmax(p["normal_force_n"][0, high]))
-        print(f"{radius:5.0f} | {res.wheel_y_mm[0, high, k]:6.1f} "
-              f"{np.degrees(res.contact_angle_rad[0, high, k]):5.1f} "
-              f"{res.normal_force_n[0, high, k] / 1e3:5.1f} {res.b_mm[0, high, k]:5.2f} "
-              f"{res.p0_mpa[0, high, k]:6.0f} {res.tau_max_mpa[0, high, k]:6.0f} "
-              f"{res.t_gamma_n[0, high, k]:5.0f} | "
-              f"{p['wheel_y_mm'][0, high, m]:6.1f} "
-              f"{np.degrees(p['contact_angle_rad'][0, high, m]):5.1f} "
-              f"{p['normal_force_n'][0, high, m] / 1e3:5.1f} {p['b_mm'][0, high, m]:5.2f} "
-              f"{p['peak_pressure_mpa'][0, high, m]:6.0f} {p['tau_max_mpa'][0, high, m]:6.0f} "
-              f"{p['t_gamma_n'][0, high, m]:5.0f} | {res.pipeline_residual_norm:.1e}")
+        t, p = res.leading_high_rail_patch(), res.leading_high_rail_patch("pipeline")
+        print(f"{radius:5.0f} | {t['wheel_y_mm']:6.1f} {np.degrees(t['contact_angle_rad']):5.1f} "
+              f"{t['normal_force_n'] / 1e3:5.1f} {t['b_mm']:5.2f} {t['p0_mpa']:6.0f} "
+              f"{t['tau_max_mpa']:6.0f} {t['t_gamma_n']:5.0f} | "
+              f"{p['wheel_y_mm']:6.1f} {np.degrees(p['contact_angle_rad']):5.1f} "
+              f"{p['normal_force_n'] / 1e3:5.1f} {p['b_mm']:5.2f} "
+              f"{p['peak_pressure_mpa']:6.0f} {p['tau_max_mpa']:6.0f} "
+              f"{p['t_gamma_n']:5.0f} | {res.pipeline_residual_norm:.1e}")
 
 
 if __name__ == "__main__":

@@ -93,3 +93,26 @@ class CurvingResult(BogieContacts):
         """(2 axles, 2 sides): the wheel has a loaded patch on its flange (y < -30 mm)."""
         return np.any(self.in_contact & (self.wheel_y_mm < FLANGE_SPLIT_Y_MM), axis=-1)
 
+
+    def leading_high_rail_patch(self, source: str = "table") -> dict[str, float]:
+        """The most loaded patch of the leading wheelset's high-rail wheel (a curve only):
+        every per-contact field at that patch, from the curving's own contacts (``table``) or
+        from the one contact pipeline's at its pose (``pipeline``; needs ``contact_pipeline``
+        in ``solve_curving``). Units as the fields' (N, rad, mm, MPa)."""
+        side = self.high_rail_side
+        if side is None:
+            raise ValueError("radius_m: tangent track has no high rail")
+        high = 0 if side == "left" else 1
+        if source == "table":
+            fields = {f: np.asarray(getattr(self, f)) for f in self.__dataclass_fields__
+                      if np.shape(getattr(self, f))[:2] == (2, 2)
+                      and np.ndim(getattr(self, f)) == 3}
+        elif source == "pipeline":
+            if self.pipeline is None:
+                raise ValueError("source: solved without contact_pipeline")
+            fields = {f: np.asarray(v) for f, v in self.pipeline.items()
+                      if np.ndim(v) == 3 and np.shape(v)[:2] == (2, 2)}
+        else:
+            raise ValueError(f"source must be 'table' or 'pipeline', got {source!r}")
+        k = int(np.argmax(fields["normal_force_n"][0, high]))
+        return {f: float(v[0, high, k]) for f, v in fields.items()}

@@ -461,3 +461,17 @@ def test_a_case_the_natural_continuation_loses_is_followed_by_arclength(trailer,
     assert rescued[0] is not None and ok[0] is not None
     np.testing.assert_allclose(rescued[0].wheelset_shift_mm, ok[0].wheelset_shift_mm, atol=1e-4)
     np.testing.assert_allclose(rescued[0].tau_max_mpa, ok[0].tau_max_mpa, rtol=1e-4, atol=1e-6)
+
+
+def test_the_leading_high_rail_patch_is_the_most_loaded_one(trailer):
+    res = cv.solve_curving(trailer, 300.0, cant_mm=100.0)
+    patch = res.leading_high_rail_patch()
+    high = cv.SIDES.index(res.high_rail_side)
+    assert patch["normal_force_n"] == float(np.max(res.normal_force_n[0, high]))
+    k = int(np.argmax(res.normal_force_n[0, high]))
+    assert patch["wheel_y_mm"] == float(res.wheel_y_mm[0, high, k])
+    assert patch["tau_max_mpa"] == float(res.tau_max_mpa[0, high, k])
+    with pytest.raises(ValueError, match="source"):
+        res.leading_high_rail_patch("pipeline")  # solved without the pipeline
+    with pytest.raises(ValueError, match="radius_m"):
+        cv.solve_curving(trailer, None).leading_high_rail_patch()

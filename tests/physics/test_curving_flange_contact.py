@@ -83,11 +83,7 @@ def balanced_pipeline_250m():
         res = cv.solve_curving(trailer, 250.0, cant_mm=100.0, table=table,
                                contact_pipeline=True, pipeline_equilibrium=True)
     assert res.pipeline is not None and res.pipeline_residual_norm < cv.PIPELINE_TOLERANCE
-    high = cv.SIDES.index(res.high_rail_side)
-    m = int(np.argmax(res.pipeline["normal_force_n"][0, high]))
-    return trailer, {f: res.pipeline[f][0, high, m] for f in
-                     ("wheel_y_mm", "contact_angle_rad", "normal_force_n", "b_mm",
-                      "tau_max_mpa", "t_gamma_n")}
+    return trailer, res.leading_high_rail_patch("pipeline")
 
 
 _NARROW = pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
@@ -114,12 +110,11 @@ def test_loaded_flange_patch_of_the_table_against_the_balanced_pipeline(balanced
     table = cv.build_contact_table(None, trailer.rail_profile, trailer.rail_inclination,
                                    trailer.wheel_radius_m, gap_smoothing=gap_smoothing)
     res = cv.solve_curving(trailer, 250.0, cant_mm=100.0, table=table)
-    high = cv.SIDES.index(res.high_rail_side)
-    k = int(np.argmax(res.normal_force_n[0, high]))
-    assert res.wheel_y_mm[0, high, k] == pytest.approx(ref["wheel_y_mm"], abs=0.7)
-    assert res.contact_angle_rad[0, high, k] == pytest.approx(ref["contact_angle_rad"],
-                                                              abs=np.radians(2.0))
-    assert res.normal_force_n[0, high, k] == pytest.approx(ref["normal_force_n"], rel=0.01)
-    assert res.b_mm[0, high, k] == pytest.approx(ref["b_mm"], rel=0.2)
-    assert res.tau_max_mpa[0, high, k] == pytest.approx(ref["tau_max_mpa"], rel=0.25)
-    assert res.t_gamma_n[0, high, k] == pytest.approx(ref["t_gamma_n"], rel=0.25)
+    got = res.leading_high_rail_patch()
+    assert got["wheel_y_mm"] == pytest.approx(ref["wheel_y_mm"], abs=0.7)
+    assert got["contact_angle_rad"] == pytest.approx(ref["contact_angle_rad"],
+                                                     abs=np.radians(2.0))
+    assert got["normal_force_n"] == pytest.approx(ref["normal_force_n"], rel=0.01)
+    assert got["b_mm"] == pytest.approx(ref["b_mm"], rel=0.2)
+    assert got["tau_max_mpa"] == pytest.approx(ref["tau_max_mpa"], rel=0.25)
+    assert got["t_gamma_n"] == pytest.approx(ref["t_gamma_n"], rel=0.25)
