@@ -204,7 +204,7 @@ def _solve_rows(a, b):
 
 
 def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5, ds_max=3.0,
-                                 ds_min=1e-4, max_steps=300, corrector_iter=8, t_min=-2.0):
+                                 ds_min=1e-6, max_steps=300, corrector_iter=8, t_min=-2.0):
     """Pseudo-arclength continuation of R(q, p) = 0 along p = p_start + t (p_end - p_start),
     t from 0 to 1, for many independent rows: it follows the solution curve through folds
     (turning points in t), where :func:`continuation_batch` stops.
