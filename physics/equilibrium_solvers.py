@@ -222,7 +222,9 @@ def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5
     the fold at negative t). ``jac``: as :func:`newton_batch`'s (required: the tangent needs
     J).
     Returns (q, residual norms at p_end, converged) like :func:`continuation_batch`; a row
-    that fails keeps ``q_start`` and its last residual norm.
+    that fails keeps ``q_start``, with the residual norm of its Newton solve at t = 0 where
+    that failed, of the final Newton solve at t = 1 where that failed, else inf (t = 1 not
+    reached).
 
     Which equilibrium this finds: the one connected to the start through the folds. Past a
     fold a real system jumps to another branch (hysteresis); the connected one is where the
@@ -261,17 +263,16 @@ def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_mi
     q_out = q.copy()
     norm_out = np.full(nb, np.inf)
     ok_out = np.zeros(nb, dtype=bool)
-    rows = np.arange(nb)
     x = np.concatenate([q, np.zeros((nb, 1))], axis=1)
     _, jm = _augmented(jac, fun, x[:, :n], x[:, n], p_start, dp)
     e_t = np.zeros_like(x)
     e_t[:, n] = 1.0
     v = orientation * _tangent(jm, e_t)
-    ds = np.full(rows.size, ds0)
-    steps = np.zeros(rows.size, dtype=int)
-    active = np.ones(rows.size, dtype=bool)
-    finish_q = np.zeros((rows.size, n))
-    finished = np.zeros(rows.size, dtype=bool)
+    ds = np.full(nb, ds0)
+    steps = np.zeros(nb, dtype=int)
+    active = np.ones(nb, dtype=bool)
+    finish_q = np.zeros((nb, n))
+    finished = np.zeros(nb, dtype=bool)
     while np.any(active):
         a = np.nonzero(active)[0]
         steps[a] += 1
@@ -283,8 +284,8 @@ def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_mi
             todo = np.nonzero(~conv)[0]
             if todo.size == 0:
                 break
-            r, jm = _augmented(jac, fun, xc[todo, :n], xc[todo, n], p_start[rows[a[todo]]],
-                               dp[rows[a[todo]]])
+            r, jm = _augmented(jac, fun, xc[todo, :n], xc[todo, n], p_start[a[todo]],
+                               dp[a[todo]])
             jm_c[todo] = jm
             arc = np.einsum("ij,ij->i", v[a[todo]], xc[todo] - xp[todo])
             done = (np.linalg.norm(r, axis=-1) < tol) & (np.abs(arc) < 1e-9)
@@ -320,9 +321,8 @@ def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_mi
         active &= (steps < max_steps) & ~back
     if np.any(finished):
         f = np.nonzero(finished)[0]
-        q_f, n_f, ok_f = newton_batch(fun, finish_q[f], p_start[rows[f]] + dp[rows[f]], tol,
-                                      jac=jac)
-        q_out[rows[f[ok_f]]] = q_f[ok_f]
-        norm_out[rows[f]] = n_f
-        ok_out[rows[f]] = ok_f
+        q_f, n_f, ok_f = newton_batch(fun, finish_q[f], p_start[f] + dp[f], tol, jac=jac)
+        q_out[f[ok_f]] = q_f[ok_f]
+        norm_out[f] = n_f
+        ok_out[f] = ok_f
     return q_out, norm_out, ok_out, x[:, n] < ARC_T_SCALE * t_min
