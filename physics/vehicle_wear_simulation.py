@@ -20,8 +20,9 @@ default the right wheel of the leading axle), which is not what was measured. He
   ``forward_share`` = 0.5 and a route whose left and right curves have equal shares, the four
   wheels wear alike and the mean profile is every wheel's own profile.
 * Steps: adaptive, the largest normal depth of any wheel in a step equals D_step (seed 003
-  eq. 2), the last step cut to land on the end mileage; the contact is re-solved every step,
-  each operating point warm-started from its last equilibrium.
+  eq. 2), the last step cut to land on the end mileage (``cut_last_step=False``: kept whole,
+  the run ends at the first step at or beyond it, a prefix of every longer run); the contact
+  is re-solved every step, each operating point warm-started from its last equilibrium.
 * Averaged as measured: Sd (FT), Sh (FH), qR of every wheel, averaged over all wheels of the
   vehicle (bogie types weighted by their number).
 * ``wear_scale`` multiplies the wheel's worn volume (a calibrated wear-coefficient scale);
@@ -217,7 +218,8 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                           max_steps: int = 400,
                           progress: Callable[[float], None] | None = None,
                           continue_from: VehicleWearSimulation | None = None,
-                          contact_cache: dict | None = None
+                          contact_cache: dict | None = None,
+                          cut_last_step: bool = True
                           ) -> VehicleWearSimulation:
     """Wear of every wheel of a vehicle over a route of curve classes to ``mileage_km``.
 
@@ -236,6 +238,10 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         key: runs that differ only in the wear (scale, flange factor, running direction,
         law) solve the new profile's contact once. Results are identical with and without it
         (only updates without fallbacks are stored).
+    cut_last_step : True: the last step is cut to end at ``mileage_km``; False: it is a whole
+        step like the others, so the run ends at or beyond ``mileage_km`` and is step for step
+        the first part of the same run to any longer mileage (the physics diagnosis reads its
+        runs up to a mileage and needs them to be the longer runs' there).
     """
     start = time.perf_counter()
     opts = options or VehicleWearOptions()
@@ -320,7 +326,11 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
         slopes = np.asarray(np.gradient(profiles, y, axis=-1))
         peak = float(np.max(rates * np.sqrt(1.0 + slopes * slopes)))
         remaining = mileage_km - mileage[-1]
-        ds = remaining if peak <= 0 else min(depth_per_step_mm / peak, remaining)
+        if peak <= 0:
+            ds = remaining
+        else:
+            ds = depth_per_step_mm / peak
+            ds = min(ds, remaining) if cut_last_step else ds
         for bi in range(n_b):
             for wi in range(4):
                 profiles[bi, wi] = apply_normal_wear(y, profiles[bi, wi], rates[bi, wi] * ds)

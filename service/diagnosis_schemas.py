@@ -115,5 +115,8 @@ class DiagnosisOut(BaseModel):
     null_fit: dict[str, Any] | None = Field(default=None, description=(
         "physics models: the null model's own fit — wear_scale (the fitted wear-coefficient "
         "scale), rms_mm and the measured series it was fitted on; null for hybrid models"))
+    at_reach: list[str] = Field(default_factory=list, description=(
+        "physics models: the null ('null') and the causes with a fit at the largest wear "
+        "scale their loop runs reach (a longer run could move it); empty for hybrid models"))
     saved_model: ModelOut | None = None
     save_reason: str | None = Field(default=None, description="why save_as saved nothing")

@@ -289,6 +289,7 @@ def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
         selected=[d["verdict"]] if d["verdict"] not in ("none", "ambiguous") else [],
         runner_up=diagnosis.runner_up, margin=diagnosis.margin,
         margin_p_value=diagnosis.margin_p_value, candidates=list(diagnosis.candidates),
+        at_reach=list(diagnosis.at_reach),
         null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
                   "Holm's correction; the margin over every other cause with a gain by a "
                   "one-sided sign-flip test over the same groups",

@@ -53,6 +53,20 @@ EXTRAPOLATION = 1.25
 SCALE_BOUNDS = (0.05, 20.0)
 #: Points of the log grid the scale search starts from (``_fit``).
 SCALE_GRID_POINTS = 121
+#: The largest wear-coefficient scale a diagnosis's loop runs are made for [-]
+#: (:func:`diagnosis_mileage_km`): every scale up to it is fitted on simulated, not
+#: extrapolated, mileage. The search reads a run only up to c x the furthest mileage, so a
+#: longer run (with the same steps up to there: ``simulate_vehicle_wear``'s
+#: ``cut_last_step=False``) changes no fit whose scale is below this; a cause whose values
+#: need a larger scale (a run that wears far more slowly than the measured wheels) is fitted
+#: at the largest scale its run reaches, as with any run length, and the diagnosis says so
+#: when that fit is the chosen one (``PhysicsDiagnosis.at_reach``). 1.5: the fitted scales of
+#: the Aosta diagnosis (seed 003 Table 2), null and every extension on all data, lie between
+#: 0.75 and 1.38, and its runs to 1.5 x 3,537 km give the answer of runs to 8,000 km bit for
+#: bit (``benchmarks/diagnose_aosta_physics.py``).
+DIAGNOSIS_SCALE_MAX = 1.5
+#: A fit is at its run's reach when its scale is at least this share of it (``ScaleFit``).
+AT_REACH_SHARE = 0.97
 
 
 @dataclass(frozen=True)
@@ -168,18 +182,21 @@ class PhysicsDiagnosis(FinderResult):
     """verdict (a cause, ``none`` or ``ambiguous``), findings ranked by gain, skipped causes
     with reasons, the null model's fitted scale on all data and its error per vehicle; the
     runner-up, the margin over it and its p-value, and the ``candidates`` of an ambiguous
-    verdict (see ``_verdict``)."""
+    verdict (see ``_verdict``); ``at_reach``: the null (``null``) and the causes whose chosen
+    fit (on all data or a fold) is at the largest scale its runs reach, which a longer run
+    could move (:data:`DIAGNOSIS_SCALE_MAX`)."""
 
     null_fit: dict[str, Any] = field(default_factory=dict)
     runner_up: str | None = None
     margin: float | None = None
     margin_p_value: float | None = None
     candidates: tuple[str, ...] = ()
+    at_reach: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {**super().to_dict(), "null_fit": self.null_fit, "runner_up": self.runner_up,
                 "margin": self.margin, "margin_p_value": self.margin_p_value,
-                "candidates": list(self.candidates)}
+                "candidates": list(self.candidates), "at_reach": list(self.at_reach)}
 
 
 class _Series:
@@ -234,6 +251,31 @@ def _blends(cause: PhysicsCause | None, runs: Mapping[Any, _Series]
             out.append((lo + t * (hi - lo), [runs[lo], runs[hi]], np.array([1 - t, t])))
     out.append((vals[-1], [runs[vals[-1]]], np.ones(1)))
     return out
+
+
+def diagnosis_mileage_km(measured: pd.DataFrame,
+                         scale_max: float = DIAGNOSIS_SCALE_MAX) -> float:
+    """The mileage a diagnosis's loop runs need [km]: the largest the scale search reads for
+    scales up to ``scale_max`` (a fit at scale c reads the series at c x each training point's
+    mileage, a held-out prediction at c x the test vehicle's), i.e. ``scale_max`` x the
+    furthest measured mileage. A run to it is read only within its simulated mileage at
+    every scale up to ``scale_max``; the strict search extrapolates up to
+    ``EXTRAPOLATION`` x ``scale_max`` beyond (:func:`fit_wear_scale`'s ``reach``)."""
+    if not scale_max > 0:
+        raise ValueError(f"scale_max: must be positive, got {scale_max}")
+    if "distance_km" not in measured:
+        raise ValueError("measured needs distance_km")
+    far = float(pd.to_numeric(measured["distance_km"]).max())
+    if not far > 0:
+        raise ValueError("measured needs a mileage beyond 0 km")
+    return scale_max * far
+
+
+def _reach(series: Sequence[_Series], km: NDArray) -> float:
+    """The largest scale the strict search can evaluate ``series`` at for mileages ``km``."""
+    far = float(np.max(km)) if km.size else 0.0
+    end = min(float(s.km[-1]) for s in series)
+    return EXTRAPOLATION * end / far if far > 0 else SCALE_BOUNDS[1]
 
 
 def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: NDArray,
@@ -304,8 +346,8 @@ def fit_wear_scale(simulation: Any, measured: pd.DataFrame) -> ScaleFit:
     series = _Series(simulation, cols)
     _, scale, sse = _fit(_blends(None, {None: series}), km, y, cols)
     far = float(km.max())
-    reach = EXTRAPOLATION * float(series.km[-1]) / far if far > 0 else SCALE_BOUNDS[1]
-    at_reach = bool(sse >= 1e12 or (far > 0 and scale >= 0.97 * reach))
+    reach = _reach([series], km)
+    at_reach = bool(sse >= 1e12 or (far > 0 and scale >= AT_REACH_SHARE * reach))
     return ScaleFit(float(scale), float(sse), float(np.sqrt(sse / n)), n,
                     float(min(reach, SCALE_BOUNDS[1])), at_reach)
 
@@ -372,8 +414,10 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     simulate : {parameter: value} -> simulation (``mileage_km``, ``mean(q)`` for the
         quantities q of :data:`SERIES`: ``sd_mm``, ``sh_mm``, ``qr_mm``);
         called once per parameter set with only the cause's parameter set (empty = null); it
-        must simulate far enough for the fitted scales (SCALE_BOUNDS x the largest mileage
-        is not required: a scale that needs more is simply not reachable)
+        must simulate far enough for the fitted scales: :func:`diagnosis_mileage_km` (scales
+        up to :data:`DIAGNOSIS_SCALE_MAX` on simulated mileage; SCALE_BOUNDS x the largest
+        mileage is not required: a scale that needs more is simply not reachable, and a fit
+        that ends at its runs' reach is listed in ``at_reach``)
     measured : columns ``vehicle``, ``distance_km`` and any of ``FT_mm``, ``FH_mm``,
         ``QR_mm`` (each scored where measured)
     skipped : {cause: reason} of causes left out of ``catalogue`` because the model lacks
@@ -403,20 +447,32 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         raise done[0]  # the model itself does not run: nothing to diagnose
     by_params = {_run_key(p): r for p, r in zip(sets, done, strict=True)}
     null_runs = {None: _Series(done[0], cols)}
+    at_reach: list[str] = []
+
+    def fit(cause: PhysicsCause | None, cands: list[tuple[Any, list[_Series], NDArray]],
+            at: NDArray) -> tuple[Any, float, float]:
+        theta, scale, sse = _fit(cands, km[at], y[at], cols)
+        chosen = next(c for c in cands if c[0] == theta)
+        name = "null" if cause is None else cause.name
+        if (sse >= 1e12 or scale >= AT_REACH_SHARE * _reach(chosen[1], km[at])) and (
+                name not in at_reach):
+            at_reach.append(name)
+        return theta, scale, sse
 
     def held_out(cause: PhysicsCause | None, cause_runs: Mapping[Any, _Series]) -> NDArray:
         cands = _blends(cause, cause_runs)
         err = np.zeros(km.size)
         for g in groups:
             test = vehicles == g
-            theta, scale, _ = _fit(cands, km[~test], y[~test], cols)
+            theta, scale, _ = fit(cause, cands, ~test)
             chosen = next(c for c in cands if c[0] == theta)
             pred = _predict(chosen[1], chosen[2], scale, km[test], cols, strict=False)
             err[test] = np.nansum((pred - y[test]) ** 2, axis=1)
         return err
 
     before = held_out(None, null_runs)
-    theta0, scale0, sse0 = _fit(_blends(None, null_runs), km, y, cols)
+    every = np.ones(km.size, dtype=bool)
+    theta0, scale0, sse0 = fit(None, _blends(None, null_runs), every)
     null_fit = {"wear_scale": scale0,
                 "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols}
     rows = []
@@ -449,7 +505,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         pvals.append(p if np.isfinite(p) else 1.0)
         lo, hi = bootstrap_gain_interval(b_units, a_units, n_bootstrap, rng)
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
-        theta, scale, sse = _fit(_blends(cause, runs[cause.name]), km, y, cols)
+        theta, scale, sse = fit(cause, _blends(cause, runs[cause.name]), every)
         findings.append((cause, Gain(float(before.mean()), float(after.mean()), float(rel), lo,
                                      hi, metric=METRIC),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
@@ -469,7 +525,8 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     verdict, runner_up, margin, margin_p, candidates = _verdict(out, after_of, unit, alpha, rng)
     return PhysicsDiagnosis(verdict, tuple(out), skipped, int(km.size), int(groups.size),
                             group_by, null_fit, runner_up=runner_up, margin=margin,
-                            margin_p_value=margin_p, candidates=candidates)
+                            margin_p_value=margin_p, candidates=candidates,
+                            at_reach=tuple(at_reach))
 
 
 def _verdict(ranked: Sequence[Finding], after_of: Mapping[str, NDArray], unit: NDArray,

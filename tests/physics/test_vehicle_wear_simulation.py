@@ -296,3 +296,23 @@ def test_a_wheel_worn_beyond_its_rim_is_named_with_where(monkeypatch):
                                                      r"profile at y = -4\d\.\d mm"):
         simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
                               depth_per_step_mm=STEP)
+
+
+def test_a_run_with_its_last_step_whole_is_the_first_part_of_a_longer_run():
+    # cut_last_step=False: the run ends at the first step at or beyond its mileage, so it is
+    # step for step the longer run up to there (the physics diagnosis reads runs to a mileage
+    # and needs them to be the longer runs' there); the cut run's last point is not.
+    whole = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=500.0,
+                                  depth_per_step_mm=STEP, cut_last_step=False)
+    longer = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=1500.0,
+                                   depth_per_step_mm=STEP)
+    n = whole.mileage_km.size
+    assert whole.mileage_km[-1] >= 500.0 and whole.mileage_km[-2] < 500.0
+    assert longer.mileage_km[-1] > whole.mileage_km[-1]
+    np.testing.assert_array_equal(longer.mileage_km[:n], whole.mileage_km)
+    for q in ("sd_mm", "sh_mm", "qr_mm"):
+        np.testing.assert_array_equal(getattr(longer, q)[:n], getattr(whole, q))
+    cut = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=500.0,
+                                depth_per_step_mm=STEP)
+    assert cut.mileage_km[-1] == pytest.approx(500.0)
+    np.testing.assert_array_equal(cut.mileage_km[:-1], whole.mileage_km[:-1])

@@ -167,6 +167,8 @@ def test_a_physics_model_is_diagnosed_with_the_physics_contract(built) -> None:
         "curve_classes"]
     assert d["n_groups"] == 4
     assert d["null_fit"]["wear_scale"] == pytest.approx(SCALE, rel=0.02)
+    # the model's run reaches its fitted scale: no fit at its runs' reach
+    assert d["at_reach"] == []
     r = client.post(f"/v1/models/{model['id']}/diagnose", json={"causes": ["traction"]})
     assert _field(r) == "causes[0]"
 

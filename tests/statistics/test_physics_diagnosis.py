@@ -443,3 +443,43 @@ def test_the_loop_on_another_binning_is_named_curve_classes(loop_on_segments, hi
     assert f.extension == {"parameter": "curve_classes", "value": 2,
                            "wear_scale": pytest.approx(1.2, rel=0.05), "null_value": None}
     assert f.gain.ci95_low > 0.5
+
+
+def test_a_run_to_the_diagnosis_mileage_reaches_every_scale_up_to_the_bound():
+    # the mileage rule: scale_max x the furthest measured mileage. A run to it fits a scale at
+    # the bound on simulated mileage (not at its reach); a scale beyond the run's reach
+    # (EXTRAPOLATION x the bound) is reported at the reach, as diagnose_physics's at_reach.
+    from types import SimpleNamespace
+
+    from wearcast.statistics.physics_diagnosis import (
+        DIAGNOSIS_SCALE_MAX,
+        EXTRAPOLATION,
+        diagnosis_mileage_km,
+    )
+
+    full = _Series({})
+    base = _measured({}, scale=1.0)
+    assert diagnosis_mileage_km(base) == pytest.approx(
+        DIAGNOSIS_SCALE_MAX * base["distance_km"].max())
+
+    def run_to(km):
+        at = full.mileage_km <= km
+        return SimpleNamespace(mileage_km=np.append(full.mileage_km[at], km),
+                               mean=lambda q: np.append(full.mean(q)[at],
+                                                        np.interp(km, full.mileage_km,
+                                                                  full.mean(q))))
+
+    for bound in (DIAGNOSIS_SCALE_MAX, 3.0):
+        at_bound = _measured({}, scale=bound, noise_mm=0.0)
+        fit = fit_wear_scale(run_to(diagnosis_mileage_km(at_bound, bound)), at_bound)
+        assert fit.wear_scale == pytest.approx(bound, rel=1e-3) and not fit.at_reach
+        assert fit.reach == pytest.approx(EXTRAPOLATION * bound)
+    beyond = _measured({}, scale=1.5 * EXTRAPOLATION * DIAGNOSIS_SCALE_MAX, noise_mm=0.0)
+    short = run_to(diagnosis_mileage_km(beyond))
+    assert fit_wear_scale(short, beyond).at_reach
+    d = diagnose_physics(lambda params: short, beyond,
+                         catalogue=(next(c for c in CATALOGUE if c.name == "patch_model"),),
+                         n_bootstrap=100)
+    assert d.at_reach[0] == "null" and d.to_dict()["at_reach"] == list(d.at_reach)
+    with pytest.raises(ValueError, match="scale_max"):
+        diagnosis_mileage_km(base, 0.0)
