@@ -15,15 +15,15 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "service"))
-sys.path.insert(0, str(ROOT / "tests"))
-import conftest  # noqa: E402,F401  (the test suite's API key for the in-process client)
-import test_physics_models_api as api  # noqa: E402
+sys.path.insert(0, str(ROOT))  # the test modules import each other as tests.service.*
+import tests.conftest  # noqa: E402,F401  (the test suite's API key for the in-process client)
+import tests.service.test_physics_models_api as api  # noqa: E402
+from tests.service.conftest import sqlite_client  # noqa: E402
 
 
 def main() -> None:
     for hidden in ({}, {"friction": 0.56}):
-        client = api._client(Path(tempfile.mkdtemp()))
+        client = sqlite_client(Path(tempfile.mkdtemp()))
         api._load(client, hidden, vehicles=5)
         start = time.perf_counter()
         model = client.post("/v1/models", json=api.MODEL).json()
