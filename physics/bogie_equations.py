@@ -94,6 +94,13 @@ N_WHEELSET_UNKNOWNS = 5
 WHEELSET_SHIFT_COLUMNS = (0, N_WHEELSET_UNKNOWNS)
 
 
+def wheelset_unknowns(q: NDArray) -> NDArray:
+    """The two wheelsets' unknowns of bogie states q (..., N_STATE) as (..., 2,
+    N_WHEELSET_UNKNOWNS): per wheelset y [mm], psi [mrad], e [1e-3], dL, dR [mm] (a view)."""
+    q = np.asarray(q)
+    return q[..., :2 * N_WHEELSET_UNKNOWNS].reshape(q.shape[:-1] + (2, N_WHEELSET_UNKNOWNS))
+
+
 @dataclass(frozen=True)
 class BogieContacts:
     """Per-contact quantities, shape (..., 2 wheelsets, 2 sides, ``N_SLOTS`` patch slots)."""
@@ -214,7 +221,7 @@ def bogie_residual(q, vehicle: BogieVehicle, table: ContactTable, kappa, a_unb, 
     ``curving_contacts``) instead of the table's."""
     kappa = np.asarray(kappa, dtype=float)
     a_unb = np.asarray(a_unb, dtype=float)
-    ws = q[..., :2 * N_WHEELSET_UNKNOWNS].reshape(q.shape[:-1] + (2, N_WHEELSET_UNKNOWNS))
+    ws = wheelset_unknowns(q)
     y = ws[..., 0]
     psi = ws[..., 1] * 1e-3
     e = ws[..., 2] * 1e-3

@@ -39,7 +39,9 @@ from wearcast.physics.bogie_equations import (
     N_STATE as N_STATE,
 )
 from wearcast.physics.bogie_equations import (
-    N_WHEELSET_UNKNOWNS,
+    SHEAR_MODULUS_MPA as SHEAR_MODULUS_MPA,
+)
+from wearcast.physics.bogie_equations import (
     WHEELSET_SHIFT_COLUMNS,
     BogieContacts,
     CompiledBogie,
@@ -49,9 +51,7 @@ from wearcast.physics.bogie_equations import (
     initial_state,
     wheelset_loads,
     wheelset_roll,
-)
-from wearcast.physics.bogie_equations import (
-    SHEAR_MODULUS_MPA as SHEAR_MODULUS_MPA,
+    wheelset_unknowns,
 )
 from wearcast.physics.curve_cases import CANT_BASE_MM as CANT_BASE_MM
 from wearcast.physics.curve_cases import CurveCase as CurveCase
@@ -128,9 +128,10 @@ class _OnTable:
         self.bogie = bogie
         sides = (table,) if table.right is None else (table, table.right)
         self.limit_mm = min(min(-float(t.shift_mm[0]), float(t.shift_mm[-1])) for t in sides)
+        self._shift_columns = list(WHEELSET_SHIFT_COLUMNS)  # an index list, made once
 
     def _off(self, q: NDArray) -> NDArray[np.bool_]:
-        return np.any(np.abs(q[:, list(WHEELSET_SHIFT_COLUMNS)]) > self.limit_mm, axis=-1)[:, None]
+        return np.any(np.abs(q[:, self._shift_columns]) > self.limit_mm, axis=-1)[:, None]
 
     def residual(self, q: NDArray, params: NDArray) -> NDArray[np.float64]:
         """``CompiledBogie.residual``, ``_OFF_TABLE_RESIDUAL`` off the table."""
@@ -345,7 +346,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         wear_p = equilibrium_wear_measures(cp.xi, cp.eta, cp.phi_per_mm, cp.a_mm, cp.b_mm,
                                        cp.normal_force_n, cp.fx_n, cp.fy_n, cp.mz_nmm,
                                        vehicle.friction, fastsim_grid)
-        ws_p = q_p[:, :2 * N_WHEELSET_UNKNOWNS].reshape(-1, 2, N_WHEELSET_UNKNOWNS)
+        ws_p = wheelset_unknowns(q_p)
         pose = {"state": q_p,
                 "wheelset_shift_mm": centre_shift(table, ws_p[..., 0], ws_p[..., 3:5]),
                 "wheelset_roll_rad": wheelset_roll(table, ws_p[..., 0], ws_p[..., 3:5]),
@@ -371,7 +372,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
         if not ok[k]:
             results.append(None)
             continue
-        ws = q[k, :2 * N_WHEELSET_UNKNOWNS].reshape(2, N_WHEELSET_UNKNOWNS)
+        ws = wheelset_unknowns(q[k])
         shown_r = np.inf if radius_m is None else float(radius_m)
         results.append(CurvingResult(
             radius_m=shown_r, direction=direction, cant_mm=float(cant_mm),

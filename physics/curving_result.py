@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.physics.bogie_equations import BogieContacts
-from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, rail_for
+from wearcast.physics.vocabulary import REGION_SPLIT_Y_MM, SIDES, rail_for
 
 #: Wheel-frame lateral position separating flange (y < split) from tread [mm]: the vocabulary's.
 FLANGE_SPLIT_Y_MM = REGION_SPLIT_Y_MM
@@ -102,17 +102,17 @@ class CurvingResult(BogieContacts):
         side = self.high_rail_side
         if side is None:
             raise ValueError("radius_m: tangent track has no high rail")
-        high = 0 if side == "left" else 1
         if source == "table":
-            fields = {f: np.asarray(getattr(self, f)) for f in self.__dataclass_fields__
-                      if np.shape(getattr(self, f))[:2] == (2, 2)
-                      and np.ndim(getattr(self, f)) == 3}
+            values = {f: getattr(self, f) for f in self.__dataclass_fields__}
         elif source == "pipeline":
             if self.pipeline is None:
                 raise ValueError("source: solved without contact_pipeline")
-            fields = {f: np.asarray(v) for f, v in self.pipeline.items()
-                      if np.ndim(v) == 3 and np.shape(v)[:2] == (2, 2)}
+            values = dict(self.pipeline)
         else:
             raise ValueError(f"source must be 'table' or 'pipeline', got {source!r}")
-        k = int(np.argmax(fields["normal_force_n"][0, high]))
-        return {f: float(v[0, high, k]) for f, v in fields.items()}
+        # the per-contact fields: (2 axles, 2 sides, slots)
+        contacts = {f: a for f, a in ((f, np.asarray(v)) for f, v in values.items())
+                    if a.ndim == 3 and a.shape[:2] == (2, 2)}
+        high = SIDES.index(side)
+        k = int(np.argmax(contacts["normal_force_n"][0, high]))
+        return {f: float(a[0, high, k]) for f, a in contacts.items()}

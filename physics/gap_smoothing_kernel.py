@@ -6,7 +6,7 @@ Gaussian and with its first and second derivatives at once: what
 for o = 0, 1, 2, with its arithmetic (the row extended by its end values, each output the
 centre sample times the centre tap plus, from the farthest pair inwards, the pair's sum (even
 taps) or difference (odd taps) times the tap), so the results equal scipy's bit for bit
-(``tests/physics/test_gap_smoothing.py``). The taps are read off scipy's own response to a
+(``tests/physics/test_gap_smoothing_kernel.py``). The taps are read off scipy's own response to a
 unit impulse (:func:`gaussian_taps`). The masked smoothing of the curving contact table
 (``gap_smoothing.masked_gaussian``) needs six such filters of an (n_shift, n_wheel) array per
 table, about two thirds of the table's build time with scipy's filter one order at a time;

@@ -24,6 +24,7 @@ from wearcast.physics.bogie_equations import (
     centre_shift,
     wheel_loads,
     wheelset_roll,
+    wheelset_unknowns,
 )
 from wearcast.physics.curving_contacts import pipeline_contacts
 from wearcast.physics.curving_table import TAPE_CIRCLE_HALF_SPACING_MM, ContactTable
@@ -35,7 +36,7 @@ def pipeline_at(q, vehicle: BogieVehicle, table: ContactTable, params, creep_gri
     """The pipeline's contacts (``curving_contacts``) at the states q (m, 12) with parameters
     (m, >= 2): (contacts, peak pressures [MPa], ok (m,), errors per row)."""
     m = q.shape[0]
-    ws = q[:, :10].reshape(m, 2, 5)
+    ws = wheelset_unknowns(q)
     y, d = ws[..., 0], ws[..., 3:5]
     loads = np.broadcast_to(wheel_loads(vehicle, params[:, 1])[:, None, :], (m, 2, 2))
     origins = (TAPE_CIRCLE_HALF_SPACING_MM - table.rail_offset_mm,

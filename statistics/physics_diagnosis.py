@@ -278,6 +278,12 @@ def _reach(series: Sequence[_Series], km: NDArray) -> float:
     return EXTRAPOLATION * end / far if far > 0 else SCALE_BOUNDS[1]
 
 
+def _at_reach(scale: float, sse: float, series: Sequence[_Series], km: NDArray) -> bool:
+    """Whether a fit (``scale``, ``sse``) of ``series`` on mileages ``km`` ended at the
+    largest scale the runs reach (or found no scale at all): a longer run could move it."""
+    return bool(sse >= 1e12 or scale >= AT_REACH_SHARE * _reach(series, km))
+
+
 def _fit(candidates: list[tuple[Any, list[_Series], NDArray]], km: NDArray, y: NDArray,
          cols: Sequence[str]) -> tuple[Any, float, float]:
     """Best (theta, scale, sse) on the training points.
@@ -345,9 +351,8 @@ def fit_wear_scale(simulation: Any, measured: pd.DataFrame) -> ScaleFit:
     n = int(np.isfinite(y).sum())
     series = _Series(simulation, cols)
     _, scale, sse = _fit(_blends(None, {None: series}), km, y, cols)
-    far = float(km.max())
     reach = _reach([series], km)
-    at_reach = bool(sse >= 1e12 or (far > 0 and scale >= AT_REACH_SHARE * reach))
+    at_reach = bool(sse >= 1e12 or (float(km.max()) > 0 and _at_reach(scale, sse, [series], km)))
     return ScaleFit(float(scale), float(sse), float(np.sqrt(sse / n)), n,
                     float(min(reach, SCALE_BOUNDS[1])), at_reach)
 
@@ -450,29 +455,29 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
     at_reach: list[str] = []
 
     def fit(cause: PhysicsCause | None, cands: list[tuple[Any, list[_Series], NDArray]],
-            at: NDArray) -> tuple[Any, float, float]:
+            at: NDArray) -> tuple[Any, float, float, tuple[Any, list[_Series], NDArray]]:
+        """``_fit`` on the points ``at``, plus the chosen candidate; notes the fit in
+        ``at_reach`` when it ended at its runs' reach."""
         theta, scale, sse = _fit(cands, km[at], y[at], cols)
         chosen = next(c for c in cands if c[0] == theta)
         name = "null" if cause is None else cause.name
-        if (sse >= 1e12 or scale >= AT_REACH_SHARE * _reach(chosen[1], km[at])) and (
-                name not in at_reach):
+        if name not in at_reach and _at_reach(scale, sse, chosen[1], km[at]):
             at_reach.append(name)
-        return theta, scale, sse
+        return theta, scale, sse, chosen
 
     def held_out(cause: PhysicsCause | None, cause_runs: Mapping[Any, _Series]) -> NDArray:
         cands = _blends(cause, cause_runs)
         err = np.zeros(km.size)
         for g in groups:
             test = vehicles == g
-            theta, scale, _ = fit(cause, cands, ~test)
-            chosen = next(c for c in cands if c[0] == theta)
+            _, scale, _, chosen = fit(cause, cands, ~test)
             pred = _predict(chosen[1], chosen[2], scale, km[test], cols, strict=False)
             err[test] = np.nansum((pred - y[test]) ** 2, axis=1)
         return err
 
     before = held_out(None, null_runs)
     every = np.ones(km.size, dtype=bool)
-    theta0, scale0, sse0 = fit(None, _blends(None, null_runs), every)
+    theta0, scale0, sse0, _ = fit(None, _blends(None, null_runs), every)
     null_fit = {"wear_scale": scale0,
                 "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols}
     rows = []
@@ -505,7 +510,7 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         pvals.append(p if np.isfinite(p) else 1.0)
         lo, hi = bootstrap_gain_interval(b_units, a_units, n_bootstrap, rng)
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
-        theta, scale, sse = fit(cause, _blends(cause, runs[cause.name]), every)
+        theta, scale, sse, _ = fit(cause, _blends(cause, runs[cause.name]), every)
         findings.append((cause, Gain(float(before.mean()), float(after.mean()), float(rel), lo,
                                      hi, metric=METRIC),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
