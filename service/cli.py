@@ -317,16 +317,17 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
         saved, reason = (None, None)
         if save_as is not None:
             saved, reason = diagnosis_store.save_extension(session, run, save_as)
-        out = diagnosis_store.diagnosis_out(session, model_id, run, saved, reason)
+        saved_as = None if saved is None else (saved.id, saved.name)
         if report is not None:
             figures = discrepancy_report.diagnosis_figures(run.diagnosis)
             report.write_text(discrepancy_report.report_html(run.diagnosis, figures),
                               encoding="utf-8")
-    table = Table(title=f"model {model_id}: verdict [bold]{out.verdict}[/bold] "
-                  f"({out.n_measurements} measurements, {out.n_groups} groups)")
+    d = run.diagnosis  # what the answer of POST /v1/models/{id}/diagnose publishes of it
+    table = Table(title=f"model {model_id}: verdict [bold]{d.verdict}[/bold] "
+                  f"({d.n_measurements} measurements, {d.n_groups} groups)")
     for column in ("cause", "relative gain [95 % CI]", "p (max-T)", "reported", "summary"):
         table.add_column(column)
-    for f in run.diagnosis.findings:  # the core's findings, as out.findings holds them
+    for f in d.findings:
         g = f.gain
         gain = "—" if finite_or_none(g.relative) is None else (
             f"{100 * g.relative:.1f} % [{100 * (finite_or_none(g.ci95_low) or 0):.1f}, "
@@ -335,11 +336,10 @@ def diagnose(model_id: Annotated[int, typer.Argument(help="model id")],
         table.add_row(f.cause, gain, "—" if p is None else f"{p:.2g}",
                       "yes" if f.significant and f.material else "no", f.summary)
     console.print(table)
-    for code, why in out.skipped.items():
+    for code, why in d.skipped.items():
         console.print(f"skipped {code}: {why}")
-    if out.saved_model is not None:
-        console.print(f"saved the extended model as id {out.saved_model.id} "
-                      f"({out.saved_model.name!r})")
+    if saved_as is not None:
+        console.print(f"saved the extended model as id {saved_as[0]} ({saved_as[1]!r})")
     elif reason:
         console.print(f"nothing saved: {reason}")
     if report is not None:

@@ -12,10 +12,12 @@ from wearcast.physics.vocabulary import (
     Region,
     Wheelset,
 )
-from wearcast.service.dataclass_schemas import from_dataclass
+from wearcast.service.dataclass_schemas import from_dataclass, from_dataclasses
 from wearcast.service.model_schemas import ModelOut
 from wearcast.service.schema_base import FieldsError, Filter, Strict
+from wearcast.statistics.discrepancy import Diagnosis
 from wearcast.statistics.findings import Finding, Gain
+from wearcast.statistics.physics_diagnosis import PhysicsDiagnosis
 
 
 class ProgressionAreasIn(Strict):
@@ -86,37 +88,29 @@ class FindingOut(BaseModel):
     """One cause the finder tried: the fields of ``statistics.findings.Finding``."""
 
 
-class DiagnosisOut(BaseModel):
-    model_id: int
-    verdict: str
-    findings: list[FindingOut]
-    skipped: dict[str, str]
-    n_measurements: int
-    n_groups: int
-    group_by: str
-    selected: list[str] = Field(default_factory=list, description=(
-        "causes named by forward selection, the verdict first"))
-    runner_up: str | None = Field(default=None, description="the best other cause")
-    margin: float | None = Field(default=None, description=(
-        "the verdict's held-out gain over the runner-up, relative to the baseline's error"))
-    margin_p_value: float | None = None
-    candidates: list[str] = Field(default_factory=list, description=(
-        "verdict 'ambiguous': the causes no tested margin separates"))
-    unexplained: list[dict[str, Any]] = Field(default_factory=list, description=(
-        "verdict 'outside_catalogue': residual structure by wheel position, route, date, "
-        "mileage or instrument, with its size"))
-    nuisance: dict[str, Any] = Field(default_factory=dict)
-    null_test: str = ""
+class _DataOut(BaseModel):
+    """The service's own fields on what the finder was given (in the answer after the hybrid
+    result's fields)."""
+
     excluded: dict[str, int] = Field(default_factory=dict, description=(
         "measurements left out, by reason"))
     expected_progression: dict[str, Any] | None = Field(default=None, description=(
         "the null's expected progression when one was given: its source and the factor "
         "g = A / (k s) per bogie type/wheelset/region at its mileages; null: linear in mileage"))
-    null_fit: dict[str, Any] | None = Field(default=None, description=(
-        "physics models: the null model's own fit — wear_scale (the fitted wear-coefficient "
-        "scale), rms_mm and the measured series it was fitted on; null for hybrid models"))
-    at_reach: list[str] = Field(default_factory=list, description=(
-        "physics models: the null ('null') and the causes with a fit at the largest wear "
-        "scale their loop runs reach (a longer run could move it); empty for hybrid models"))
+
+
+class _SavedOut(BaseModel):
+    """The service's own fields on ``save_as`` (last in the answer)."""
+
     saved_model: ModelOut | None = None
     save_reason: str | None = Field(default=None, description="why save_as saved nothing")
+
+
+# The answer of both finders (hybrid and physics models): the model's id, then every published
+# field of ``discrepancy.Diagnosis`` and ``physics_diagnosis.PhysicsDiagnosis`` (their shared
+# ``findings.FinderResult`` first), typed, defaulted and described by the dataclasses
+# (``dataclass_schemas.from_dataclasses``), with the service's own fields among them. No
+# docstring: the published schema has no description.
+@from_dataclasses(Diagnosis, _DataOut, PhysicsDiagnosis, _SavedOut)
+class DiagnosisOut(BaseModel):
+    model_id: int

@@ -31,7 +31,7 @@ from sqlalchemy.orm import Session
 
 from wearcast.service import measurement_store, model_loading, model_store, route_store
 from wearcast.service import models_db as db
-from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut
 from wearcast.service.errors import NotFound, Unprocessable, from_value_error
 from wearcast.statistics import discrepancy, discrepancy_report, extension, hybrid
 from wearcast.statistics.causes import CATALOGUE
@@ -255,17 +255,13 @@ def save_extension(session: Session, run: DiagnosisRun, name: str
 def diagnosis_out(session: Session, model_id: int, run: DiagnosisRun,
                   saved: db.Model | None = None, save_reason: str | None = None
                   ) -> DiagnosisOut:
-    d = run.diagnosis.to_dict()
-    findings = [FindingOut.model_validate(f) for f in d["findings"]]
-    return DiagnosisOut(
-        model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
-        n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
-        selected=d["selected"], runner_up=d["runner_up"], margin=d["margin"],
-        margin_p_value=d["margin_p_value"], candidates=d["candidates"],
-        unexplained=d["unexplained"], nuisance=d["nuisance"], null_test=d["null_test"],
-        excluded=run.excluded, expected_progression=run.expected_progression,
-        saved_model=None if saved is None else model_store.model_out(session, saved),
-        save_reason=save_reason)
+    """The answer: the diagnosis as its core writes it (``Diagnosis.to_dict``) and the
+    service's own fields."""
+    return DiagnosisOut.model_validate({
+        "model_id": model_id, **run.diagnosis.to_dict(), "excluded": run.excluded,
+        "expected_progression": run.expected_progression,
+        "saved_model": None if saved is None else model_store.model_out(session, saved),
+        "save_reason": save_reason})
 
 
 def diagnose(session: Session, model_id: int, body: DiagnoseIn) -> DiagnosisOut:

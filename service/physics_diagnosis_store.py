@@ -31,7 +31,7 @@ from wearcast.service import measurement_store
 from wearcast.service import models_db as db
 from wearcast.service import physics_model_store as store
 from wearcast.service.db import SessionFactory, transaction
-from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut, FindingOut
+from wearcast.service.diagnosis_schemas import DiagnoseIn, DiagnosisOut
 from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
 from wearcast.service.physics_schemas import MAX_STEPS_PER_RUN
@@ -39,6 +39,8 @@ from wearcast.service.route_store import rebinned_classes
 from wearcast.statistics.physics_diagnosis import (
     CURVE_CLASSES_PARAMETER,
     NO_SEGMENTS,
+    NULL_TEST,
+    PhysicsDiagnosis,
     catalogue_for,
     diagnose_physics,
 )
@@ -223,8 +225,7 @@ def run_diagnosis_job(factory: SessionFactory, job_id: int, spec: dict[str, Any]
     if request.save_as is not None:
         saved, reason = _save(factory, model, model_spec, diagnosis, request.save_as,
                               spec, route["classes"], simulate, segments)
-    out = _out(model.id, diagnosis, saved, reason, factory)
-    return out.model_copy(update={"null_fit": diagnosis.null_fit}).model_dump(mode="json")
+    return _out(model.id, diagnosis, saved, reason, factory).model_dump(mode="json")
 
 
 def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagnosis: Any,
@@ -273,24 +274,19 @@ def _save(factory: SessionFactory, model: Any, model_spec: dict[str, Any], diagn
         return row.id, None
 
 
-def _out(model_id: int, diagnosis: Any, saved: int | None, reason: str | None,
+def _out(model_id: int, diagnosis: PhysicsDiagnosis, saved: int | None, reason: str | None,
          factory: SessionFactory) -> DiagnosisOut:
-    d = diagnosis.to_dict()
-    findings = [FindingOut.model_validate(f) for f in d["findings"]]
+    """The answer: the diagnosis as its core writes it (``PhysicsDiagnosis.to_dict``), the
+    hybrid answer's ``selected`` (the verdict when it names a cause) and ``null_test``, and
+    the service's own fields."""
     saved_model = None
     if saved is not None:
         with factory() as session:
             row = session.get(db.Model, saved)
             assert row is not None
             saved_model = store.model_out(session, row)
-    return DiagnosisOut(
-        model_id=model_id, verdict=d["verdict"], findings=findings, skipped=d["skipped"],
-        n_measurements=d["n_measurements"], n_groups=d["n_groups"], group_by=d["group_by"],
-        selected=[d["verdict"]] if d["verdict"] not in ("none", "ambiguous") else [],
-        runner_up=diagnosis.runner_up, margin=diagnosis.margin,
-        margin_p_value=diagnosis.margin_p_value, candidates=list(diagnosis.candidates),
-        at_reach=list(diagnosis.at_reach),
-        null_test="held-out FT/FH/qR error, one-sided test over the held-out groups with "
-                  "Holm's correction; the margin over every other cause with a gain by a "
-                  "one-sided sign-flip test over the same groups",
-        saved_model=saved_model, save_reason=reason)
+    named = diagnosis.verdict not in ("none", "ambiguous")
+    return DiagnosisOut.model_validate({
+        "model_id": model_id, **diagnosis.to_dict(),
+        "selected": [diagnosis.verdict] if named else [], "null_test": NULL_TEST,
+        "saved_model": saved_model, "save_reason": reason})

@@ -132,13 +132,15 @@ class Diagnosis(FinderResult):
 
     verdict : a cause code, ``none``, ``ambiguous`` (candidates listed) or
         ``outside_catalogue`` (structure in ``unexplained``)
-    selected : causes named by forward selection, in order (the verdict first)
-    runner_up, margin, margin_p_value : the best other cause, the verdict's held-out gain
-        over it (relative to the baseline's error) and the margin's randomisation p-value
-    candidates : the causes the verdict could not separate (``ambiguous``): the best and
-        the rivals (other causes significant and material themselves) its margin does not beat
-    unexplained : residual structure outside the catalogue, with its size
+    margin_p_value : the margin's randomisation p-value
+    candidates : (``ambiguous``) the best cause and the rivals (other causes significant and
+        material themselves) its margin does not beat
     nuisance : the baseline's per-vehicle, per-wheel and per-measurement standard deviations
+    null_test : the test of the null, in words
+
+    The attribute docstrings are the descriptions of the diagnosis answer's fields
+    (``service.diagnosis_schemas.DiagnosisOut``); ``residuals``, ``covariates`` and
+    ``predictions`` (kept out of repr and equality) are the report's working data.
     """
 
     residuals: pd.DataFrame = field(repr=False, compare=False)
@@ -146,11 +148,17 @@ class Diagnosis(FinderResult):
     predictions: dict[str, list[list[float]]] = field(default_factory=dict, repr=False,
                                                       compare=False)
     selected: tuple[str, ...] = ()
+    """causes named by forward selection, the verdict first"""
     runner_up: str | None = None
+    """the best other cause"""
     margin: float | None = None
+    """the verdict's held-out gain over the runner-up, relative to the baseline's error"""
     margin_p_value: float | None = None
     candidates: tuple[str, ...] = ()
+    """verdict 'ambiguous': the causes no tested margin separates"""
     unexplained: tuple[dict[str, Any], ...] = ()
+    """verdict 'outside_catalogue': residual structure by wheel position, route, date,
+    mileage or instrument, with its size"""
     nuisance: dict[str, Any] = field(default_factory=dict)
     null_test: str = ""
 

@@ -28,7 +28,7 @@ and ``mean(quantity)``), so tests and the service choose vehicle, route and law.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -45,6 +45,10 @@ DEFAULT_MIN_RELATIVE_GAIN = 0.05
 #: Scored series, measured column -> simulation quantity: FT (Sd), FH (Sh) and qR, the one list
 #: of ``statistics.physics_comparison`` (a point missing a quantity is scored on the others).
 SERIES = QUANTITIES
+#: The diagnosis's tests in words (the answer's ``null_test``).
+NULL_TEST = ("held-out FT/FH/qR error, one-sided test over the held-out groups with Holm's "
+             "correction; the margin over every other cause with a gain by a one-sided "
+             "sign-flip test over the same groups")
 #: Name of the diagnosis's error metric (``findings.Gain.metric``).
 METRIC = "ft_fh_qr_squared_error_mm2"
 #: How far beyond its end a series is extrapolated (linearly from its last step) [-].
@@ -180,18 +184,25 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
 @dataclass(frozen=True)
 class PhysicsDiagnosis(FinderResult):
     """verdict (a cause, ``none`` or ``ambiguous``), findings ranked by gain, skipped causes
-    with reasons, the null model's fitted scale on all data and its error per vehicle; the
-    runner-up, the margin over it and its p-value, and the ``candidates`` of an ambiguous
-    verdict (see ``_verdict``); ``at_reach``: the null (``null``) and the causes whose chosen
-    fit (on all data or a fold) is at the largest scale its runs reach, which a longer run
-    could move (:data:`DIAGNOSIS_SCALE_MAX`)."""
+    with reasons, the null model's fit on all data; the runner-up, the margin over it and its
+    p-value, and the ``candidates`` of an ambiguous verdict (see ``_verdict``); ``at_reach``:
+    the fits a longer run could move (:data:`DIAGNOSIS_SCALE_MAX`; a chosen fit on all data or
+    a fold at the largest scale its runs reach).
 
-    null_fit: dict[str, Any] = field(default_factory=dict)
+    The attribute docstrings are the descriptions of the diagnosis answer's fields, which the
+    hybrid diagnosis (``discrepancy.Diagnosis``) answers too
+    (``service.diagnosis_schemas.DiagnosisOut``)."""
+
+    null_fit: dict[str, Any]
+    """physics models: the null model's own fit — wear_scale (the fitted wear-coefficient
+    scale), rms_mm and the measured series it was fitted on; null for hybrid models"""
     runner_up: str | None = None
     margin: float | None = None
     margin_p_value: float | None = None
     candidates: tuple[str, ...] = ()
     at_reach: tuple[str, ...] = ()
+    """physics models: the null ('null') and the causes with a fit at the largest wear
+    scale their loop runs reach (a longer run could move it); empty for hybrid models"""
 
     def to_dict(self) -> dict[str, Any]:
         return {**super().to_dict(), "null_fit": self.null_fit, "runner_up": self.runner_up,

@@ -1,6 +1,8 @@
 """The HTTP bodies derived from the core's dataclasses (``service.dataclass_schemas``): one field
 per dataclass field, in its order, typed as the core writes it as JSON and described by the
 field's attribute docstring; the answer of a diagnosis is the core's ``to_dict`` byte for byte.
+An answer of several cores (``from_dataclasses``) lists their fields part by part, keeps their
+defaults and refuses a field declared differently or written again in the service.
 """
 
 from __future__ import annotations
@@ -8,24 +10,20 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, Field, ValidationError
 
-from wearcast.service.dataclass_schemas import attribute_docstrings, from_dataclass, json_type
+from wearcast.service.dataclass_schemas import (
+    attribute_docstrings,
+    from_dataclass,
+    from_dataclasses,
+    json_type,
+)
 from wearcast.service.diagnosis_schemas import DiagnosisOut, FindingOut, GainOut
-from wearcast.statistics.discrepancy import Diagnosis
-from wearcast.statistics.findings import FinderResult, Finding, Gain
-from wearcast.statistics.physics_diagnosis import PhysicsDiagnosis
-
-#: Fields of the finders' results that the diagnosis answer leaves out, and why.
-NOT_PUBLISHED = {
-    "residuals": "the report's residual frame (GET .../diagnose/report draws it)",
-    "covariates": "the report's covariates per residual row",
-    "predictions": "the report's predicted-vs-measured pairs",
-}
+from wearcast.statistics.findings import Finding, Gain
 
 
 @dataclass(frozen=True)
@@ -132,9 +130,84 @@ def test_the_diagnosis_answer_takes_the_core_findings() -> None:
     assert item["items"]["$ref"].endswith("/FindingOut")
 
 
-@pytest.mark.parametrize("core", [FinderResult, Diagnosis, PhysicsDiagnosis])
-def test_the_diagnosis_answer_carries_every_finder_field(core: type) -> None:
-    """``DiagnosisOut`` is written by hand (it adds the service's own fields and serves both
-    finders); every field of the finders' results is in it or named in NOT_PUBLISHED."""
-    names = {f.name for f in dataclasses.fields(core)}
-    assert names - set(NOT_PUBLISHED) <= set(DiagnosisOut.model_fields)
+@dataclass(frozen=True)
+class _Hybrid:
+    verdict: str
+    """what the finder names"""
+    report: tuple[float, ...] = field(default=(), repr=False, compare=False)
+    selected: tuple[str, ...] = ()
+    """causes named"""
+    margin: float | None = None
+
+
+@dataclass(frozen=True)
+class _Physics:
+    verdict: str
+    null_fit: dict[str, Any]
+    """the null's fit"""
+    margin: float | None = None
+    spread: dict[str, float] = field(default_factory=lambda: {"a": 1.0})
+
+
+class _Service(BaseModel):
+    excluded: dict[str, int] = Field(default_factory=dict)
+
+
+@from_dataclasses(_Hybrid, _Service, _Physics)
+class _AnswerOut(BaseModel):
+    model_id: int
+
+
+def test_an_answer_of_several_cores_lists_their_fields_part_by_part() -> None:
+    assert list(_AnswerOut.model_fields) == [
+        "model_id", "verdict", "selected", "margin", "excluded", "null_fit", "spread"]
+    schema = _AnswerOut.model_json_schema(mode="serialization")
+    assert schema["required"] == ["model_id", "verdict"]  # on every core, no default
+    assert "description" not in schema  # the decorated class has no docstring
+    props = schema["properties"]
+    assert props["verdict"]["description"] == "what the finder names"
+    assert props["null_fit"]["description"] == "the null's fit"
+
+
+def test_an_answer_of_several_cores_keeps_their_defaults() -> None:
+    out = _AnswerOut.model_validate({"model_id": 1, "verdict": "none"})
+    # a field one core lacks and has no default there is null; the others' defaults kept,
+    # as the core writes them (a tuple as a list), a fresh copy each time
+    assert out.model_dump() == {"model_id": 1, "verdict": "none", "selected": [],
+                                "margin": None, "excluded": {}, "null_fit": None,
+                                "spread": {"a": 1.0}}
+    assert _AnswerOut.model_fields["null_fit"].annotation == dict[str, Any] | None
+    out.spread["a"] = 2.0
+    assert _AnswerOut.model_validate({"model_id": 1, "verdict": "x"}).spread == {"a": 1.0}
+
+
+def test_an_internal_field_is_not_published() -> None:
+    assert "report" not in _AnswerOut.model_fields
+
+
+def test_a_field_declared_differently_by_two_cores_is_refused() -> None:
+    @dataclass(frozen=True)
+    class Other:
+        margin: str = ""
+
+    with pytest.raises(TypeError, match="margin"):
+        from_dataclasses(_Hybrid, Other)(type("Out", (BaseModel,), {}))
+
+    @dataclass(frozen=True)
+    class Described:
+        verdict: str
+        """another description"""
+
+    with pytest.raises(TypeError, match="verdict"):
+        from_dataclasses(_Hybrid, Described)(type("Out", (BaseModel,), {}))
+
+
+def test_a_core_field_written_again_in_the_service_is_refused() -> None:
+    class Again(BaseModel):
+        margin: float | None = None
+
+    with pytest.raises(TypeError, match="margin"):
+        from_dataclasses(_Hybrid, Again)(type("Out", (BaseModel,), {}))
+    with pytest.raises(TypeError, match="verdict"):
+        from_dataclasses(_Hybrid)(type("Out", (BaseModel,), {"__annotations__": {
+            "verdict": str}}))
