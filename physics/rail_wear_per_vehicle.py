@@ -18,11 +18,13 @@ masses in t (Mt = 1e6 t).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.adaptive_step import adaptive_step
 from wearcast.physics.class_contacts import ClassContacts
 from wearcast.physics.patch_wear import (
     contact_volume_basis,
@@ -47,14 +49,14 @@ def vehicle_mass_t(vehicle: BogieVehicle, bogies_per_vehicle: int = 2) -> float:
 def rail_step_rows(rate: NDArray, depth_mm: float, n_steps: int, vehicle: BogieVehicle) -> tuple:
     """Rail steps of seed 003 eq. (4): N_step = D^r / max(depth per vehicle); per step k the
     pairs (rail_step k, vehicles k N_step, tonnage_mt, max_depth_mm k D^r) [-, -, Mt, mm]."""
-    peak = float(np.max(rate))
+    per_step = adaptive_step(rate, depth_mm)  # vehicles per rail step (inf: no wear)
     mass_t = vehicle_mass_t(vehicle)
     out = []
     for k in range(1, n_steps + 1):
-        n_veh = k * depth_mm / peak if peak > 0 else float("inf")
+        n_veh = k * per_step
         out.append((("rail_step", k), ("vehicles", n_veh),
                     ("tonnage_mt", n_veh * mass_t / 1e6),
-                    ("max_depth_mm", k * depth_mm if peak > 0 else 0.0)))
+                    ("max_depth_mm", k * depth_mm if math.isfinite(per_step) else 0.0)))
     return tuple(tuple(s) for s in out)
 
 

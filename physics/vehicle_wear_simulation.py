@@ -34,6 +34,7 @@ Depths mm, mileage km.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -42,13 +43,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.adaptive_step import adaptive_step
 from wearcast.physics.patch_wear import wheel_depth_basis_by_slot
 from wearcast.physics.profiles.parameters import flange_parameters
 from wearcast.physics.profiles.s1002 import s1002_height_mm
 from wearcast.physics.step_convergence import DEFAULT_TOLERANCE, StepConvergence, converge_steps
 from wearcast.physics.vehicle_wheel_series import VehicleWheelSeries
 from wearcast.physics.vehicles import BogieVehicle, vehicle_preset
-from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear
+from wearcast.physics.wear_distribution import Smoothing, apply_normal_wear, depth_below_mm
 from wearcast.physics.wear_laws import WearLaw
 from wearcast.physics.wear_loop import (
     BOGIE_WHEELS,
@@ -323,14 +325,14 @@ def simulate_vehicle_wear(vehicle: str | Sequence[tuple[BogieVehicle, int]], rou
                 rates[bi, lead_index[(axle, side)]] = (fwd * lead_rates[(axle, side)]
                                                        + (1.0 - fwd) * lead_rates[other])
         _check_finite_rates(rates, labels, mileage[-1])
-        slopes = np.asarray(np.gradient(profiles, y, axis=-1))
-        peak = float(np.max(rates * np.sqrt(1.0 + slopes * slopes)))
         remaining = mileage_km - mileage[-1]
-        if peak <= 0:
+        # seed 003 eq. 2: the deepest point of any wheel loses D_step normal to its profile
+        # (at most MAX_VERTICAL_STEP_FACTOR D_step of vertical change, adaptive_step)
+        ds = adaptive_step(rates, depth_per_step_mm, np.gradient(profiles, y, axis=-1))
+        if not math.isfinite(ds):
             ds = remaining
-        else:
-            ds = depth_per_step_mm / peak
-            ds = min(ds, remaining) if cut_last_step else ds
+        elif cut_last_step:
+            ds = min(ds, remaining)
         for bi in range(n_b):
             for wi in range(4):
                 profiles[bi, wi] = apply_normal_wear(y, profiles[bi, wi], rates[bi, wi] * ds)
@@ -394,13 +396,18 @@ def _check_finite_rates(rates: NDArray, labels: Sequence[str], mileage_km: float
 def _check_profiles(y: NDArray, z0: NDArray, profiles: NDArray, labels: Sequence[str],
                     mileage_km: float) -> None:
     """Raise :class:`WearLoopDivergedError` on a non-finite profile or one worn deeper than
-    ``MAX_WHEEL_WEAR_MM`` below the new profile, naming the wheel and where."""
+    ``MAX_WHEEL_WEAR_MM`` below the new profile, normal to it (``depth_below_mm``: a flange
+    face worn sideways is not a rim worn through), naming the wheel and where."""
     flat = profiles.reshape(len(labels), -1)
     for label, z in zip(labels, flat, strict=True):
         if not np.all(np.isfinite(z)):
             raise WearLoopDivergedError(f"vehicle wear loop diverged near {mileage_km:.0f} km: "
                                         f"non-finite profile of {label}")
-        depth = z0 - z
+        # the vertical difference bounds the normal depth from above: the (costlier) normal
+        # depth only where the vertical one exceeds the rim
+        if float(np.max(z0 - z)) <= MAX_WHEEL_WEAR_MM:
+            continue
+        depth = depth_below_mm(y, z0, z)
         k = int(np.argmax(depth))
         if depth[k] > MAX_WHEEL_WEAR_MM:
             raise WearLoopDivergedError(

@@ -317,6 +317,38 @@ def apply_normal_wear(y_mm: ArrayLike, z_mm: ArrayLike, normal_depth_mm: ArrayLi
     return vertical
 
 
+#: Spacing of the reference curve's points along its arc for :func:`depth_below_mm` [mm].
+_DEPTH_ARC_SPACING_MM = 0.02
+
+
+def depth_below_mm(y_mm: ArrayLike, z_reference_mm: ArrayLike, z_worn_mm: ArrayLike
+                   ) -> NDArray[np.float64]:
+    """Depth of each worn point below the reference profile, normal to it [mm]: the distance
+    from (y, z_worn) to the reference curve where the point lies below it, else 0.
+
+    The vertical difference z_ref - z_worn at a fixed y is this depth over cos(delta) on a
+    flank at angle delta (a flange face worn 1 mm sideways at 80 deg differs by 5.8 mm at a
+    fixed y), so a depth check that must hold on the flange too (a wheel rim's wear,
+    ``wear_loop.MAX_WHEEL_WEAR_MM``) measures this one. The reference curve is re-sampled
+    every ``_DEPTH_ARC_SPACING_MM`` of arc, so the distance to its nearest point is within
+    half that of the distance to the curve."""
+    from scipy.spatial import cKDTree
+
+    y = np.asarray(y_mm, dtype=float)
+    z0 = np.asarray(z_reference_mm, dtype=float)
+    z1 = np.asarray(z_worn_mm, dtype=float)
+    out = np.zeros(np.broadcast_shapes(y.shape, z1.shape))
+    below = np.broadcast_to(z0 - z1 > 0, out.shape)
+    if not np.any(below):
+        return out
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z0)))])
+    s = np.linspace(0.0, arc[-1], max(int(arc[-1] / _DEPTH_ARC_SPACING_MM) + 1, 2))
+    tree = cKDTree(np.column_stack([np.interp(s, arc, y), np.interp(s, arc, z0)]))
+    points = np.column_stack([np.broadcast_to(y, out.shape)[below], z1[below]])
+    out[below] = tree.query(points)[0]
+    return out
+
+
 def worn_volume_mm3(y_mm: ArrayLike, z_reference_mm: ArrayLike, z_worn_mm: ArrayLike,
                     wheel_radius_mm: float) -> float:
     """Worn volume between two profiles (seed 002 eq. 8) [mm^3].

@@ -33,6 +33,7 @@ from typing import Any, Literal, cast, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from wearcast.physics.adaptive_step import adaptive_step, deepest_normal_depth
 from wearcast.physics.class_contacts import (
     BOGIE_WHEELS,
     ClassContacts,
@@ -53,6 +54,7 @@ from wearcast.physics.wear_distribution import (
     Smoothing,
     apply_normal_wear,
     check_application,
+    depth_below_mm,
     worn_volume_mm3,
 )
 from wearcast.physics.wear_laws import WearLaw
@@ -274,7 +276,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
     eps = 1e-3
     for i in range(st.n_steps):
         remaining = st.step_km if st.mode == "fixed" else None
-        z_start = z.copy()
+        step_normal = np.zeros_like(z)  # normal depth removed in this step [mm]
         step_basis = None
         taken = 0.0
         while True:
@@ -331,29 +333,26 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
             rate = basis_km.T @ coeffs                                     # mm/km, normal
             if sm.clip_negative:
                 rate = np.maximum(rate, 0.0)
-            slope = np.gradient(z, y)
-            peak = float(np.max(rate * np.sqrt(1.0 + slope * slope)))
             if remaining is not None:
-                # Fixed step, cut into sub-steps of at most max_depth_per_step_mm.
+                # Fixed step, cut into sub-steps of at most max_depth_per_step_mm of vertical
+                # change (a numerical limit on how far one contact solution is extrapolated)
+                slope = np.gradient(z, y)
+                peak = float(np.max(rate * np.sqrt(1.0 + slope * slope)))
                 ds = remaining if peak <= 0 else min(remaining, max(
                     st.max_depth_per_step_mm / peak, st.step_km / st.max_substeps))
             else:
-                ds = st.max_step_km if peak <= 0 else min(st.depth_per_step_mm / peak,
-                                                           st.max_step_km)
+                # seed 003 eq. 2: the deepest point loses D_step^w normal to the profile (at
+                # most MAX_VERTICAL_STEP_FACTOR D_step of vertical change, adaptive_step)
+                ds = min(adaptive_step(rate, st.depth_per_step_mm, np.gradient(z, y)),
+                         st.max_step_km)
             z_new = apply_normal_wear(y, z, rate * ds)
-            if remaining is None and ds < st.max_step_km:
-                for _ in range(2):  # nearly linear in ds: rescale to D_step exactly
-                    actual = float(np.max(z - z_new))
-                    if actual <= 0:
-                        break
-                    ds = min(ds * st.depth_per_step_mm / actual, st.max_step_km)
-                    z_new = apply_normal_wear(y, z, rate * ds)
+            step_normal += rate * ds
             # Vertical wear per unit coefficient, linearised (Jacobian of eq. 9).
             sub = np.stack([(z - apply_normal_wear(y, z, row * ds * eps)) / eps
                             for row in basis_km])
             step_basis = sub if step_basis is None else step_basis + sub
-            since_update += float(np.max(z - z_new))
-            _check_diverged(z_new, profiles[0], i, mileage[-1] + taken + ds)
+            since_update += deepest_normal_depth(rate * ds)
+            _check_diverged(y, z_new, profiles[0], i, mileage[-1] + taken + ds)
             z = z_new
             taken += ds
             if remaining is None:
@@ -362,7 +361,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
             if remaining <= 1e-9 * st.step_km:
                 break
         basis_steps.append(step_basis)
-        step_depth.append(float(np.max(z_start - z)))
+        step_depth.append(deepest_normal_depth(step_normal))
         step_km.append(taken)
         profiles.append(z.copy())
         mileage.append(mileage[-1] + taken)
@@ -392,14 +391,21 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
                                if rail_sides else None))
 
 
-def _check_diverged(z_mm: NDArray, z_initial_mm: NDArray, step: int, mileage_km: float) -> None:
+def _check_diverged(y_mm: NDArray, z_mm: NDArray, z_initial_mm: NDArray, step: int,
+                    mileage_km: float) -> None:
     """Raise :class:`WearLoopDivergedError` on a non-finite profile or wear beyond
-    :data:`MAX_WHEEL_WEAR_MM` (a worn profile is never returned from a diverged run)."""
+    :data:`MAX_WHEEL_WEAR_MM` normal to the new profile (``depth_below_mm``: a flange face worn
+    sideways is not a rim worn through; a worn profile is never returned from a diverged
+    run)."""
     if not np.all(np.isfinite(z_mm)):
         raise WearLoopDivergedError(
             f"wear loop diverged in step {step + 1} near {mileage_km:.0f} km: non-finite "
             "profile; use shorter steps (adaptive mode or a smaller step_km)")
-    depth = float(np.max(z_initial_mm - z_mm))
+    # the vertical difference bounds the depth normal to the new profile from above: the
+    # (costlier) normal depth only where the vertical one exceeds the rim
+    if float(np.max(z_initial_mm - z_mm)) <= MAX_WHEEL_WEAR_MM:
+        return
+    depth = float(np.max(depth_below_mm(y_mm, z_initial_mm, z_mm)))
     if depth > MAX_WHEEL_WEAR_MM:
         raise WearLoopDivergedError(
             f"wear loop diverged in step {step + 1} near {mileage_km:.0f} km: {depth:.3g} mm "

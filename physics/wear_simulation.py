@@ -24,10 +24,11 @@ class WearSimulation:
 
     y_mm (n,), profiles_mm (n_steps+1, n) wheel profile z after each step (row 0: initial),
     mileage_km (n_steps+1,), sh_mm / sd_mm / qr_mm (n_steps+1,) flange parameters (FH, FT, qR),
-    step_km (n_steps,), step_max_depth_mm (n_steps,), worn_volume_mm3 (n_steps+1,) (seed 002
-    eq. 8 against the initial profile), contact_fallbacks, contact_updates, elapsed_s, law,
-    application, rail_y_mm, rail_depth_per_vehicle_mm (n_rail,), rail_steps (rail step ->
-    vehicles, tonnage [Mt], max depth [mm]; ``rail_wear_per_vehicle.rail_step_rows``),
+    step_km (n_steps,), step_max_depth_mm (n_steps,) (the deepest normal depth each step
+    removed, ``adaptive_step``: D_step^w in the adaptive mode), worn_volume_mm3 (n_steps+1,)
+    (seed 002 eq. 8 against the initial profile), contact_fallbacks, contact_updates,
+    elapsed_s, law, application, rail_y_mm, rail_depth_per_vehicle_mm (n_rail,), rail_steps
+    (rail step -> vehicles, tonnage [Mt], max depth [mm]; ``rail_wear_per_vehicle.rail_step_rows``),
     rail_high/low_depth_per_vehicle_mm (n_rail,) with ``rail_from_all_wheels`` (else None),
     rail (the rail the wheel ran on: a name or a rail shape; with a high and a low rail of
     their own, the rail of tangent track), high_rail / low_rail (the curves' outer and inner

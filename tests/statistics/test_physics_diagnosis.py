@@ -228,7 +228,10 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
     # Stop 30 (the lateral creepage with the contact point's lead, the masked table): on 5
     # vehicles friction 0.5 was found (gain 0.86, interval 0.69-0.94, scale 1.205) but its
     # resampling p 0.018 was 0.055 after Holm over three causes, so `none`; on 8 vehicles p 0.0015
-    # (Holm 0.0045), scale 1.202, named.
+    # (Holm 0.0045), scale 1.202, named. Stop 32: D_step bounds the normal depth (seed 003
+    # eq. 2, physics/adaptive_step.py), not the vertical change, so 1.0 mm became steps up to
+    # ~3x longer on the flank and the series too coarse to tell friction (p 0.135, `none`);
+    # 0.5 mm names it.
     from wearcast.physics.vocabulary import CurveClass
     from wearcast.statistics.generators.scenarios import (
         cached_vehicle_simulator,
@@ -239,7 +242,7 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
     route = [CurveClass(250.0, 100.0, None, "left", 0.15),
              CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
     simulate = cached_vehicle_simulator(route, "metro_b", law="usfd", mileage_km=3000.0,
-                                        depth_per_step_mm=1.0)
+                                        depth_per_step_mm=0.5)
     measured = measured_vehicle_series(simulate(hidden), wear_scale=1.2, noise_mm=0.02,
                                        n_vehicles=8)
     catalogue = (PhysicsCause("flange_lubrication", "flange", "flange_wear_factor",
