@@ -7,6 +7,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
          [--shape-weighting area|none] [--shape-growth life|none]
+         [--shape-position position|none]
          [--score-metric ols|gls|gls_vehicle]
          [--margin-metric ols|test]
          [--random-effects-levels vehicle_wheel|wheel] [--traction-fit gls|ols]
@@ -56,6 +57,7 @@ from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import finder_shape_growth as fsg
+from wearcast.statistics import finder_shape_position as fsp
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
@@ -300,6 +302,11 @@ def main() -> None:
                     help="wear-curve (instrument) cause: each wheel life's shape coefficients "
                          "less their growth with the worn area, or as measured "
                          "(finder_shape_growth.SHAPE_GROWTH)")
+    ap.add_argument("--shape-position", default=fsp.SHAPE_POSITION,
+                    choices=("position", "none"),
+                    help="wear-curve (instrument) cause: the coefficients less the shape of "
+                         "each wheel's position (bogie type, leading share), or not "
+                         "(finder_shape_position.SHAPE_POSITION)")
     ap.add_argument("--score-metric", default=fs.SCORE_METRIC,
                     choices=("ols", "gls", "gls_vehicle"),
                     help="held-out error of the finder's tests: weighted squared residuals, "
@@ -338,6 +345,7 @@ def main() -> None:
     cb.NOISE_WEIGHTING = args.noise_weighting
     fsw.SHAPE_WEIGHTING = args.shape_weighting
     fsg.SHAPE_GROWTH = args.shape_growth
+    fsp.SHAPE_POSITION = args.shape_position
     fs.SCORE_METRIC = args.score_metric
     fs.MARGIN_METRIC = args.margin_metric
     fs.WITHIN_VEHICLE_MARGIN = args.within_vehicle_margin
