@@ -384,7 +384,10 @@ def signature_coefficients(data: FinderData) -> Array:
         grown = without_wear_growth(shape_coefficients(data), data.base.sum(axis=1),
                                     life_ids(data.frame, data.mileage_km), inst)
         bogie = data.column("bogie_type")
+        # the positions tested in the curve-space metric (``finder_shape_test.whitened_shape``)
+        gram = data.basis @ data.basis.T
+        chol = np.linalg.cholesky(gram + 1e-12 * np.eye(gram.shape[0]))
         data.cache["signature_coefficients"] = without_position_shape(
             grown, wheel_positions(None if bogie is None else bogie.to_numpy(),
-                                   data.lead_share), inst)
+                                   data.lead_share), inst, metric=chol)
     return np.array(data.cache["signature_coefficients"])

@@ -134,7 +134,8 @@ def position_test(coef: Array, position: NDArray[Any], instrument: NDArray[Any] 
 
 
 def without_position_shape(coef: Array, position: NDArray[Any],
-                           instrument: NDArray[Any] | None = None) -> Array:
+                           instrument: NDArray[Any] | None = None,
+                           metric: Array | None = None) -> Array:
     """(n, k) shape coefficients less their wheel position's effect (module docstring), when
     the position effects stand out against their interaction with the instrument
     (``position_test`` below ``POSITION_ALPHA``).
@@ -142,6 +143,9 @@ def without_position_shape(coef: Array, position: NDArray[Any],
     coef : (n, k) signature coefficients (``finder_shape_growth.without_wear_growth``)
     position : (n,) position label of each row (``wheel_positions``)
     instrument : (n,) instrument of each row, or None
+    metric : (k, k) map of the coefficients into the metric the test sums over (the
+        curve-space error: ``finder_shape_test.whitened_shape``'s Cholesky factor), or None
+        (the coefficients as given). The removal itself is the same in any linear metric.
     Unchanged (a copy) with ``SHAPE_POSITION = "none"``, a single position or positions
     that do not stand out.
     """
@@ -152,7 +156,8 @@ def without_position_shape(coef: Array, position: NDArray[Any],
         raise ValueError(f"SHAPE_POSITION must be 'position' or 'none', got {SHAPE_POSITION!r}")
     n = c.shape[0]
     pos = _indicators(position) if n else np.zeros((0, 1))
-    if pos.shape[1] < 2 or position_test(c, position, instrument)[0] >= POSITION_ALPHA:
+    tested = c if metric is None else c @ np.asarray(metric, dtype=float)
+    if pos.shape[1] < 2 or position_test(tested, position, instrument)[0] >= POSITION_ALPHA:
         return c
     inst = (np.ones((n, 1)) if instrument is None else _indicators(instrument))
     p = pos.shape[1]
