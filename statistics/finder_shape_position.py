@@ -135,7 +135,7 @@ def position_test(coef: Array, position: NDArray[Any], instrument: NDArray[Any] 
 
 def without_position_shape(coef: Array, position: NDArray[Any],
                            instrument: NDArray[Any] | None = None,
-                           metric: Array | None = None) -> Array:
+                           metric: NDArray[Any] | None = None) -> Array:
     """(n, k) shape coefficients less their wheel position's effect (module docstring), when
     the position effects stand out against their interaction with the instrument
     (``position_test`` below ``POSITION_ALPHA``).
