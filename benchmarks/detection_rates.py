@@ -7,6 +7,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
          [--shape-weighting area|none] [--shape-growth life|none]
+         [--shape-position position|none] [--echo-area scale_offset|scale]
          [--score-metric ols|gls|gls_vehicle]
          [--margin-metric ols|test]
          [--random-effects-levels vehicle_wheel|wheel] [--traction-fit gls|ols]
@@ -53,9 +54,11 @@ import pandas as pd
 
 from wearcast.statistics import cause_base as cb
 from wearcast.statistics import causes as cz
+from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
 from wearcast.statistics import finder_shape_growth as fsg
+from wearcast.statistics import finder_shape_position as fsp
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics import hybrid
 from wearcast.statistics.discrepancy import diagnose
@@ -242,11 +245,12 @@ SWEEPS: dict[str, tuple[Callable[[Any, int], Any], Any, dict[str, list[tuple[Any
                                  for e in (0.003, 0.006)],
     }),
     "loop": (run_loop, ((), ()), {
-        "traction": [(m, ((te.traction(m),), ())) for m in (1.1, 1.2, 1.3)],
+        "traction": [(m, ((te.traction(m),), ())) for m in (1.1, 1.15, 1.2, 1.3)],
         "running_direction": [(p, ((loop_leading_share(p),), ())) for p in (0.6, 0.7)],
         "flange_lubrication": [(m, ((te.flange_lubrication(m),), ())) for m in (0.8, 0.7)],
         "nonlinear_progression": [(b, ((te.nonlinear_progression(b),), ())) for b in (0.9, 0.85)],
-        "seasonal_friction": [(a, ((te.seasonal_friction(a),), ())) for a in (0.1, 0.2, 0.3)],
+        "seasonal_friction": [(a, ((te.seasonal_friction(a),), ()))
+                              for a in (0.1, 0.15, 0.2, 0.3)],
         "vehicle_load": [(g, ((te.vehicle_load(g),), ())) for g in (0.5, 1.0)],
         "profile_misalignment": [(o, ((), (te.flange_tread_offset("MP-2", o),)))
                                  for o in (0.1, 0.2)],
@@ -300,6 +304,16 @@ def main() -> None:
                     help="wear-curve (instrument) cause: each wheel life's shape coefficients "
                          "less their growth with the worn area, or as measured "
                          "(finder_shape_growth.SHAPE_GROWTH)")
+    ap.add_argument("--shape-position", default=fsp.SHAPE_POSITION,
+                    choices=("position", "none"),
+                    help="wear-curve (instrument) cause: the coefficients less the shape of "
+                         "each wheel's position (bogie type, leading share), or not "
+                         "(finder_shape_position.SHAPE_POSITION)")
+    ap.add_argument("--echo-area", default=fi.AREA_DISTORTION, choices=("scale_offset", "scale"),
+                    help="a named instrument's area distortion in the echo test of the area "
+                         "causes named beside it: a log-scale and an additive area per "
+                         "instrument and region, or the log-scale alone "
+                         "(finder_instrument.AREA_DISTORTION)")
     ap.add_argument("--score-metric", default=fs.SCORE_METRIC,
                     choices=("ols", "gls", "gls_vehicle"),
                     help="held-out error of the finder's tests: weighted squared residuals, "
@@ -338,6 +352,8 @@ def main() -> None:
     cb.NOISE_WEIGHTING = args.noise_weighting
     fsw.SHAPE_WEIGHTING = args.shape_weighting
     fsg.SHAPE_GROWTH = args.shape_growth
+    fsp.SHAPE_POSITION = args.shape_position
+    fi.AREA_DISTORTION = args.echo_area
     fs.SCORE_METRIC = args.score_metric
     fs.MARGIN_METRIC = args.margin_metric
     fs.WITHIN_VEHICLE_MARGIN = args.within_vehicle_margin

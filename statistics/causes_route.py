@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from wearcast.physics.vocabulary import WEAR_MEASURES
 from wearcast.statistics.cause_base import Cause, FinderData, Mask, _levels
 from wearcast.statistics.finder_shape_growth import without_wear_growth
+from wearcast.statistics.finder_shape_position import wheel_positions, without_position_shape
 from wearcast.statistics.residuals import life_ids
 from wearcast.statistics.route_measure import weighted_measure
 
@@ -374,12 +375,19 @@ def shape_coefficients(data: FinderData) -> Array:
 
 def signature_coefficients(data: FinderData) -> Array:
     """(n, 3) ``shape_coefficients`` less each wheel life's growth with its predicted worn area
-    (``finder_shape_growth``): what an instrument's signature, the same at every wear, is
-    estimated and tested on."""
+    (``finder_shape_growth``) and less the shape of the wheel's position (bogie type and
+    leading share, ``finder_shape_position``): what an instrument's signature, the same at
+    every wear and in every position, is estimated and tested on."""
     if "signature_coefficients" not in data.cache:   # computed once per dataset
-        inst = data.column("instrument_id")
-        data.cache["signature_coefficients"] = without_wear_growth(
-            shape_coefficients(data), data.base.sum(axis=1),
-            life_ids(data.frame, data.mileage_km),
-            None if inst is None else inst.astype(str).to_numpy())
+        col = data.column("instrument_id")
+        inst = None if col is None else col.astype(str).to_numpy()
+        grown = without_wear_growth(shape_coefficients(data), data.base.sum(axis=1),
+                                    life_ids(data.frame, data.mileage_km), inst)
+        bogie = data.column("bogie_type")
+        # the positions tested in the curve-space metric (``finder_shape_test.whitened_shape``)
+        gram = data.basis @ data.basis.T
+        chol = np.linalg.cholesky(gram + 1e-12 * np.eye(gram.shape[0]))
+        data.cache["signature_coefficients"] = without_position_shape(
+            grown, wheel_positions(None if bogie is None else bogie.to_numpy(),
+                                   data.lead_share), inst, metric=chol)
     return np.array(data.cache["signature_coefficients"])
