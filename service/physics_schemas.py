@@ -48,8 +48,11 @@ class PhysicsSimulationIn(Strict):
     """Options of the whole-vehicle run (bounded; the defaults suit a calibration)."""
 
     depth_per_step_mm: float = Field(default=0.8, ge=0.05, le=5.0, description=(
-        "D_step: largest normal wear depth of any wheel per step [mm] (seed 003: 0.2; the "
-        "Aosta run changes by 9.7 % from 1.6 to 0.8 mm and 2.1 % from 0.8 to 0.4 mm)"))
+        "D_step: largest normal wear depth of any wheel per step [mm] (seed 003 eq. 2: 0.2; "
+        "physics.adaptive_step); the Aosta run's FT and qR losses at 3,600 km change by "
+        "12.5 % from 0.8 to 0.4 mm, 5.8 % from 0.4 to 0.2 mm and 1.6 % from 0.2 to 0.1 mm "
+        "(benchmarks/validate_aosta_measured.py): the wear scale absorbs a coarse step's "
+        "uniform part; step_convergence halves it until the change is < 2 %"))
     mileage_km: float | None = Field(default=None, gt=0, le=MAX_SIMULATED_KM, description=(
         "simulated mileage [km]; default: twice the furthest calibration mileage, run "
         "further (up to max_mileage_km) when the fitted scale needs more"))

@@ -288,12 +288,15 @@ def test_a_wheel_worn_beyond_its_rim_is_named_with_where(monkeypatch):
     from wearcast.physics import vehicle_wear_simulation as vws
     from wearcast.physics.wear_loop import MAX_WHEEL_WEAR_MM, WearLoopDivergedError
 
+    # on the tread (y -11..-9 mm, nearly flat) the depth normal to the new profile is the
+    # vertical 41 mm; on the flange face the same vertical drop is a smaller normal depth
+    # (wear_distribution.depth_below_mm), so a flank band would be named only later
     def runaway(y, z, depth):
-        return z - np.where(np.abs(y + 40.0) < 1.0, MAX_WHEEL_WEAR_MM + 1.0, 0.0)
+        return z - np.where(np.abs(y + 10.0) < 1.0, MAX_WHEEL_WEAR_MM + 1.0, 0.0)
 
     monkeypatch.setattr(vws, "apply_normal_wear", runaway)
-    with pytest.raises(WearLoopDivergedError, match=r"motor0-1L worn 41 mm below the new "
-                                                     r"profile at y = -4\d\.\d mm"):
+    with pytest.raises(WearLoopDivergedError, match=r"motor0-1L worn 4[01](\.\d)? mm below the new "
+                                                     r"profile at y = -(9|10|11)\.\d mm"):
         simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
                               depth_per_step_mm=STEP)
 
