@@ -22,7 +22,7 @@ This module solves it. Solution from straight track with continuation in the loa
 Newton method with ``scipy.optimize.root`` (hybr) as fallback, first with the smooth saturation
 law (``contact.creep``), then from that equilibrium with FASTSIM's forces. Where the curve of
 equilibria folds back in the load parameter (a hollow-worn tread: the centred tangent
-equilibrium turns back within ~1/2,000 km of curvature) the natural continuation stops at the
+equilibrium can turn back at a small curvature) the natural continuation stops at the
 fold; those cases are followed along the curve through its folds by pseudo-arclength
 continuation (``equilibrium_solvers.arclength_continuation_batch``). Failure raises
 :class:`CurvingConvergenceError`. Linear-theory check: Boocock (1969), Wickens (2003).
@@ -299,7 +299,7 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
     q, norm, ok = continuation_batch(saturation.residual, q0, p_start, p_end, tol,
                                      jac=saturation.jacobian)
     # where the curve of equilibria folds back in the load (a hollow-worn tread: the centred
-    # tangent equilibrium turns back at ~1/2,000 km of curvature), follow it through the folds
+    # tangent equilibrium can turn back at a small curvature), follow it through the folds
     folded = np.nonzero(~ok & np.any(p_start != p_end, axis=-1))[0]
     if folded.size:
         q_a, norm_a, ok_a = arclength_continuation_batch(
