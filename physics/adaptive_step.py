@@ -44,6 +44,15 @@ def deepest_normal_depth(normal_depth: ArrayLike) -> float:
     return max(float(np.max(d)), 0.0) if d.size else 0.0
 
 
+def deepest_vertical_change(normal_depth: ArrayLike, slope: ArrayLike) -> float:
+    """The largest change of z at a fixed y that a normal-depth distribution makes on a profile
+    of slope dz/dy (same shape): max d sqrt(1 + z'^2) = max d / cos(delta) [mm, or mm per unit
+    of exposure]; 0 where nothing wears. Exact where the moved points do not fold back
+    (``wear_distribution.apply_normal_wear``)."""
+    g = np.asarray(slope, dtype=float)
+    return deepest_normal_depth(np.asarray(normal_depth, dtype=float) * np.sqrt(1.0 + g * g))
+
+
 def adaptive_step(normal_depth_rate: ArrayLike, depth_per_step_mm: float,
                   slope: ArrayLike | None = None) -> float:
     """The exposure of one adaptive step, D_step / max_s Delta(s) (seed 003 eq. 2, 4), at
@@ -72,8 +81,7 @@ def adaptive_step(normal_depth_rate: ArrayLike, depth_per_step_mm: float,
     peak = deepest_normal_depth(rate)
     step = depth_per_step_mm / peak if peak > 0 else float("inf")
     if slope is not None:
-        g = np.asarray(slope, dtype=float)
-        vertical = deepest_normal_depth(rate * np.sqrt(1.0 + g * g))
+        vertical = deepest_vertical_change(rate, slope)
         if vertical > 0:
             step = min(step, MAX_VERTICAL_STEP_FACTOR * depth_per_step_mm / vertical)
     return step

@@ -33,7 +33,11 @@ from typing import Any, Literal, cast, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from wearcast.physics.adaptive_step import adaptive_step, deepest_normal_depth
+from wearcast.physics.adaptive_step import (
+    adaptive_step,
+    deepest_normal_depth,
+    deepest_vertical_change,
+)
 from wearcast.physics.class_contacts import (
     BOGIE_WHEELS,
     ClassContacts,
@@ -336,8 +340,7 @@ def simulate_wear(vehicle: BogieVehicle | str, route_classes: Any, *,
             if remaining is not None:
                 # Fixed step, cut into sub-steps of at most max_depth_per_step_mm of vertical
                 # change (a numerical limit on how far one contact solution is extrapolated)
-                slope = np.gradient(z, y)
-                peak = float(np.max(rate * np.sqrt(1.0 + slope * slope)))
+                peak = deepest_vertical_change(rate, np.gradient(z, y))
                 ds = remaining if peak <= 0 else min(remaining, max(
                     st.max_depth_per_step_mm / peak, st.step_km / st.max_substeps))
             else:
