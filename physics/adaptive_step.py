@@ -29,11 +29,12 @@ from numpy.typing import ArrayLike
 #: fold back, the vertical equivalent d / cos(delta) at every point). On a near-vertical
 #: flange face (slope factor 1 / cos(delta) up to ~47 on the Aosta wheels by 8,000 km) a
 #: normal depth of D_step is a vertical change of up to 47 D_step at a fixed y, which that
-#: re-sampling does not follow: with the normal bound alone the whole-vehicle Aosta run
-#: (every trip forward, D_step 0.8 mm) diverged near 6,200-6,700 km (a flange face "worn"
-#: 44-69 mm below the new profile), with 4 it runs to 8,000 km (61 steps), with 2 too (88).
-#: A numerical bound of the representation, binding only on flanks steeper than
-#: acos(1/4) = 75.5 deg; the seed's threshold is the normal one.
+#: re-sampling does not follow: with the normal bound alone (this factor inf) the whole-vehicle
+#: Aosta run of ``tests/physics/test_contact_slots.py`` (every trip forward, D_step 0.8 mm)
+#: diverged (a flange face 44 mm below the new profile vertically near 6,200 km, 69 mm
+#: normal to it near 6,700 km when the run goes on to that check); with
+#: 4 it runs to 8,000 km. A numerical bound of the representation, binding only on flanks
+#: steeper than acos(1/4) = 75.5 deg; the seed's threshold is the normal one.
 MAX_VERTICAL_STEP_FACTOR = 4.0
 
 
