@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import make_smoothing_spline
 from scipy.ndimage import uniform_filter1d
+from scipy.spatial import cKDTree
 
 from wearcast.physics.contact.fastsim import FastsimResult
 from wearcast.physics.wear_laws import ArchardKTH, kth_zone
@@ -332,8 +333,6 @@ def depth_below_mm(y_mm: ArrayLike, z_reference_mm: ArrayLike, z_worn_mm: ArrayL
     ``wear_loop.MAX_WHEEL_WEAR_MM``) measures this one. The reference curve is re-sampled
     every ``_DEPTH_ARC_SPACING_MM`` of arc, so the distance to its nearest point is within
     half that of the distance to the curve."""
-    from scipy.spatial import cKDTree
-
     y = np.asarray(y_mm, dtype=float)
     z0 = np.asarray(z_reference_mm, dtype=float)
     z1 = np.asarray(z_worn_mm, dtype=float)

@@ -80,13 +80,14 @@ class InstrumentAreaScale(Cause):
         # (A_pred + a0)); rows the model predicts (nearly) no wear get the bounded 1 / a0
         p = np.clip(data.base, 0.0, None)
         per_area = 1.0 / np.maximum(p, data.floor[None, :])
-        per = 2 * len(self._kinds())
+        kinds = self._kinds()
+        per = 2 * len(kinds)
         x = np.zeros((data.n, 2, per * len(self.levels)))
         for j, lev in enumerate(self.levels):
             on = (self.instruments == lev).astype(float)
             for r in range(2):
                 x[:, r, per * j + r] = on
-                if per == 4:
+                if "area_offset" in kinds:
                     x[:, r, per * j + 2 + r] = on * per_area[:, r]
         return x
 

@@ -106,11 +106,11 @@ def position_test(coef: Array, position: NDArray[Any], instrument: NDArray[Any] 
             else np.asarray(instrument).astype(str))
     pos = np.asarray(position).astype(str)
     cells = np.char.add(np.char.add(pos, "\u0000"), inst.astype(str))
-    levels, code, count = np.unique(cells, return_inverse=True, return_counts=True)
+    levels, first, code, count = np.unique(cells, return_index=True, return_inverse=True,
+                                           return_counts=True)
     sums = np.zeros((levels.size, c.shape[1]))
     np.add.at(sums, code, c)
     means = sums / count[:, None]
-    first = np.array([np.flatnonzero(code == j)[0] for j in range(levels.size)])
     x_inst = _indicators(inst[first])
     x_both = np.hstack([_indicators(pos[first]), x_inst])
     w = np.sqrt(count.astype(float))[:, None]
