@@ -125,6 +125,13 @@ def scipy_polish(fun, q0, param, tol, jac=None):
     return sol.x, norm, norm < tol
 
 
+#: Powell-hybrid tries per row of :func:`continuation_batch` once its step has been halved
+#: max_halvings // 2 times (the first tries after that many halvings; later halvings are
+#: Newton's alone). On the Aosta null run of the diagnosis (stop 33) the tries at halvings 5
+#: and 6 solved 148 of 359 and 56 of 256 rows, the four after them 23 of 816, at 2.7 ms a try.
+POLISH_TRIES = 2
+
+
 def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=None):
     """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
     p_end, each row with its own step (doubled on success, halved on failure). Returns
@@ -134,7 +141,8 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=N
     equilibrium) has no path to continue along: every retry would solve the same problem from
     the same state, so it gets one Newton solve and, if that fails, one Powell-hybrid solve
     (what the halvings would have repeated, deterministically, up to ``max_halvings`` times).
-    ``jac``: as :func:`newton_batch`'s."""
+    A continued row whose Newton solve fails after ``max_halvings // 2`` halvings is also given
+    to the Powell hybrid, :data:`POLISH_TRIES` times. ``jac``: as :func:`newton_batch`'s."""
     nb = len(q_start)
     q = np.array(q_start, dtype=float)
     t = np.zeros(nb)
@@ -152,8 +160,9 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=N
         params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
         q_new, n_new, ok = newton_batch(fun, q[idx], params, tol, jac=jac)
         for k in np.nonzero(~ok)[0]:
-            # small steps, or no path at all: let scipy try as well
-            if no_path[idx[k]] or halvings[idx[k]] >= max_halvings // 2:
+            # small steps (the first POLISH_TRIES of them), or no path at all: let scipy try
+            if no_path[idx[k]] or (max_halvings // 2 <= halvings[idx[k]]
+                                   < max_halvings // 2 + POLISH_TRIES):
                 q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol, jac=jac)
                 if ok_s:
                     q_new[k], n_new[k], ok[k] = q_s, n_s, True
@@ -203,8 +212,18 @@ def _solve_rows(a, b):
                                                                              strict=True)])
 
 
+#: The arclength corrector's monotonicity test: a Newton correction more than this many times
+#: the previous one ends the step as failed. 4 passes the S-curve's folds
+#: (``tests/physics/test_equilibrium_solvers.py``; 2 does not: near a fold the corrector may
+#: take one correction larger than the one before and still converge) and on the Aosta null
+#: run of the diagnosis (README, Wear loop section, stop 33) ends most failed steps after 2-3
+#: corrections instead of 8.
+CORRECTION_GROWTH = 4.0
+
+
 def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5, ds_max=3.0,
-                                 ds_min=1e-6, max_steps=300, corrector_iter=8, t_min=-2.0):
+                                 ds_min=1e-6, max_steps=300, corrector_iter=8, t_min=-2.0,
+                                 max_growth=CORRECTION_GROWTH):
     """Pseudo-arclength continuation of R(q, p) = 0 along p = p_start + t (p_end - p_start),
     t from 0 to 1, for many independent rows: it follows the solution curve through folds
     (turning points in t), where :func:`continuation_batch` stops.
@@ -213,9 +232,12 @@ def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5
     docs/references.md): the unknowns are (q, tau) with tau = ARC_T_SCALE t; each step predicts
     along the unit tangent w (J w = 0, w . w_prev = 1) by the arclength ds and corrects by
     Newton on [R(q, tau) = 0, w . (x - x_pred) = 0]; a corrector that does not reach ``tol`` in
-    ``corrector_iter`` iterations halves ds (the row fails below ``ds_min``), a converged step
-    lengthens it by 1.5 (at most ``ds_max``). Where tau passes ARC_T_SCALE the state is
-    interpolated to t = 1 and solved there by Newton. A row first solves t = 0 from
+    ``corrector_iter`` iterations, or whose correction grows past ``max_growth`` times the one
+    before (the monotonicity test of Newton's method, [Deuflhard 2004] ch. 2–3 in
+    docs/references.md, in the loose form :data:`CORRECTION_GROWTH` explains), halves ds (the
+    row fails below ``ds_min``), a converged step lengthens it by 1.5 (at most ``ds_max``).
+    Where tau passes ARC_T_SCALE the state is interpolated to t = 1 and solved there by
+    Newton. A row first solves t = 0 from
     ``q_start`` and sets out towards increasing t; a curve that turns back below ``t_min``
     (the start's branch leads away from the end) is followed once more from the start the
     other way round (an S-shaped curve of a start on its middle branch reaches t = 1 over
@@ -246,7 +268,7 @@ def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5
             break
         q_r, n_r, ok_r, back = _follow_curve(fun, jac, q[rows], p_start[rows], dp[rows], tol,
                                              orientation, ds0, ds_max, ds_min, max_steps,
-                                             corrector_iter, t_min)
+                                             corrector_iter, t_min, max_growth)
         q_out[rows[ok_r]] = q_r[ok_r]
         norm_out[rows] = n_r
         ok_out[rows] = ok_r
@@ -255,7 +277,7 @@ def arclength_continuation_batch(fun, q_start, p_start, p_end, tol, jac, ds0=0.5
 
 
 def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_min, max_steps,
-                  corrector_iter, t_min):
+                  corrector_iter, t_min, max_growth):
     """One pass of :func:`arclength_continuation_batch` from the equilibria q at t = 0,
     setting out towards increasing t (``orientation`` 1) or decreasing t (-1). Returns (q at
     t = 1, residual norms (inf where not reached), converged, turned back below t_min)."""
@@ -279,9 +301,11 @@ def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_mi
         xp = x[a] + ds[a, None] * v[a]
         xc = xp.copy()
         conv = np.zeros(a.size, dtype=bool)
+        diverged = np.zeros(a.size, dtype=bool)
+        dx_prev = np.full(a.size, np.inf)
         jm_c = np.zeros((a.size, n, n + 1))
         for _ in range(corrector_iter):
-            todo = np.nonzero(~conv)[0]
+            todo = np.nonzero(~conv & ~diverged)[0]
             if todo.size == 0:
                 break
             r, jm = _augmented(jac, fun, xc[todo, :n], xc[todo, n], p_start[a[todo]],
@@ -295,7 +319,16 @@ def _follow_curve(fun, jac, q, p_start, dp, tol, orientation, ds0, ds_max, ds_mi
                 break
             g = np.concatenate([r[~done], arc[~done, None]], axis=1)
             aug = np.concatenate([jm[~done], v[a[go]][:, None, :]], axis=1)
-            xc[go] = xc[go] + _solve_rows(aug, -g)
+            dx = _solve_rows(aug, -g)
+            # monotonicity test: a correction more than max_growth times the one before means
+            # a corrector thrown off the curve (across a jump of the residual, or diverging):
+            # the step fails now rather than after corrector_iter iterations
+            dx_norm = np.linalg.norm(dx, axis=-1)
+            up = dx_norm > max_growth * dx_prev[go]
+            diverged[go[up]] = True
+            dx_prev[go] = dx_norm
+            go, dx = go[~up], dx[~up]
+            xc[go] = xc[go] + dx
             bad = ~np.all(np.isfinite(xc[go]), axis=1)
             xc[go[bad]] = xp[go[bad]]
         # rows whose corrector converged: a step along the curve
