@@ -125,13 +125,6 @@ def scipy_polish(fun, q0, param, tol, jac=None):
     return sol.x, norm, norm < tol
 
 
-#: Powell-hybrid tries per row of :func:`continuation_batch` once its step has been halved
-#: max_halvings // 2 times (the first tries after that many halvings; later halvings are
-#: Newton's alone). On the Aosta null run of the diagnosis (stop 33) the tries at halvings 5
-#: and 6 solved 148 of 359 and 56 of 256 rows, the four after them 23 of 816, at 2.7 ms a try.
-POLISH_TRIES = 2
-
-
 def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=None):
     """Continuation of many equilibria in the load parameters p (N, p), linear from p_start to
     p_end, each row with its own step (doubled on success, halved on failure). Returns
@@ -141,8 +134,7 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=N
     equilibrium) has no path to continue along: every retry would solve the same problem from
     the same state, so it gets one Newton solve and, if that fails, one Powell-hybrid solve
     (what the halvings would have repeated, deterministically, up to ``max_halvings`` times).
-    A continued row whose Newton solve fails after ``max_halvings // 2`` halvings is also given
-    to the Powell hybrid, :data:`POLISH_TRIES` times. ``jac``: as :func:`newton_batch`'s."""
+    ``jac``: as :func:`newton_batch`'s."""
     nb = len(q_start)
     q = np.array(q_start, dtype=float)
     t = np.zeros(nb)
@@ -160,9 +152,8 @@ def continuation_batch(fun, q_start, p_start, p_end, tol, max_halvings=10, jac=N
         params = p_start[idx] + t_try[:, None] * (p_end[idx] - p_start[idx])
         q_new, n_new, ok = newton_batch(fun, q[idx], params, tol, jac=jac)
         for k in np.nonzero(~ok)[0]:
-            # small steps (the first POLISH_TRIES of them), or no path at all: let scipy try
-            if no_path[idx[k]] or (max_halvings // 2 <= halvings[idx[k]]
-                                   < max_halvings // 2 + POLISH_TRIES):
+            # small steps, or no path at all: let scipy try as well
+            if no_path[idx[k]] or halvings[idx[k]] >= max_halvings // 2:
                 q_s, n_s, ok_s = scipy_polish(fun, q[idx[k]], params[k], tol, jac=jac)
                 if ok_s:
                     q_new[k], n_new[k], ok[k] = q_s, n_s, True

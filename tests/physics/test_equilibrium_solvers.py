@@ -50,11 +50,8 @@ def test_a_continued_row_keeps_its_halvings_and_polish_attempts(monkeypatch):
                                         np.zeros((1, 2)), np.array([[0.5, 0.5]]), 1e-9,
                                         max_halvings=10)
     assert not ok[0]
-    # 11 failed attempts (halvings 0..10), Powell on the first POLISH_TRIES (2) with
-    # halvings >= 5: on the Aosta null run the tries after the second solved 23 of 816
-    # (README, Wear loop section, stop 33)
-    assert es.POLISH_TRIES == 2
-    assert calls == {"newton": 11, "polish": 2}
+    # 11 failed attempts (halvings 0..10), Powell on the 6 with halvings >= 5
+    assert calls == {"newton": 11, "polish": 6}
 
 
 def test_a_warm_row_newton_misses_is_the_powell_solution_from_the_warm_state(monkeypatch):
