@@ -128,20 +128,26 @@ class _OnTable:
         self.bogie = bogie
         sides = (table,) if table.right is None else (table, table.right)
         self.limit_mm = min(min(-float(t.shift_mm[0]), float(t.shift_mm[-1])) for t in sides)
-        self._shift_columns = list(WHEELSET_SHIFT_COLUMNS)  # an index list, made once
+        self._shift_columns = WHEELSET_SHIFT_COLUMNS
 
     def _off(self, q: NDArray) -> NDArray[np.bool_]:
-        return np.any(np.abs(q[:, self._shift_columns]) > self.limit_mm, axis=-1)[:, None]
+        # one comparison per wheelset's shift column (MINPACK calls this for single states
+        # some 10^5 times a wear run: no fancy indexing)
+        a, b = self._shift_columns
+        return ((np.abs(q[:, a]) > self.limit_mm) | (np.abs(q[:, b]) > self.limit_mm))[:, None]
 
     def residual(self, q: NDArray, params: NDArray) -> NDArray[np.float64]:
         """``CompiledBogie.residual``, ``_OFF_TABLE_RESIDUAL`` off the table."""
-        return np.where(self._off(q), _OFF_TABLE_RESIDUAL, self.bogie.residual(q, params))
+        res = self.bogie.residual(q, params)
+        off = self._off(q)
+        return np.where(off, _OFF_TABLE_RESIDUAL, res) if off.any() else res
 
     def jacobian(self, q: NDArray, params: NDArray, steps: NDArray
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``CompiledBogie.jacobian`` with the residual of :meth:`residual`."""
         res, jac = self.bogie.jacobian(q, params, steps)
-        return np.where(self._off(q), _OFF_TABLE_RESIDUAL, res), jac
+        off = self._off(q)
+        return (np.where(off, _OFF_TABLE_RESIDUAL, res) if off.any() else res), jac
 
 
 # --------------------------------------------------------------------------------------------
