@@ -14,20 +14,22 @@ import numpy as np
 from wearcast.physics import equilibrium_solvers as es
 
 
+def _count_calls(monkeypatch, calls: dict, key: str, module, name: str) -> None:
+    """Count the calls of ``module.name`` in ``calls[key]`` (the function still runs)."""
+    real = getattr(module, name)
+    calls[key] = 0
+
+    def counted(*a, **k):
+        calls[key] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(module, name, counted)
+
+
 def _counting(monkeypatch):
-    calls = {"newton": 0, "polish": 0}
-    newton, polish = es.newton_batch, es.scipy_polish
-
-    def counted_newton(*a, **k):
-        calls["newton"] += 1
-        return newton(*a, **k)
-
-    def counted_polish(*a, **k):
-        calls["polish"] += 1
-        return polish(*a, **k)
-
-    monkeypatch.setattr(es, "newton_batch", counted_newton)
-    monkeypatch.setattr(es, "scipy_polish", counted_polish)
+    calls: dict = {}
+    _count_calls(monkeypatch, calls, "newton", es, "newton_batch")
+    _count_calls(monkeypatch, calls, "polish", es, "scipy_polish")
     return calls
 
 
@@ -180,14 +182,8 @@ def _jump_jac(q, p, steps):
 
 
 def _counting_corrector(monkeypatch):
-    calls = {"augmented": 0}
-    augmented = es._augmented
-
-    def counted(*a, **k):
-        calls["augmented"] += 1
-        return augmented(*a, **k)
-
-    monkeypatch.setattr(es, "_augmented", counted)
+    calls: dict = {}
+    _count_calls(monkeypatch, calls, "augmented", es, "_augmented")
     return calls
 
 
