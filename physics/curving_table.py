@@ -87,7 +87,19 @@ class ContactTable:
 
     ``rigid_rise_mm`` (n_s,): how far the wheel rises at rigid contact relative to the centred
     wheelset [mm] (minimum of the unsmoothed gap), for the wheelset roll.
-    Wheel columns on ``wheel_y_mm``: height z [mm] and slope dz/dy. ``rail_offset_mm`` maps
+    Wheel columns on ``wheel_y_mm``: height z [mm], slope dz/dy, and ``contact_slope`` the
+    slope smoothed with the gap's Gaussians, which gives each candidate its contact angle:
+    at a minimum y_c of the smoothed gap G*g, (G*g)'(y_c) = (G*g')(y_c) = 0, and g' is the
+    difference of the rail's and the wheel's slopes, so there the kernel-weighted mean slopes
+    of wheel and rail agree: their common tangent at the patch scale is the wheel's slope
+    averaged by the same kernel, not its slope at y_c. On the S1002 flange root the contact
+    angle rises by 4-6 deg per mm, convexly, so the mean is steeper than the point value and
+    the point slope put the loaded patch 0.3-0.9 mm up the flank of the one contact
+    pipeline's pressure centre at the same force angle (the Manchester trailer at 150-600 m,
+    ``benchmarks/curving_flange_table_vs_rigid.py`` block 3; 0.04-0.37 mm with the mean). On
+    the flank the mean is at most 64 deg where the point slope reaches 70 deg: an unloaded
+    first touch there has the point slope, a loaded patch spans the kernel.
+    ``rail_offset_mm`` maps
     wheel y to rail y (y_rail = y_wheel + offset + shift). Hertz constants under 1 N for
     log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
     ``hertz_b1`` [mm]. ``track``: the wheelset on its track the table was built from (the
@@ -106,6 +118,7 @@ class ContactTable:
     gap2_per_mm: NDArray[np.float64]
     wheel_z_mm: NDArray[np.float64]
     wheel_slope: NDArray[np.float64]
+    contact_slope: NDArray[np.float64]
     rigid_rise_mm: NDArray[np.float64]
     rail_offset_mm: float
     nominal_radius_m: float
@@ -283,7 +296,7 @@ class ContactTable:
                            weight: NDArray) -> dict[str, NDArray]:
         """The candidate columns of ``candidates`` from the slots."""
         wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
-        slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
+        slope = np.interp(yc, self.wheel_y_mm, self.contact_slope)
         rail_y = yc + self.rail_offset_mm + s[..., None]
         angle = np.arctan(-slope)
         cos = np.cos(angle)
@@ -562,9 +575,14 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
         ((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
         else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
     gap, gap2 = smooth_gap(raw, inside, scales, wheel_step_mm, gap_smoothing)
+    # the candidates' contact angle: the wheel's slope under the gap's Gaussians (the plain
+    # filters; the masked smoothing's normalised kernel is the same wherever the rail covers
+    # the kernel, as on tread and flange root) (ContactTable docstring)
+    contact_slope = smooth_gap(slope[None, :], None, scales, wheel_step_mm, "gaussian")[0][0]
     log_ratio, app1, a1, b1 = _hertz_unit_table()
     return ContactTable(shift_mm=shifts, wheel_y_mm=y_w, gap_mm=gap, gap2_per_mm=gap2,
-                         wheel_z_mm=z_w, wheel_slope=slope, rigid_rise_mm=rigid_rise,
+                         wheel_z_mm=z_w, wheel_slope=slope, contact_slope=contact_slope,
+                         rigid_rise_mm=rigid_rise,
                          rail_offset_mm=offset,
                          nominal_radius_m=wheel_radius_m, smoothing_mm=sigma,
                          hertz_log_ratio=log_ratio,
