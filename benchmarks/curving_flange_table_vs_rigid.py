@@ -29,7 +29,8 @@ the ``minuetto`` preset) two blocks:
    the pipeline's pressure centre y_p, its reference (the interpenetration centre of gravity
    of ``contact.patches``) and contact angle delta_r (the mean of the locus angles over the
    interpenetration region, the direction of its normal force); the wheel's slope angle at
-   y_p, at the point and averaged over the table's Gaussians (``ContactTable.contact_slope``);
+   y_p, at the point and averaged with the gap's own weights at the wheel's shift
+   (``ContactTable.contact_slope_at``);
    and the table's patch at the same pose (y, angle). The force angle is what the equilibrium
    fixes; the table puts its patch where its contact angle equals it.
 
@@ -47,6 +48,7 @@ import numpy as np
 from wearcast.physics import gap_smoothing as gs
 from wearcast.physics.bogie_equations import (
     SHEAR_MODULUS_MPA,
+    SIDE_SIGN,
     bogie_residual,
     centre_shift,
     wheel_loads,
@@ -162,10 +164,10 @@ def _table_against_pipeline() -> None:
                             pipeline_equilibrium=True)
         solved.append(res)
         t, p = res.leading_high_rail_patch(), res.leading_high_rail_patch("pipeline")
-        print(f"{radius:5.0f} | {t['wheel_y_mm']:6.1f} {np.degrees(t['contact_angle_rad']):5.1f} "
+        print(f"{radius:5.0f} | {t['wheel_y_mm']:6.2f} {np.degrees(t['contact_angle_rad']):5.1f} "
               f"{t['normal_force_n'] / 1e3:5.1f} {t['b_mm']:5.2f} {t['p0_mpa']:6.0f} "
               f"{t['tau_max_mpa']:6.0f} {t['t_gamma_n']:5.0f} | "
-              f"{p['wheel_y_mm']:6.1f} {np.degrees(p['contact_angle_rad']):5.1f} "
+              f"{p['wheel_y_mm']:6.2f} {np.degrees(p['contact_angle_rad']):5.1f} "
               f"{p['normal_force_n'] / 1e3:5.1f} {p['b_mm']:5.2f} "
               f"{p['peak_pressure_mpa']:6.0f} {p['tau_max_mpa']:6.0f} "
               f"{p['t_gamma_n']:5.0f} | {res.pipeline_residual_norm:.1e}")
@@ -179,6 +181,10 @@ def _patch_reference(trailer, solved) -> None:
 
     def slope_deg(column, y):
         return np.degrees(np.arctan(-np.interp(y, table.wheel_y_mm, column)))
+
+    def averaged_deg(shift, y):
+        # the averaged slope at the wheel's shift (``ContactTable.contact_slope_at``)
+        return float(np.degrees(np.arctan(-table.side(high).contact_slope_at(shift, [y])[0])))
 
     print("\nthe same patches at the pipeline's balanced pose (angles in deg, y in mm)")
     print("R m | pipeline: pressure centre y, reference y, delta_r | wheel slope angle at the "
@@ -203,7 +209,8 @@ def _patch_reference(trailer, solved) -> None:
         yp = n.centre_y_wheel_mm
         print(f"{res.radius_m:5.0f} | {yp:6.2f} {n.region.y_wheel_mm:6.2f} "
               f"{np.degrees(-n.contact_angle_rad):5.1f} | "
-              f"{slope_deg(table.wheel_slope, yp):5.1f} {slope_deg(table.contact_slope, yp):5.1f}"
+              f"{slope_deg(table.wheel_slope, yp):5.1f} "
+              f"{averaged_deg(SIDE_SIGN[high] * float(y[0, 0]), yp):5.1f}"
               f" | {c.wheel_y_mm[0, 0, high, k]:6.2f} "
               f"{np.degrees(c.contact_angle_rad[0, 0, high, k]):5.1f}")
 
