@@ -25,6 +25,14 @@ the ``minuetto`` preset) two blocks:
    the Manchester benchmark, README). The loaded patch's width, pressure and tau_max, not
    only its position, decide the wear; the unloaded first touch of blocks 1-2 is no reference
    for them (the approach spans root and flank). About 20 s (masked) to 45 s (gaussian).
+4. Why the two flange patches of block 3 sit where they do, at the pipeline's balanced pose:
+   the pipeline's pressure centre y_p, its reference (the interpenetration centre of gravity
+   of ``contact.patches``) and contact angle delta_r (the mean of the locus angles over the
+   interpenetration region, the direction of its normal force); the wheel's slope angle at
+   y_p, at the point and averaged with the gap's own weights at the wheel's shift
+   (``ContactTable.contact_slope_at``);
+   and the table's patch at the same pose (y, angle). The force angle is what the equilibrium
+   fixes; the table puts its patch where its contact angle equals it.
 
 Run: ``.venv/bin/python benchmarks/curving_flange_table_vs_rigid.py [--inclination 0.05]
 [--bogie trailer] [--gap-smoothing masked] [--rail-edge-ramp-mm 3]`` (about 1 min).
@@ -38,9 +46,19 @@ from dataclasses import replace
 import numpy as np
 
 from wearcast.physics import gap_smoothing as gs
+from wearcast.physics.bogie_equations import (
+    SHEAR_MODULUS_MPA,
+    SIDE_SIGN,
+    bogie_residual,
+    centre_shift,
+    wheel_loads,
+    wheelset_roll,
+    wheelset_unknowns,
+)
 from wearcast.physics.contact.geometry import rigid_wheel_gap
-from wearcast.physics.curving import solve_curving
-from wearcast.physics.curving_table import build_contact_table
+from wearcast.physics.contact.pose_contact import Pose, contact_at_poses
+from wearcast.physics.curving import DEFAULT_CREEP_GRID, solve_curving
+from wearcast.physics.curving_table import build_contact_table, vehicle_contact_table
 from wearcast.physics.vehicles import vehicle_preset
 
 #: Seed 003 Table 3 (n_class = 7): radius [m], cant [mm], speed [km/h] of the first class of
@@ -140,17 +158,61 @@ def _table_against_pipeline() -> None:
           "in its own equilibrium")
     print("R m | table: y, angle, N kN, b mm, p0 MPa, tau_max MPa, T_gamma N | "
           "pipeline: y, angle, N kN, b mm, pmax MPa, tau_max MPa, T_gamma N | residual")
+    solved = []
     for radius in (150.0, 250.0, 400.0, 600.0):
         res = solve_curving(trailer, radius, cant_mm=100.0, contact_pipeline=True,
                             pipeline_equilibrium=True)
+        solved.append(res)
         t, p = res.leading_high_rail_patch(), res.leading_high_rail_patch("pipeline")
-        print(f"{radius:5.0f} | {t['wheel_y_mm']:6.1f} {np.degrees(t['contact_angle_rad']):5.1f} "
+        print(f"{radius:5.0f} | {t['wheel_y_mm']:6.2f} {np.degrees(t['contact_angle_rad']):5.1f} "
               f"{t['normal_force_n'] / 1e3:5.1f} {t['b_mm']:5.2f} {t['p0_mpa']:6.0f} "
               f"{t['tau_max_mpa']:6.0f} {t['t_gamma_n']:5.0f} | "
-              f"{p['wheel_y_mm']:6.1f} {np.degrees(p['contact_angle_rad']):5.1f} "
+              f"{p['wheel_y_mm']:6.2f} {np.degrees(p['contact_angle_rad']):5.1f} "
               f"{p['normal_force_n'] / 1e3:5.1f} {p['b_mm']:5.2f} "
               f"{p['peak_pressure_mpa']:6.0f} {p['tau_max_mpa']:6.0f} "
               f"{p['t_gamma_n']:5.0f} | {res.pipeline_residual_norm:.1e}")
+    _patch_reference(trailer, solved)
+
+
+def _patch_reference(trailer, solved) -> None:
+    """Block 4 (module docstring)."""
+    table = vehicle_contact_table(trailer, "left")
+    high = 1  # the right wheel runs on the high rail of a left curve
+
+    def slope_deg(column, y):
+        return np.degrees(np.arctan(-np.interp(y, table.wheel_y_mm, column)))
+
+    def averaged_deg(shift, y):
+        # the averaged slope at the wheel's shift (``ContactTable.contact_slope_at``)
+        return float(np.degrees(np.arctan(-table.side(high).contact_slope_at(shift, [y])[0])))
+
+    print("\nthe same patches at the pipeline's balanced pose (angles in deg, y in mm)")
+    print("R m | pipeline: pressure centre y, reference y, delta_r | wheel slope angle at the "
+          "pressure centre: point, averaged | table at this pose: y, angle")
+    for res in solved:
+        q = res.pipeline["state"][None]
+        ws = wheelset_unknowns(q)
+        y, d = ws[..., 0], ws[..., 3:5]
+        kappa = np.array([1.0 / res.radius_m])
+        a_unb = np.array([res.unbalanced_acceleration_m_s2])
+        pose = Pose(float(centre_shift(table, y, d)[0, 0]), float(ws[0, 0, 1]) * 1e-3,
+                    float(wheelset_roll(table, y, d)[0, 0]),
+                    float(wheel_loads(trailer, a_unb)[0, high]),
+                    1.0 + float(ws[0, 0, 2]) * 1e-3, float(kappa[0]))
+        loaded = contact_at_poses(table.track, "right", [pose], speed_m_s=1.0,
+                                  mu=trailer.friction, shear_modulus_mpa=SHEAR_MODULUS_MPA,
+                                  n_grid=DEFAULT_CREEP_GRID)[0].loaded
+        n = max((p.normal for p in loaded.patches), key=lambda n: n.normal_force_n)
+        _, c = bogie_residual(q, trailer, table, kappa, a_unb, trailer.traction_torque_nm,
+                              return_contacts=True, creep_grid=DEFAULT_CREEP_GRID)
+        k = int(np.argmax(c.normal_force_n[0, 0, high]))
+        yp = n.centre_y_wheel_mm
+        print(f"{res.radius_m:5.0f} | {yp:6.2f} {n.region.y_wheel_mm:6.2f} "
+              f"{np.degrees(-n.contact_angle_rad):5.1f} | "
+              f"{slope_deg(table.wheel_slope, yp):5.1f} "
+              f"{averaged_deg(SIDE_SIGN[high] * float(y[0, 0]), yp):5.1f}"
+              f" | {c.wheel_y_mm[0, 0, high, k]:6.2f} "
+              f"{np.degrees(c.contact_angle_rad[0, 0, high, k]):5.1f}")
 
 
 if __name__ == "__main__":

@@ -316,7 +316,7 @@ class CompiledBogie:
 def _kernel_tab(table: ContactTable) -> tuple:
     """One wheel's table arrays in the kernel's order (``bogie_residual_flat``)."""
     return (table.gap_mm, table.gap2_per_mm, table.smoothing_mm, table.wheel_y_mm,
-            table.wheel_z_mm, table.wheel_slope, table.shift_mm, table.rigid_rise_mm,
+            table.wheel_z_mm, table.contact_slope, table.shift_mm, table.rigid_rise_mm,
             table.hertz_log_ratio, table.hertz_approach1, table.hertz_a1, table.hertz_b1,
             KALKER_TABLE, KALKER_ROW_SHAPE)
 

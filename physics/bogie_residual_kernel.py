@@ -68,14 +68,22 @@ def interp_like_numpy(x: float, xp: NDArray[np.float64], fp: NDArray[np.float64]
 @njit(cache=True)
 def _candidate_columns(shift: float, yc: float, slot_gap: float, g2: float,
                        wheel_y: NDArray[np.float64], wheel_z: NDArray[np.float64],
-                       wheel_slope: NDArray[np.float64], r0: float, min_b: float, max_b: float,
+                       contact_slope: NDArray[np.float64], grid0: float, grid_step: float,
+                       r0: float, min_b: float, max_b: float,
                        log_ratio: NDArray[np.float64], approach1: NDArray[np.float64],
                        a1: NDArray[np.float64], b1: NDArray[np.float64], half_spacing: float,
                        out: NDArray[np.float64]) -> None:
     """One candidate's columns (``ContactTable._candidate_columns``) into out: gap, angle,
-    lateral [mm], rolling radius [m], approach1 [mm], a1, b1 [mm]."""
+    lateral [mm], rolling radius [m], approach1 [mm], a1, b1 [mm]. ``contact_slope``
+    (n_shift, n_y) on the shift grid ``grid0 + i grid_step``, taken like
+    ``ContactTable.contact_slope_at``."""
     wz = interp_like_numpy(yc, wheel_y, wheel_z)
-    slope = interp_like_numpy(yc, wheel_y, wheel_slope)
+    pos = (shift - grid0) / grid_step
+    pos = min(max(pos, 0.0), contact_slope.shape[0] - 1.000001)
+    k = int(np.floor(pos))
+    w = pos - np.floor(pos)
+    slope = ((1.0 - w) * interp_like_numpy(yc, wheel_y, contact_slope[k])
+             + w * interp_like_numpy(yc, wheel_y, contact_slope[k + 1]))
     angle = math.atan(-slope)
     cos = math.cos(angle)
     radius = r0 + wz / 1000.0
@@ -121,7 +129,7 @@ def _slot_columns(shift, tab, consts, memory, g_row):
     for m in range(_SHIFT_MEMORY):
         if mem_shift[m] == shift:
             return m
-    (gap, gap2, smoothing, wheel_y, wheel_z, wheel_slope, _, _, log_ratio, approach1, a1, b1,
+    (gap, gap2, smoothing, wheel_y, wheel_z, contact_slope, _, _, log_ratio, approach1, a1, b1,
      _, _) = tab
     s_y = slots[0]
     s_gap = slots[1]
@@ -149,7 +157,8 @@ def _slot_columns(shift, tab, consts, memory, g_row):
             cols[6] = 1.0
         else:
             _candidate_columns(shift, s_y[t], s_gap[t], s_g2[t], wheel_y, wheel_z,
-                               wheel_slope, consts[R0], consts[MIN_B], consts[MAX_B], log_ratio,
+                               contact_slope, consts[GRID0], consts[GRID_STEP], consts[R0],
+                               consts[MIN_B], consts[MAX_B], log_ratio,
                                approach1, a1, b1, consts[HALF_SPACING], mem_cols[hit, t])
         mem_w[hit, t] = s_w[t]
     return hit

@@ -27,7 +27,12 @@ from wearcast.physics.contact.geometry import (
 from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import N_SLOTS, candidate_slots
-from wearcast.physics.gap_smoothing import check_gap_smoothing, smooth_gap, smoothstep
+from wearcast.physics.gap_smoothing import (
+    check_gap_smoothing,
+    smooth_gap,
+    smooth_like_gap,
+    smoothstep,
+)
 from wearcast.physics.profiles.measured_wheel import MeasuredWheel
 from wearcast.physics.profiles.rails import RailShape, rail_profile
 from wearcast.physics.profiles.s1002 import s1002_height_mm
@@ -87,7 +92,26 @@ class ContactTable:
 
     ``rigid_rise_mm`` (n_s,): how far the wheel rises at rigid contact relative to the centred
     wheelset [mm] (minimum of the unsmoothed gap), for the wheelset roll.
-    Wheel columns on ``wheel_y_mm``: height z [mm] and slope dz/dy. ``rail_offset_mm`` maps
+    Wheel columns on ``wheel_y_mm``: height z [mm], slope dz/dy, and ``contact_slope``
+    (n_s, n_y) the slope averaged like the gap at each shift (the gap's Gaussians, with the
+    masked smoothing's weights of the points with rail below,
+    ``gap_smoothing.smooth_like_gap``), which gives each candidate its contact angle:
+    with S = G*(m g) / G*(m) the smoothed gap (m the rail's coverage, 1 for the ``gaussian``
+    method; g = z_rail(y + shift) - z_wheel(y) up to sign, m moving with the rail), at a
+    minimum y_c of S (dS/dy = 0) the envelope theorem gives the rate at which the gap closes
+    with the shift, d S(y_c) / d shift = dS/d shift - dS/dy = G*(m z_wheel') / G*(m): the
+    wheel's slope averaged with the gap's own weights. A normal force along that angle is
+    the gradient of a potential of the approach (d - S(y_c)), the residual's contact forces
+    are conservative, and the candidate's force direction agrees with its gap (the slope at
+    the point, or averaged with the plain Gaussian where the rail does not cover the kernel,
+    at the gauge corner, does not; helper flange11). On the S1002 flange root the contact
+    angle rises by 4-6 deg per mm, convexly, so the mean is steeper than the point value: the
+    point slope put the loaded patch 0.3-0.9 mm up the flank of the one contact pipeline's
+    pressure centre at the same force angle, the mean 0.02-0.50 mm (the Manchester trailer
+    at 150-600 m, ``benchmarks/curving_flange_table_vs_rigid.py`` block 3). Near the gauge
+    corner the mean depends on the shift (at wheel y -36 mm: 44-53 deg over shifts 5-10 mm,
+    the point slope 49 deg); it stays below 66 deg where the point slope reaches 70 deg.
+    ``rail_offset_mm`` maps
     wheel y to rail y (y_rail = y_wheel + offset + shift). Hertz constants under 1 N for
     log(B/A) = ``hertz_log_ratio`` and A = 1/mm: ``hertz_approach1``, ``hertz_a1``,
     ``hertz_b1`` [mm]. ``track``: the wheelset on its track the table was built from (the
@@ -106,6 +130,7 @@ class ContactTable:
     gap2_per_mm: NDArray[np.float64]
     wheel_z_mm: NDArray[np.float64]
     wheel_slope: NDArray[np.float64]
+    contact_slope: NDArray[np.float64]
     rigid_rise_mm: NDArray[np.float64]
     rail_offset_mm: float
     nominal_radius_m: float
@@ -158,6 +183,28 @@ class ContactTable:
                                 _NO_CONTACT_GAP_MM, SLOT_FADE_MM)
         yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
         return self._candidate_columns(s, yc, gap, g2, weight)
+
+    def contact_slope_at(self, shift_mm: ArrayLike, wheel_y_mm: ArrayLike) -> NDArray:
+        """``contact_slope`` at wheel points ``wheel_y_mm`` (shift.shape + (k,)) of each shift:
+        linear in y on the two table rows around the shift (clamped like the candidates'
+        gap rows, :meth:`candidates`), then linear in the shift between them."""
+        s = np.asarray(shift_mm, dtype=float)
+        yc = np.asarray(wheel_y_mm, dtype=float)
+        grid = self.shift_mm
+        pos = np.clip((s - grid[0]) / (grid[1] - grid[0]), 0.0, len(grid) - 1.000001)
+        k = np.floor(pos).astype(int)[..., None]
+        w = (pos - np.floor(pos))[..., None]
+        xp = self.wheel_y_mm
+        j = np.clip(np.searchsorted(xp, yc, side="right") - 1, 0, xp.size - 2)
+
+        def on_row(row: NDArray) -> NDArray:
+            # np.interp's arithmetic (slope form from the left point, clamped ends)
+            f0, f1 = self.contact_slope[row, j], self.contact_slope[row, j + 1]
+            value = (f1 - f0) / (xp[j + 1] - xp[j]) * (yc - xp[j]) + f0
+            value = np.where(yc >= xp[-1], self.contact_slope[row, -1], value)
+            return np.where(yc < xp[0], self.contact_slope[row, 0], value)
+
+        return (1.0 - w) * on_row(k) + w * on_row(k + 1)
 
     def _candidate_slots_numpy(self, shift_mm: ArrayLike, n_slots: int = N_SLOTS
                                ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -283,7 +330,7 @@ class ContactTable:
                            weight: NDArray) -> dict[str, NDArray]:
         """The candidate columns of ``candidates`` from the slots."""
         wz = np.interp(yc, self.wheel_y_mm, self.wheel_z_mm)
-        slope = np.interp(yc, self.wheel_y_mm, self.wheel_slope)
+        slope = self.contact_slope_at(s, yc)
         rail_y = yc + self.rail_offset_mm + s[..., None]
         angle = np.arctan(-slope)
         cos = np.cos(angle)
@@ -562,9 +609,14 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
         ((1.0, smoothing_mm[0]),) if smoothing_mm[0] == smoothing_mm[1]
         else ((blend, smoothing_mm[0]), (1.0 - blend, smoothing_mm[1])))
     gap, gap2 = smooth_gap(raw, inside, scales, wheel_step_mm, gap_smoothing)
+    # the candidates' contact angle: the wheel's slope averaged with the gap's own weights at
+    # each shift (the masked smoothing's normalised kernel) (ContactTable docstring)
+    contact_slope = smooth_like_gap(slope, shifts.size, inside, scales, wheel_step_mm,
+                                    gap_smoothing)
     log_ratio, app1, a1, b1 = _hertz_unit_table()
     return ContactTable(shift_mm=shifts, wheel_y_mm=y_w, gap_mm=gap, gap2_per_mm=gap2,
-                         wheel_z_mm=z_w, wheel_slope=slope, rigid_rise_mm=rigid_rise,
+                         wheel_z_mm=z_w, wheel_slope=slope, contact_slope=contact_slope,
+                         rigid_rise_mm=rigid_rise,
                          rail_offset_mm=offset,
                          nominal_radius_m=wheel_radius_m, smoothing_mm=sigma,
                          hertz_log_ratio=log_ratio,

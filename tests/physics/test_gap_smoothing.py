@@ -87,3 +87,45 @@ def test_the_rail_edge_ramp_acts_on_the_masked_table_only(monkeypatch):
     np.testing.assert_array_equal(wide_gauss, narrow_gauss)
     assert 0.5 < wide_masked - narrow_masked < 3.0
     assert wide_masked < flange_y("gaussian") - 1.0
+
+
+
+def test_the_slope_averaged_like_the_gap_is_the_rate_its_minimum_closes_with_the_shift():
+    # g(y, s) = A(y) + B(y + s), the rail's coverage moving with it (rail below y + s > -6 mm):
+    # at the masked smoothed gap's minimum (on full coverage), d S_min / d s = -(A' averaged
+    # with the gap's weights) (envelope theorem, ``curving_table.ContactTable``). The minimum
+    # lies 4-5 mm inside the rail's edge, where the 2 mm kernel reaches past it: measured
+    # within 1e-4 (a central difference in s), the plain Gaussian average of A' 0.001-0.006
+    # off, A' at the point 0.03.
+    from wearcast.physics.gap_smoothing import smooth_gap, smooth_like_gap
+
+    step = 0.05
+    y = np.arange(-20.0, 20.0 + 1e-9, step)
+    a = 0.02 * y**2 + 0.002 * y**3 + 0.25 * y
+    a1 = 0.04 * y + 0.006 * y**2 + 0.25
+    scales = ((1.0, 2.0),)
+
+    def smoothed(s):
+        raw = (a + 0.03 * (y + s - 3.0) ** 2)[None, :]
+        inside = (y + s + 6.0)[None, :]
+        return smooth_gap(raw, inside, scales, step, "masked")[0][0], inside
+
+    def minimum(s):
+        g, _ = smoothed(s)
+        i = int(np.argmin(g))
+        den = g[i - 1] - 2.0 * g[i] + g[i + 1]
+        frac = 0.5 * (g[i - 1] - g[i + 1]) / den
+        return y[i] + frac * step, g[i] - 0.125 * (g[i - 1] - g[i + 1]) * frac
+
+    h = 0.02
+    plain_off = []
+    for s in (-1.0, 0.0, 1.0):
+        yc, _ = minimum(s)
+        assert yc + s + 6.0 > 3.5  # on full coverage, the kernel reaching past the edge
+        rate = (minimum(s + h)[1] - minimum(s - h)[1]) / (2.0 * h)
+        _, inside = smoothed(s)
+        mean = np.interp(yc, y, smooth_like_gap(a1, 1, inside, scales, step, "masked")[0])
+        assert rate == pytest.approx(-mean, abs=3e-4), (s, yc)
+        plain = np.interp(yc, y, smooth_like_gap(a1, 1, None, scales, step, "gaussian")[0])
+        plain_off.append(abs(rate + plain))
+    assert max(plain_off) > 5e-3

@@ -85,8 +85,10 @@ def test_fixed_steps_of_seed_000():
                                                                        step_km=5000.0))
     assert sim.mileage_km == pytest.approx([0.0, 5000.0, 10000.0])
     # The step-depth limit cuts a fixed step into sub-steps (at most max_substeps).
-    # (40 km in the 300 m curve wear 0.22 mm vertically, 0.14 mm normal to the profile, at
-    # stop 32: three sub-steps of at most 0.1 mm of vertical change each)
+    # (40 km in the 300 m curve wear 0.21 mm vertically, 0.14 mm normal to the profile:
+    # three sub-steps of at most 0.1 mm of vertical change each; 0.22 mm at stop 32 with the
+    # contact angle from the wheel's slope at the point, 0.197 mm with it averaged by the plain
+    # Gaussian, 0.207 mm by the gap's own masked weights, helper flange11)
     sharp = simulate_wear("metro_b", CLASSES[:1], steps=WearSteps(
         mode="fixed", n_steps=1, step_km=40.0, max_depth_per_step_mm=0.1))
     assert sharp.mileage_km == pytest.approx([0.0, 40.0])
