@@ -334,14 +334,6 @@ SEED_RATIO_TOLERANCE = 0.05
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "not reproduced to the tolerance: with seed 003's own definitions (km_tot of the mean "
-    "wheel of the bogie's four, §4.3 and eq. 2, D_step bounding the normal depth; the wear law "
-    "per FASTSIM element on wheel and rail, §4.2; the next rail the mean of the virtual rails "
-    "each worn to D_step^r, §6.1) the loop's km_tot now RISES at rail steps 1-2 as the seed's "
-    "(stop 32: 2,785 -> 3,113 -> 3,445 km) but by more: ratio 1.117 at step 1 against the "
-    "seed's 1.038, 0.079 > 0.05 (benchmarks/reproduce_seed003.py --rail-steps); until stop 31 "
-    "the step bounded the vertical change and km_tot fell (ratio 0.961)"))
 def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference_dir):
     import pandas as pd
 
@@ -354,9 +346,17 @@ def test_rail_steps_lengthen_the_wheel_life_as_seed_003_tables_5_and_8(reference
                       comment="#")
     seed = ref[ref.description == "complete"].sort_values("rail_step").km_tot.to_numpy(float)
     # seed 003's km_tot: the mean wheel (§4.3, eq. 2), the law applied locally (§4.2)
-    rs = simulate_rail_steps("minuetto", classes, n_rail_steps=2, law="usfd",
+    # with seed 003's own definitions (km_tot of the mean wheel of the bogie's four, §4.3 and
+    # eq. 2, D_step bounding the normal depth; the wear law per FASTSIM element on wheel and
+    # rail, §4.2; the next rail the mean of the virtual rails each worn to D_step^r, §6.1) and
+    # the table's contact angle from the kernel-averaged slope (stop 33): measured ratios 1.062
+    # and 1.129 at rail steps 1-2 against the seed's 1.038 and 1.154
+    # (benchmarks/reproduce_seed003.py --rail-steps). Steps 3-4 (1.148, 1.116 against 1.238,
+    # 1.339) are not reproduced: README, seed reproduction table
+    rs = simulate_rail_steps("minuetto", classes, n_rail_steps=3, law="usfd",
                              steps=WearSteps(n_steps=20, depth_per_step_mm=0.2),
                              unbalanced_acceleration_m_s2=0.8, mean_wheel=True,
                              application="local")
-    assert rs.km_tot[1] / rs.km_tot[0] == pytest.approx(seed[1] / seed[0],
-                                                         abs=SEED_RATIO_TOLERANCE)
+    for j in (1, 2):
+        assert rs.km_tot[j] / rs.km_tot[0] == pytest.approx(seed[j] / seed[0],
+                                                             abs=SEED_RATIO_TOLERANCE), j
