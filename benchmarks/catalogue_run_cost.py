@@ -13,7 +13,7 @@ seed 003's Table 3 classes, timed by wrapping (not changing) the loop's parts:
   normal rate of the step-setting point.
 * Time: the contact tables (``curving_table.build_contact_table``), the curving solves from
   the last equilibrium (warm), the retries of the points that fail from it (continuation from
-  centred wheelsets, ``class_contacts._solve_points``), the wear rates, and the rest.
+  the tangent track's equilibrium, ``class_contacts._solve_points``), the wear rates, and the rest.
 * Retries: operating points retried, how many the retry solves, and the class fallbacks
   (classes and wheels that keep the previous update's contact).
 
@@ -78,7 +78,7 @@ def _beyond_stall(fun: Any, q: Any, t: float, p: Any, floor: float = 2.0 ** -10)
 
 
 class _RetryFailures:
-    """Why the retried operating points (continuation from centred wheelsets) fail: the stage
+    """Why the retried operating points (continuation from the tangent equilibrium) fail: the stage
     (the saturation law's continuation, or Newton with FASTSIM's forces from its equilibrium),
     the load fraction t the continuation reached, the residual norm and its largest equation,
     and the state (contact-frame shifts y1, y2 [mm] against the contact table's range,
@@ -212,7 +212,7 @@ class _RetryFailures:
         d["|y|max"] = d[["y1", "y2"]].abs().max(axis=1)
         d["at_range"] = d["|y|max"] > d["range_mm"] - 0.5
         print("why the retries fail (per retried operating point; t: load fraction the "
-              "continuation from centred wheelsets reached; |y|max: largest contact-frame "
+              "continuation from the tangent equilibrium reached; |y|max: largest contact-frame "
               f"shift, table range +-{d['range_mm'].iloc[0]:g} mm; dmin: smallest approach):")
         g = d.groupby(["bogie", "radius_m", "stage"])
         pd.set_option("display.width", 200)
@@ -275,7 +275,7 @@ def main() -> None:
         return wrapper
 
     # _solve_points' solves: cold (a first update, no last equilibrium: initial_states None),
-    # warm (from the last equilibria), retry (the warm failures from centred wheelsets: a list
+    # warm (from the last equilibria), retry (the warm failures from the tangent equilibrium: a list
     # of None)
     solve = curving.solve_curving_cases_or_none
 
@@ -347,7 +347,7 @@ def main() -> None:
     print("time: " + ", ".join(f"{k} {v:.1f} s ({100 * v / wall:.0f} %)"
                                for k, v in clock.items())
           + f", rest {wall - sum(clock.values()):.1f} s")
-    print(f"retries from centred wheelsets: {counts['retried']} operating points, "
+    print(f"retries by continuation: {counts['retried']} operating points, "
           f"{counts['retry_solved']} solved")
     print("km range       steps  mean step km  step set by (wheel, y mm, sqrt(1+z'^2), "
           "normal rate mm/1000 km)  largest normal rate")

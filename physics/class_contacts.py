@@ -126,12 +126,13 @@ def _solve_table_points(vehicle: BogieVehicle, points: list[tuple], table: Conta
                         fastsim_grid: int, warm: dict | None = None, warm_first: bool = False
                         ) -> list[CurvingResult | None]:
     """Batched curving of the operating points in one batch; a point that does not converge
-    from centred wheelsets is retried from its last equilibrium (``warm``: operating point ->
-    ``CurvingResult.saturation_state`` on the previous profile) if it has one, else it is None
+    from the tangent track's equilibrium is retried from its last equilibrium (``warm``:
+    operating point -> ``CurvingResult.saturation_state`` on the previous profile) if it has
+    one, else it is None
     (the caller falls back to a neighbour or the previous contact). ``warm_first``: start every
     point that has a last equilibrium from it (Newton at full load, no continuation) and retry
-    the failures by continuation from centred wheelsets (faster when the profile changed
-    little). The vehicle's traction torque acts at every point."""
+    the failures by continuation from the tangent track's equilibrium (faster when the profile
+    changed little). The vehicle's traction torque acts at every point."""
     cases = [curve_case(r, cant, v, "left", torque_nm=vehicle.traction_torque_nm)
              for r, cant, v in points]
     labels = [(r, "left", cant) for r, cant, _ in points]

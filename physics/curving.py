@@ -225,9 +225,10 @@ def solve_curving_cases_or_none(vehicle: BogieVehicle, cases: list[CurveCase],
                                 ) -> list[CurvingResult | None]:
     """Solve many operating points of one vehicle at once (batched continuation).
 
-    Every case is continued from centred wheelsets on tangent track (curvature, unbalanced
-    acceleration and torque scaled from 0 to their values; the step of each case is doubled on
-    success and halved on failure) by a batched damped Newton method with forward-difference
+    Every case is continued from the tangent track's equilibrium (solved once from centred
+    wheelsets; the centred state where that fails) with curvature, unbalanced acceleration and
+    torque scaled from 0 to their values (the step of each case doubled on success and halved
+    on failure) by a batched damped Newton method with forward-difference
     Jacobians; a case whose steps become small is also tried with ``scipy.optimize.root``
     (Powell hybrid). FASTSIM runs once, batched, on all final contacts.
 
