@@ -184,16 +184,22 @@ class ContactTable:
         yc, gap, g2, weight = (v.reshape(s.shape + (n_slots,)) for v in slots)
         return self._candidate_columns(s, yc, gap, g2, weight)
 
+    def _shift_rows(self, shift_mm: ArrayLike) -> tuple[NDArray, NDArray]:
+        """The table row k below each shift and the weight w of row k + 1 (linear in the
+        shift, clamped to the grid), shift.shape each."""
+        s = np.asarray(shift_mm, dtype=float)
+        grid = self.shift_mm
+        pos = np.clip((s - grid[0]) / (grid[1] - grid[0]), 0.0, len(grid) - 1.000001)
+        k = np.floor(pos).astype(int)
+        return k, pos - k
+
     def contact_slope_at(self, shift_mm: ArrayLike, wheel_y_mm: ArrayLike) -> NDArray:
         """``contact_slope`` at wheel points ``wheel_y_mm`` (shift.shape + (k,)) of each shift:
         linear in y on the two table rows around the shift (clamped like the candidates'
         gap rows, :meth:`candidates`), then linear in the shift between them."""
-        s = np.asarray(shift_mm, dtype=float)
         yc = np.asarray(wheel_y_mm, dtype=float)
-        grid = self.shift_mm
-        pos = np.clip((s - grid[0]) / (grid[1] - grid[0]), 0.0, len(grid) - 1.000001)
-        k = np.floor(pos).astype(int)[..., None]
-        w = (pos - np.floor(pos))[..., None]
+        k, w = self._shift_rows(shift_mm)
+        k, w = k[..., None], w[..., None]
         xp = self.wheel_y_mm
         j = np.clip(np.searchsorted(xp, yc, side="right") - 1, 0, xp.size - 2)
 
@@ -211,12 +217,8 @@ class ContactTable:
         """Reference implementation of the candidate slots (wheel y, gap, g'', weight), each
         shift.shape + (n_slots,): the numpy form of ``contact_candidates_kernel`` (its
         docstring states the selection rule)."""
-        s = np.asarray(shift_mm, dtype=float)
-        grid = self.shift_mm
-        step = grid[1] - grid[0]
-        pos = np.clip((s - grid[0]) / step, 0.0, len(grid) - 1.000001)
-        k = np.floor(pos).astype(int)
-        w = (pos - k)[..., None]
+        k, w = self._shift_rows(shift_mm)
+        w = w[..., None]
         g = (1.0 - w) * self.gap_mm[k] + w * self.gap_mm[k + 1]  # (..., n_y)
         n_y = g.shape[-1]
         cols = np.arange(n_y)
