@@ -2,6 +2,7 @@
 
 Run: .venv/bin/python benchmarks/validate_aosta_measured.py [--km 3600] [--first-step 0.8]
      [--halvings 2] [--patch-width hertz] [--gap-smoothing masked [--rail-edge-ramp-mm 3]]
+     [--flange-wear-factor F --wear-scale C]
 
 Seed 003 Table 2 (reference/published/aosta_measured_FH_FT_QR.csv) prints FH, FT and qR of
 three ALn 501 Minuetto units (DM061, DM068, DM082), each AVERAGED OVER ALL ITS WHEELS, at
@@ -15,7 +16,9 @@ with half the share each); law: seed 003's USFD (eq. 1), wheel loses the full vo
 stiffnesses). Step convergence (``physics.step_convergence``): D_step = --first-step, halved
 up to --halvings times until FT and qR at --km change by < 2 % of their loss. Prints the time
 of every run, the comparison per point, per vehicle and per quantity, and writes
-docs/img/aosta_measured_vs_loop.png. Needs ../shared/reference (skips when it is absent).
+docs/img/aosta_measured_vs_loop.png (the model as is only). ``--flange-wear-factor`` and
+``--wear-scale`` run an extended model the same way, e.g. the physics diagnosis's verdict
+(``benchmarks/diagnose_aosta_physics.py``). Needs ../shared/reference (skips when it is absent).
 """
 
 from __future__ import annotations
@@ -58,6 +61,10 @@ def main() -> None:
     parser.add_argument("--first-step", type=float, default=0.8, help="first D_step [mm]")
     parser.add_argument("--halvings", type=int, default=2, help="at most this many halvings")
     parser.add_argument("--patch-width", default="hertz")
+    parser.add_argument("--flange-wear-factor", type=float, default=1.0,
+                        help="factor on the wear of flange patches (VehicleWearOptions)")
+    parser.add_argument("--wear-scale", type=float, default=1.0,
+                        help="wear-coefficient scale (VehicleWearOptions)")
     parser.add_argument("--gap-smoothing", default=gs.GAP_SMOOTHING,
                         choices=gs.GAP_SMOOTHING_METHODS,
                         help="how the contact table's gap is smoothed (physics/gap_smoothing.py); "
@@ -77,7 +84,9 @@ def main() -> None:
         return
     measured = pd.read_csv(measured_csv, comment="#")
     classes = aosta_classes(pd.read_csv(track_csv, comment="#"))
-    options = VehicleWearOptions(patch_width=args.patch_width)
+    options = VehicleWearOptions(patch_width=args.patch_width,
+                                 flange_wear_factor=args.flange_wear_factor,
+                                 wear_scale=args.wear_scale)
 
     def run(step: float):
         t0 = time.perf_counter()
@@ -119,8 +128,9 @@ def main() -> None:
                  "vs the whole-vehicle loop (USFD, Table 3 classes)")
     fig.tight_layout()
     IMG.mkdir(parents=True, exist_ok=True)
-    # the README's picture is the default contact table's only
-    if (args.gap_smoothing, args.rail_edge_ramp_mm) == _DEFAULT_TABLE:
+    # the README's picture is the default contact table's and the model as is only
+    if ((args.gap_smoothing, args.rail_edge_ramp_mm) == _DEFAULT_TABLE
+            and args.flange_wear_factor == 1.0 and args.wear_scale == 1.0):
         fig.savefig(IMG / "aosta_measured_vs_loop.png", dpi=110)
     plt.close(fig)
 

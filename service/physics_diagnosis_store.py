@@ -1,11 +1,12 @@
 """The physics diagnosis on stored data: what a physics model gets wrong, and why.
 
 :func:`wearcast.statistics.physics_diagnosis.diagnose_physics` scores each cause of the
-physical catalogue (flange lubrication, friction level, running-direction share, patch model,
-wear law, traction, rail state, curve classes; ``catalogue_for`` the model's own friction, law
-and options as the nulls) out of sample with folds grouped by vehicle. Its ``simulate`` is
-the model's whole-vehicle run: the stored run for the null, one new run per catalogue value
-to the model's simulated mileage. The rail state runs on the vehicle's rail worn by its own
+physical catalogue (flange wear against the tread, friction level, running-direction share,
+patch model, wear law, traction, rail state, curve classes; ``catalogue_for`` the model's own
+friction, law and options as the nulls) out of sample with folds grouped by vehicle. Its
+``simulate`` is the model's whole-vehicle run: the stored run for the null, one new run per
+catalogue value to the model's simulated mileage (a flange factor above 1 at the wear scale
+1 / factor, ``PhysicsCause.run_scale``). The rail state runs on the vehicle's rail worn by its own
 traffic on the model's classes (``physics.rail_tonnage``: the catalogue's tonnages from one
 chain of rail steps, computed once per diagnosis); the curve classes re-bin the route's
 stored segments (``route_store.rebinned_classes``), skipped when the route was stored as

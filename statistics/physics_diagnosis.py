@@ -28,7 +28,7 @@ and ``mean(quantity)``), so tests and the service choose vehicle, route and law.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -84,6 +84,12 @@ class PhysicsCause:
     values: tuple[Any, ...]
     null: Any
     discrete: bool = False
+    scaled_runs: bool = False
+    """the values are factors on part of the wear: a value above 1 is run at the wear scale
+    1 / value (:meth:`run_scale`), so that its run wears its fastest part at the null's pace
+    and reaches the diagnosis's mileage in about the null's number of steps (a run at flange
+    factor 4 and scale 1 needs 4x the steps to the same mileage); its series is read at its
+    mileage x the run scale (the scale equivalence of the module docstring)"""
 
     @property
     def categorical(self) -> bool:
@@ -91,12 +97,34 @@ class PhysicsCause:
         flagged ``discrete`` (a number of curve classes has nothing between two counts)."""
         return self.discrete or any(isinstance(v, str) for v in self.values)
 
+    def run_scale(self, value: Any) -> float:
+        """The wear scale ``value``'s loop run is made at [-]: 1 / value for a value above 1
+        of a cause with ``scaled_runs``, else 1."""
+        if self.scaled_runs and not isinstance(value, str) and value is not None and value > 1:
+            return 1.0 / float(value)
+        return 1.0
 
+    def run_params(self, value: Any) -> dict[str, Any]:
+        """The parameter set of ``value``'s loop run: {parameter: value}, with
+        ``wear_scale`` (a ``VehicleWearOptions`` field) when :meth:`run_scale` is not 1."""
+        scale = self.run_scale(value)
+        return ({self.parameter: value} if scale == 1.0
+                else {self.parameter: value, "wear_scale": scale})
+
+
+#: Factors of the flange-wear cause on the wear of flange patches: lubricated flanges (0.25,
+#: 0.5) and flanges wearing more against the tread than the law's coefficient map gives (2, 4,
+#: 8: dry flanges, or a tread whose wear natural contaminants lower, where the USFD map was
+#: measured on dry twin discs, seed 003 §4.2). The scale c is refitted with each value, so the
+#: factor sets the ratio of flange to tread wear, f x the law's.
+FLANGE_WEAR_FACTORS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 #: The catalogue (issue 12): each cause one physical parameter of the loop besides the scale.
 CATALOGUE: tuple[PhysicsCause, ...] = (
-    PhysicsCause("flange_lubrication", "flange wear differs from the law's (lubrication or "
-                 "flange friction): factor on the wear of flange patches",
-                 "flange_wear_factor", (0.25, 0.5, 1.0), 1.0),
+    PhysicsCause("flange_wear", "the flanges wear otherwise against the tread than the law "
+                 "gives: factor on the wear of flange patches, the scale refitted with it "
+                 "(below 1: lubricated flanges; above 1: dry flanges, or tread wear lowered by "
+                 "natural contaminants the dry twin-disc map leaves out)",
+                 "flange_wear_factor", FLANGE_WEAR_FACTORS, 1.0, scaled_runs=True),
     PhysicsCause("friction_level", "the friction coefficient differs from the model's "
                  "(dry/wet, season)", "friction", (0.2, 0.28, 0.4), 0.28),
     PhysicsCause("running_direction_share", "the vehicle does not run half its mileage in "
@@ -161,20 +189,18 @@ def catalogue_for(friction: float, nulls: Mapping[str, Any] | None = None,
     out = []
     for c in CATALOGUE:
         if c.parameter == "friction":
-            c = PhysicsCause(c.name, c.summary, c.parameter,
-                             (round(0.7 * friction, 4), friction, round(1.4 * friction, 4)),
-                             friction)
+            c = replace(c, values=(round(0.7 * friction, 4), friction,
+                                   round(1.4 * friction, 4)), null=friction)
         if c.parameter == "traction_torque_nm" and adhesion_torque_nm is not None:
-            c = PhysicsCause(c.name, c.summary, c.parameter,
-                             tuple(round(f * adhesion_torque_nm, 1)
-                                   for f in TRACTION_ADHESION_SHARES), 0.0)
+            c = replace(c, values=tuple(round(f * adhesion_torque_nm, 1)
+                                        for f in TRACTION_ADHESION_SHARES), null=0.0)
         if nulls and c.parameter in nulls and nulls[c.parameter] is not None:
             null = nulls[c.parameter]
             if c.categorical:
                 values = (null, *[v for v in c.values if v != null])
             else:
                 values = tuple(sorted({float(v) for v in c.values} | {float(null)}))
-            c = PhysicsCause(c.name, c.summary, c.parameter, values, null)
+            c = replace(c, values=values, null=null)
         out.append(c)
     if n_class is not None:
         out.append(curve_classes_cause(n_class))
@@ -195,7 +221,9 @@ class PhysicsDiagnosis(FinderResult):
 
     null_fit: dict[str, Any]
     """physics models: the null model's own fit — wear_scale (the fitted wear-coefficient
-    scale), rms_mm and the measured series it was fitted on; null for hybrid models"""
+    scale), rms_mm, the measured series it was fitted on and rms_mm_by_series (each series'
+    RMS error, mm; a finding's extension carries its own on all data); null for hybrid
+    models"""
     runner_up: str | None = None
     margin: float | None = None
     margin_p_value: float | None = None
@@ -214,8 +242,9 @@ class _Series:
     """The loop's vehicle-mean series of one parameter set, as functions of mileage (the
     measured columns ``cols`` of :data:`SERIES`)."""
 
-    def __init__(self, sim: Any, cols: Sequence[str]):
-        self.km = np.asarray(sim.mileage_km, dtype=float)
+    def __init__(self, sim: Any, cols: Sequence[str], run_scale: float = 1.0):
+        # a run made at wear scale s reaches at m the state a scale-1 run reaches at s m
+        self.km = np.asarray(sim.mileage_km, dtype=float) * run_scale
         self.values = {col: np.asarray(sim.mean(SERIES[col]), dtype=float) for col in cols}
 
     def at(self, col: str, km: NDArray, strict: bool = True) -> NDArray:
@@ -392,10 +421,11 @@ def catalogue_runs(catalogue: Sequence[PhysicsCause]) -> list[dict[str, Any]]:
     seen = {_run_key({})}
     for cause in catalogue:
         for v in cause.values:
-            key = _run_key({cause.parameter: v})
+            params = cause.run_params(v)
+            key = _run_key(params)
             if v != cause.null and key not in seen:
                 seen.add(key)
-                out.append({cause.parameter: v})
+                out.append(params)
     return out
 
 
@@ -472,7 +502,8 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         theta, scale, sse = _fit(cands, km[at], y[at], cols)
         chosen = next(c for c in cands if c[0] == theta)
         name = "null" if cause is None else cause.name
-        if name not in at_reach and _at_reach(scale, sse, chosen[1], km[at]):
+        weighted = [r for r, w in zip(chosen[1], chosen[2], strict=True) if w != 0]
+        if name not in at_reach and _at_reach(scale, sse, weighted, km[at]):
             at_reach.append(name)
         return theta, scale, sse, chosen
 
@@ -488,19 +519,28 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
 
     before = held_out(None, null_runs)
     every = np.ones(km.size, dtype=bool)
-    theta0, scale0, sse0, _ = fit(None, _blends(None, null_runs), every)
+    def rms_by_series(chosen: tuple[Any, list[_Series], NDArray], scale: float
+                      ) -> dict[str, float]:
+        """RMS error [mm] of each scored series of a fit on all points."""
+        pred = _predict(chosen[1], chosen[2], scale, km, cols, strict=False)
+        return {c: float(np.sqrt(np.nanmean((pred[:, j] - y[:, j]) ** 2)))
+                for j, c in enumerate(cols)}
+
+    theta0, scale0, sse0, chosen0 = fit(None, _blends(None, null_runs), every)
     null_fit = {"wear_scale": scale0,
-                "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols}
+                "rms_mm": float(np.sqrt(sse0 / np.isfinite(y).sum())), "series": cols,
+                "rms_mm_by_series": rms_by_series(chosen0, scale0)}
     rows = []
     for cause in catalogue:
-        failed = [by_params[_run_key({cause.parameter: v})] for v in cause.values
+        failed = [by_params[_run_key(cause.run_params(v))] for v in cause.values
                   if v != cause.null]
         failed = [r for r in failed if isinstance(r, BaseException)]
         if failed:  # a run that fails leaves the cause unscored, saying why
             skipped[cause.name] = f"the loop failed for this extension: {failed[0]}"
             continue
         cause_runs = {v: (null_runs[None] if v == cause.null else
-                          _Series(by_params[_run_key({cause.parameter: v})], cols))
+                          _Series(by_params[_run_key(cause.run_params(v))], cols,
+                                  cause.run_scale(v)))
                       for v in cause.values}
         runs[cause.name] = cause_runs
         after = held_out(cause, cause_runs)
@@ -521,11 +561,12 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
         pvals.append(p if np.isfinite(p) else 1.0)
         lo, hi = bootstrap_gain_interval(b_units, a_units, n_bootstrap, rng)
         rel = 1.0 - after.sum() / before.sum() if before.sum() > 0 else 0.0
-        theta, scale, sse, _ = fit(cause, _blends(cause, runs[cause.name]), every)
+        theta, scale, sse, chosen = fit(cause, _blends(cause, runs[cause.name]), every)
         findings.append((cause, Gain(float(before.mean()), float(after.mean()), float(rel), lo,
                                      hi, metric=METRIC),
                          {"parameter": cause.parameter, "value": theta, "wear_scale": scale,
-                          "null_value": cause.null}, p))
+                          "null_value": cause.null,
+                          "rms_mm_by_series": rms_by_series(chosen, scale)}, p))
     adj = _holm(pvals) if pvals else np.array([])
     out = []
     for (cause, gain, ext, p), p_holm in zip(findings, adj, strict=True):

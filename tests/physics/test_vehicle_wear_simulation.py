@@ -75,6 +75,23 @@ def test_wear_scale_and_flange_lubrication_act_in_the_right_direction(symmetric)
 
 
 @pytest.mark.slow
+def test_the_wear_scale_is_a_change_of_the_mileage_variable():
+    # every wear rate x c: the run reaches at m what the scale-1 run reaches at c m, step for
+    # step (the adaptive step bounds a depth, so both take the same steps; the physics
+    # diagnosis runs its large flange factors at scale 1 / factor on this ground)
+    options = {"flange_wear_factor": 2.0}
+    plain = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM / 2,
+                                  depth_per_step_mm=STEP, options=VehicleWearOptions(**options))
+    slow = simulate_vehicle_wear("metro_b", ROUTE, law="usfd", mileage_km=KM,
+                                 depth_per_step_mm=STEP,
+                                 options=VehicleWearOptions(**options, wear_scale=0.5))
+    assert len(plain.mileage_km) == len(slow.mileage_km) > 2
+    np.testing.assert_allclose(slow.mileage_km, 2.0 * plain.mileage_km, rtol=1e-9)
+    np.testing.assert_allclose(slow.profiles_mm, plain.profiles_mm, atol=1e-9)
+    np.testing.assert_allclose(slow.mean("sd_mm"), plain.mean("sd_mm"), atol=1e-9)
+
+
+@pytest.mark.slow
 def test_traction_torque_acts_on_the_motor_bogie_only():
     # 0.3 of metro_b's motor-axle adhesion torque (2 mu Q r = 16.0 kN m) over one 200 km step
     # (the same mileage for both runs, so the shared adaptive step does not enter): the motor
