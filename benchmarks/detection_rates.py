@@ -296,7 +296,8 @@ def main() -> None:
                     help="precision weights of the finder's rows: one noise scale per region, "
                          "a variance function of the predicted area, or Huber weights alone "
                          "(cause_base.NOISE_WEIGHTING)")
-    ap.add_argument("--shape-weighting", default=fsw.SHAPE_WEIGHTING, choices=("area", "none"),
+    ap.add_argument("--shape-weighting", default=fsw.SHAPE_WEIGHTING,
+                    choices=("position_area", "area", "none"),
                     help="precision weights of the wear-curve (instrument) cause's rows: a "
                          "variance function of the predicted worn area, or none "
                          "(finder_shape_weights.SHAPE_WEIGHTING)")
