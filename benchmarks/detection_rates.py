@@ -6,7 +6,7 @@ Run: .venv/bin/python benchmarks/detection_rates.py [--seeds N] [--first-seed S]
          [--resampling wild|permute] [--loop-null simulated|linear]
          [--progression-stretch F] [--margin-test combined|bootstrap|sign_flip]
          [--margin-nuisance encompassing|runner_up] [--noise-weighting region|area|none]
-         [--shape-weighting area|none] [--shape-growth life|none]
+         [--shape-weighting position_area|area|none] [--shape-growth life|none]
          [--shape-position position|none] [--echo-area scale_offset|scale]
          [--score-metric ols|gls|gls_vehicle]
          [--margin-metric ols|test]
@@ -296,9 +296,11 @@ def main() -> None:
                     help="precision weights of the finder's rows: one noise scale per region, "
                          "a variance function of the predicted area, or Huber weights alone "
                          "(cause_base.NOISE_WEIGHTING)")
-    ap.add_argument("--shape-weighting", default=fsw.SHAPE_WEIGHTING, choices=("area", "none"),
+    ap.add_argument("--shape-weighting", default=fsw.SHAPE_WEIGHTING,
+                    choices=("position_area", "area", "none"),
                     help="precision weights of the wear-curve (instrument) cause's rows: a "
-                         "variance function of the predicted worn area, or none "
+                         "variance function of the predicted worn area with a factor per "
+                         "wheel position (between-wheel test), of the area alone, or none "
                          "(finder_shape_weights.SHAPE_WEIGHTING)")
     ap.add_argument("--shape-growth", default=fsg.SHAPE_GROWTH, choices=("life", "none"),
                     help="wear-curve (instrument) cause: each wheel life's shape coefficients "

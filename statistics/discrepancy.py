@@ -36,9 +36,10 @@ scores it out of sample and names a cause only when it is specific:
    coefficients, in the metric of their wheel-to-wheel nuisance covariance
    (``finder_shape_test.noise_whitened``; its gain is reported in curve space), every
    measurement weighted by
-   the inverse of the shape nuisance's variance at its predicted worn area
-   (``finder_shape_weights``: the late, worn rows no longer drown a signature that is the
-   same at every mileage), each wheel life's growth with the wear removed
+   the inverse of the shape nuisance's variance at its predicted worn area and, in the
+   between-wheel test, its wheel position (``finder_shape_weights``: the late, worn rows
+   and the always-leading wheels' scattered shapes no longer drown a signature that is the
+   same at every mileage and position), each wheel life's growth with the wear removed
    (``finder_shape_growth``); where wheel lives measured by several instruments exist, the
    signature must also stand out inside them (``finder_shape_test.within_life_p``, nuisance
    resampled by measurement session), the larger of the two adjusted p-values counting
@@ -101,6 +102,7 @@ from wearcast.statistics import causes as cz
 from wearcast.statistics import finder_instrument as fi
 from wearcast.statistics import finder_random_effects as fre
 from wearcast.statistics import finder_scoring as fs
+from wearcast.statistics import finder_shape_position as fsp
 from wearcast.statistics import finder_shape_test as fst
 from wearcast.statistics import finder_shape_weights as fsw
 from wearcast.statistics.discrepancy_data import build_data
@@ -298,7 +300,7 @@ def diagnose(
         centred = fst.instrument_centred(z, inst_codes)
         # precision weights of the rows (``finder_shape_weights``): in the means, the
         # held-out errors and the resampled datasets alike
-        w_shape = fsw.shape_weights(centred, data.base.sum(axis=1))
+        w_shape = fsw.shape_weights(centred, data.base.sum(axis=1), fsp.row_positions(data))
         data.cache["shape_weights"] = w_shape
         before = w_shape * np.sum(fs.held_out_shape(coef, None, folds, w_shape) ** 2, axis=1)
         after = w_shape * np.sum(fs.held_out_shape(coef, inst, folds, w_shape) ** 2, axis=1)

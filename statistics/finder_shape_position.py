@@ -79,6 +79,13 @@ def wheel_positions(bogie_type: NDArray[Any] | None, lead_share: Array) -> NDArr
                       dtype=object)
 
 
+def row_positions(data: Any) -> NDArray[Any]:
+    """(n,) position label of every row of the finder's data (``cause_base.FinderData``): its
+    bogie type (when the data have one) and nominal leading share (``wheel_positions``)."""
+    bogie = data.column("bogie_type")
+    return wheel_positions(None if bogie is None else bogie.to_numpy(), data.lead_share)
+
+
 def _indicators(labels: NDArray[Any]) -> Array:
     _, codes = np.unique(np.asarray(labels).astype(str), return_inverse=True)
     return np.asarray(np.eye(int(codes.max()) + 1)[codes], dtype=float)

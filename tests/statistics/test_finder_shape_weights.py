@@ -31,11 +31,40 @@ def test_weights_follow_the_variance_function_of_the_worn_area():
     # inverse variance: ~ (area ratio)^-2 between the ends, within the bins' resolution
     ratio = np.median(w[small]) / np.median(w[large])
     assert ratio > 50.0
+    before = fsw.SHAPE_WEIGHTING
     try:
         fsw.SHAPE_WEIGHTING = "none"
         assert np.array_equal(fsw.shape_weights(centred, area), np.ones(2000))
     finally:
-        fsw.SHAPE_WEIGHTING = "area"
+        fsw.SHAPE_WEIGHTING = before
+
+
+def test_a_position_that_scatters_more_is_weighted_down_by_its_factor():
+    # three positions with the same variance function of the area, one of them scattering
+    # 4x as much (sd) at every area, with a heavy tail (Student t, 3 dof): its weights fall
+    # by its mean-square factor, the other two keep equal weights
+    rng = np.random.default_rng(7)
+    n = 3000
+    area = np.exp(rng.uniform(np.log(5.0), np.log(200.0), n))     # [mm^2]
+    position = np.array(["motor|0.5", "trailer|0.5", "motor|1.0"])[np.arange(n) % 3]
+    sd = 0.1 * area / 5.0 * np.where(position == "motor|1.0", 4.0, 1.0)
+    centred = rng.standard_t(3, size=(n, 3)) * sd[:, None]
+    w = fsw.shape_weights(centred, area, position)
+    w_area = fsw.shape_weights(centred, area)          # no positions: the area's alone
+    assert np.isclose(np.mean(1.0 / w), 1.0, rtol=1e-9)
+    ratio = w / w_area
+    by = {p: np.median(ratio[position == p]) for p in np.unique(position)}
+    # the loud position against the quiet ones: ~ 1/16 of their weight, relative to the
+    # area-only weights (sampling noise of a heavy-tailed mean square: within a factor 2)
+    loud = by["motor|1.0"] / np.mean([by["motor|0.5"], by["trailer|0.5"]])
+    assert 1.0 / 32.0 < loud < 1.0 / 8.0, by
+    assert 0.7 < by["motor|0.5"] / by["trailer|0.5"] < 1.4, by
+    before = fsw.SHAPE_WEIGHTING
+    try:
+        fsw.SHAPE_WEIGHTING = "area"        # the finder before the position factor
+        assert np.array_equal(fsw.shape_weights(centred, area, position), w_area)
+    finally:
+        fsw.SHAPE_WEIGHTING = before
 
 
 # the twin's flange-tread offset of one instrument at the detection table's strength
