@@ -29,12 +29,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from wearcast.physics.bogie_equations import BogieContacts
+from wearcast.physics.conformal_patch_width import conformal_half_width_mm
 from wearcast.physics.curving import (
     ContactTable,
     CurvingConvergenceError,
     CurvingResult,
     build_contact_table,
-    conformal_half_width_mm,
     curve_case,
     solve_curving_cases_or_none,
 )
@@ -170,8 +170,9 @@ def class_contacts(vehicle: BogieVehicle, classes: Sequence[CurveClass], y_mm: N
 
     patch_width : ``hertz`` (the curving model's ellipse, from the gap smoothed over 2 mm) or
         ``kik_piotrowski`` (the lateral semi-axis widened to the extent of the unsmoothed gap
-        within 0.55 x the approach, ``curving.conformal_half_width_mm``: conformal flange-root
-        patches become wide and mild; the equilibrium and creepages are unchanged)
+        within 0.55 x the approach, ``conformal_patch_width.conformal_half_width_mm``:
+        conformal flange-root patches become wide and mild; the equilibrium and creepages are
+        unchanged)
 
     Returns (contacts, number of classes that kept the previous contact). Raises
     CurvingConvergenceError when a class fails and there is no previous contact.

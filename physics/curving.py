@@ -64,7 +64,6 @@ from wearcast.physics.curving_result import CurvingResult as CurvingResult
 from wearcast.physics.curving_table import GAUGE_MM as GAUGE_MM
 from wearcast.physics.curving_table import ContactTable as ContactTable
 from wearcast.physics.curving_table import build_contact_table as build_contact_table
-from wearcast.physics.curving_table import conformal_half_width_mm as conformal_half_width_mm
 from wearcast.physics.curving_table import conical_wheel as conical_wheel
 from wearcast.physics.curving_table import contact_table_for as contact_table_for
 from wearcast.physics.curving_table import measured_wheel_table_for as measured_wheel_table_for

@@ -24,7 +24,7 @@ from wearcast.physics.contact.geometry import (
     rigid_wheel_gap,
     rigid_wheel_gap_beyond_rail,
 )
-from wearcast.physics.contact.hertz import effective_modulus_mpa, hertz_contact
+from wearcast.physics.contact.hertz import hertz_contact
 from wearcast.physics.contact.track_profiles import wheel_curve_from_height, wheelset_track
 from wearcast.physics.contact_candidates_kernel import N_SLOTS, candidate_slots
 from wearcast.physics.gap_smoothing import (
@@ -367,7 +367,7 @@ def conical_wheel(conicity: float) -> Callable[[NDArray[np.float64]], NDArray[np
     return height_mm
 
 
-def _rail_envelope(rail: str | RailShape, inclination: float) -> tuple[NDArray, NDArray, float]:
+def rail_envelope(rail: str | RailShape, inclination: float) -> tuple[NDArray, NDArray, float]:
     """Upper envelope z(y) of the inclined rail (top at 0) and the distance of the rail-frame
     origin from the track centre [mm] that puts the gauge point (14 mm below the top, innermost)
     at GAUGE_MM / 2."""
@@ -380,85 +380,6 @@ def _rail_envelope(rail: str | RailShape, inclination: float) -> tuple[NDArray, 
     order = np.argsort(zg)
     y_gauge = float(np.interp(-14.0, zg[order], yg[order]))
     return y, z, GAUGE_MM / 2.0 - y_gauge
-
-
-#: Kik & Piotrowski (1996): the patch is where the undeformed interpenetration exceeds
-#: (1 - epsilon) of the approach, i.e. where the gap is below epsilon * approach; epsilon = 0.55.
-KIK_PIOTROWSKI_EPSILON = 0.55
-
-
-def conformal_half_width_mm(wheel_y_grid_mm: ArrayLike, wheel_z_grid_mm: ArrayLike,
-                            rail: str | RailShape,
-                            inclination: float, wheel_y_mm: ArrayLike, rail_y_mm: ArrayLike,
-                            normal_n: ArrayLike, a_mm: ArrayLike, b_mm: ArrayLike,
-                            search_mm: float = 12.0) -> NDArray[np.float64]:
-    """Lateral half-width of a patch from the UNSMOOTHED gap (Kik-Piotrowski's virtual
-    penetration), along the profile arc [mm], never below the Hertz ``b_mm``.
-
-    The curving model's Hertz patches take the curvature of a gap smoothed over 2 mm, which
-    turns a conformal pair (the S1002 flange root, concave R13, on the 60E1 gauge corner, convex
-    R13: relative curvature ~0) into a narrow ellipse (b < 1 mm, p0 of several GPa). Seed 002
-    §2.1 (Simpack) finds the patch by Kik-Piotrowski and replaces it by an equivalent ellipse;
-    so do we, for the patch width only: with the approach delta = 3 N / (4 E* sqrt(a b)) of the
-    Hertz patch (its circular equivalent, Johnson §4.2), the patch spans the connected range
-    around the contact point where the raw gap is within epsilon * delta of its minimum
-    (epsilon = 0.55, Kik & Piotrowski 1996). For a Hertzian pair this is about b; for a
-    conformal one it is the extent of the conformal arcs.
-
-    Parameters
-    ----------
-    wheel_y_grid_mm, wheel_z_grid_mm : the wheel profile z(y) in the wheel frame [mm]
-    rail, inclination : rail profile and inclination (as the vehicle's)
-    wheel_y_mm, rail_y_mm : contact points on the wheel and in the rail frame of the contact
-        table (``CurvingResult.wheel_y_mm`` / ``rail_y_mm``), shape S [mm]
-    normal_n, a_mm, b_mm : normal force [N] and Hertz semi-axes [mm], shape S
-    search_mm : half-range searched around the contact point [mm]
-
-    Returns
-    -------
-    half-width along the profile arc [mm], shape S (b_mm where not loaded)
-    """
-    yg = np.asarray(wheel_y_grid_mm, dtype=float)
-    zg = np.asarray(wheel_z_grid_mm, dtype=float)
-    yw, yr, n, a, b = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
-        wheel_y_mm, rail_y_mm, normal_n, a_mm, b_mm)))
-    ry, rz, _ = _rail_envelope(rail, inclination)
-    e_star = effective_modulus_mpa()
-    out = b.copy()
-    step = 0.05
-    local = np.arange(-search_mm, search_mm + 1e-9, step)
-    loaded = np.nonzero((n > 1.0) & (a > 0) & (b > 0))
-    if loaded[0].size == 0:
-        return out
-    # all loaded patches at once, row by row the arithmetic of one patch (the same numbers)
-    yw_p, yr_p, n_p, a_p, b_p = (v[loaded] for v in (yw, yr, n, a, b))
-    y = yw_p[:, None] + local[None, :]
-    # rail_y is the rail-envelope coordinate of the contact (ContactTable.candidates:
-    # rail_y = y + offset + shift, the coordinate build_contact_table samples the rail at)
-    y_rail = y + (yr_p - yw_p)[:, None]
-    gap = -np.interp(y, yg, zg) - np.interp(y_rail, ry, rz, left=np.nan, right=np.nan)
-    gap = np.where(np.isfinite(gap), gap, np.inf)
-    centre = int(np.argmin(np.abs(local)))
-    lo_win = max(0, centre - int(round(1.0 / step)))
-    hi_win = min(local.size, centre + int(round(1.0 / step)) + 1)
-    g_min = np.min(gap[:, lo_win:hi_win], axis=1)
-    delta = 3.0 * n_p / (4.0 * e_star * np.sqrt(a_p * b_p))
-    inside = gap <= (g_min + KIK_PIOTROWSKI_EPSILON * delta)[:, None]
-    # the connected run of inside points through the smallest gap near the contact point
-    j0 = lo_win + np.argmin(gap[:, lo_win:hi_win], axis=1)
-    cols = np.arange(local.size)[None, :]
-    rows = np.arange(j0.size)
-    last_out = np.maximum.accumulate(np.where(inside, -1, cols), axis=1)
-    left = np.where(j0 > 0, last_out[rows, np.maximum(j0 - 1, 0)], -1) + 1
-    first_out = np.minimum.accumulate(np.where(inside, local.size, cols)[:, ::-1],
-                                      axis=1)[:, ::-1]
-    right = np.where(j0 < local.size - 1, first_out[rows, np.minimum(j0 + 1, local.size - 1)],
-                     local.size) - 1
-    width_y = (right - left + 1) * step
-    slope = np.interp(yw_p, yg, np.gradient(zg, yg))
-    half_arc = 0.5 * width_y * np.sqrt(1.0 + slope * slope)
-    out[loaded] = np.where(half_arc > b_p, half_arc, b_p)
-    return out
 
 
 def _interp_rows(x: NDArray, xp: NDArray, fp_rows: NDArray, outside: float) -> NDArray:
@@ -600,7 +521,7 @@ def _side_table(rail: str | RailShape, opposite: str | RailShape | None,
     # the wheel's rigid rise so that the roll of the pair is (rise(y) - rise(-y)) / 1500 mm
     rigid_roll = np.interp(shifts, contact_level, roll)
     rigid_rise = TAPE_CIRCLE_HALF_SPACING_MM * rigid_roll
-    _, _, rail_origin = _rail_envelope(rail, inclination)
+    _, _, rail_origin = rail_envelope(rail, inclination)
     offset = TAPE_CIRCLE_HALF_SPACING_MM - rail_origin  # rail y of wheel y = 0 at zero shift
     lo, hi = FLANK_SMOOTHING_Y_MM
     blend = np.clip((y_w - lo) / (hi - lo), 0.0, 1.0)  # 1 on the tread, 0 on the flank

@@ -269,12 +269,13 @@ def _half_width_one_patch_at_a_time(yg, zg, rail, inclination, yw, yr, n, a, b,
                                     search_mm=12.0):
     """conformal_half_width_mm as written before it took all patches at once: a loop over
     the loaded patches (the reference the batched version must equal bit for bit)."""
+    from wearcast.physics.conformal_patch_width import KIK_PIOTROWSKI_EPSILON
     from wearcast.physics.contact.hertz import effective_modulus_mpa
-    from wearcast.physics.curving_table import KIK_PIOTROWSKI_EPSILON, _rail_envelope
+    from wearcast.physics.curving_table import rail_envelope
 
     yw, yr, n, a, b = np.broadcast_arrays(*(np.asarray(v, dtype=float)
                                             for v in (yw, yr, n, a, b)))
-    ry, rz, _ = _rail_envelope(rail, inclination)
+    ry, rz, _ = rail_envelope(rail, inclination)
     e_star = effective_modulus_mpa()
     out = b.copy()
     step = 0.05
@@ -308,7 +309,7 @@ def test_kik_piotrowski_width_of_all_patches_at_once_equals_one_at_a_time():
     # wheels, a tangent and two curves) and on random patches (some unloaded, some whose
     # search range leaves the rail: an infinite gap)
     from wearcast.physics.class_contacts import class_contacts_all_wheels
-    from wearcast.physics.curving_table import conformal_half_width_mm
+    from wearcast.physics.conformal_patch_width import conformal_half_width_mm
     from wearcast.physics.profiles.s1002 import s1002_height_mm
     from wearcast.physics.vocabulary import CurveClass
 
