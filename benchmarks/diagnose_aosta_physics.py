@@ -35,10 +35,9 @@ import pandas as pd
 from wearcast.physics import gap_smoothing as gs
 from wearcast.physics.rail_tonnage import rails_worn_to_tonnages
 from wearcast.physics.vehicle_wear_simulation import VehicleWearOptions, simulate_vehicle_wear
+from wearcast.statistics.physics_causes import CATALOGUE, RAIL_TONNAGES_MT
 from wearcast.statistics.physics_diagnosis import (
-    CATALOGUE,
     DIAGNOSIS_SCALE_MAX,
-    RAIL_TONNAGES_MT,
     diagnose_physics,
     diagnosis_mileage_km,
     run_sequentially,

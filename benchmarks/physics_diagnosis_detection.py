@@ -30,12 +30,12 @@ from wearcast.statistics.generators.scenarios import (
     curvy_segments,
     measured_vehicle_series,
 )
-from wearcast.statistics.physics_diagnosis import (
+from wearcast.statistics.physics_causes import (
     RAIL_TONNAGES_MT,
     PhysicsCause,
     curve_classes_cause,
-    diagnose_physics,
 )
+from wearcast.statistics.physics_diagnosis import diagnose_physics
 from wearcast.statistics.routes import route_from_segments
 
 ROUTE = [CurveClass(250.0, 100.0, None, "left", 0.15),

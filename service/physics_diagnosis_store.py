@@ -37,12 +37,14 @@ from wearcast.service.errors import Unprocessable
 from wearcast.service.job_store import JobControl, default_timeout, queue_job
 from wearcast.service.physics_schemas import MAX_STEPS_PER_RUN
 from wearcast.service.route_store import rebinned_classes
-from wearcast.statistics.physics_diagnosis import (
+from wearcast.statistics.physics_causes import (
     CURVE_CLASSES_PARAMETER,
     NO_SEGMENTS,
+    catalogue_for,
+)
+from wearcast.statistics.physics_diagnosis import (
     NULL_TEST,
     PhysicsDiagnosis,
-    catalogue_for,
     diagnose_physics,
 )
 from wearcast.statistics.physics_model import VehicleSeries, calibrate_scale

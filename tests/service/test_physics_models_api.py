@@ -264,7 +264,7 @@ def test_the_whole_catalogue_names_a_hidden_cause_or_none(tmp_path, hidden, expe
     assert r.status_code == 200, r.text
     d = r.json()
     assert d["verdict"] == expected, d
-    from wearcast.statistics.physics_diagnosis import CATALOGUE
+    from wearcast.statistics.physics_causes import CATALOGUE
 
     assert len(d["findings"]) == len(CATALOGUE) == 7 and d["group_by"] == "vehicle"
     assert set(d["skipped"]) == {"curve_classes"}

@@ -9,14 +9,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wearcast.statistics.physics_diagnosis import (
+from wearcast.statistics.physics_causes import (
     CATALOGUE,
     NO_SEGMENTS,
-    SERIES,
     PhysicsCause,
     catalogue_for,
-    catalogue_runs,
     curve_classes_cause,
+)
+from wearcast.statistics.physics_diagnosis import (
+    SERIES,
+    catalogue_runs,
     diagnose_physics,
     fit_wear_scale,
     run_sequentially,
@@ -243,7 +245,7 @@ def test_the_loop_itself_hides_a_cause(hidden, expected):
         cached_vehicle_simulator,
         measured_vehicle_series,
     )
-    from wearcast.statistics.physics_diagnosis import PhysicsCause
+    from wearcast.statistics.physics_causes import PhysicsCause
 
     route = [CurveClass(250.0, 100.0, None, "left", 0.15),
              CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
@@ -283,7 +285,7 @@ def test_loop_series_measured_with_flange_height():
 
 
 def test_the_traction_cause_is_scaled_to_the_vehicles_adhesion_torque():
-    from wearcast.statistics.physics_diagnosis import TRACTION_ADHESION_SHARES, catalogue_for
+    from wearcast.statistics.physics_causes import TRACTION_ADHESION_SHARES, catalogue_for
 
     default = next(c for c in catalogue_for(0.28) if c.name == "traction_on_motor_axles")
     assert default.null == 0.0 and default.values[0] == 0.0
@@ -377,7 +379,7 @@ def _metro_catalogue():
 def loop_on_worn_rails():
     from wearcast.physics.vocabulary import CurveClass
     from wearcast.statistics.generators.scenarios import cached_vehicle_simulator
-    from wearcast.statistics.physics_diagnosis import RAIL_TONNAGES_MT
+    from wearcast.statistics.physics_causes import RAIL_TONNAGES_MT
 
     route = [CurveClass(250.0, 100.0, None, "left", 0.15),
              CurveClass(250.0, 100.0, None, "right", 0.15), CurveClass(None, share=0.7)]
