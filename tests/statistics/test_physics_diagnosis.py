@@ -451,8 +451,13 @@ def test_the_loop_on_another_binning_is_named_curve_classes(loop_on_segments, hi
     if expected == "none":
         return
     f = d.finding("curve_classes")
-    assert f.extension == {"parameter": "curve_classes", "value": 2,
-                           "wear_scale": pytest.approx(1.2, rel=0.05), "null_value": None}
+    fit = dict(f.extension)
+    rms = fit.pop("rms_mm_by_series")
+    assert fit == {"parameter": "curve_classes", "value": 2,
+                   "wear_scale": pytest.approx(1.2, rel=0.05), "null_value": None}
+    # the extension fits every scored series to about the data's 0.02 mm noise, the null not
+    assert set(rms) == {"FT_mm", "FH_mm", "QR_mm"} and max(rms.values()) < 0.05
+    assert max(d.null_fit["rms_mm_by_series"].values()) > 2 * max(rms.values())
     assert f.gain.ci95_low > 0.5
 
 
