@@ -31,7 +31,8 @@ class PhysicsCause:
     """the values are factors on part of the wear (flange patches): a value above 1 is run at
     the wear scale 1 / value (:meth:`run_scale`), so that its run, made to the null's mileage,
     takes about the null's steps instead of up to ``value`` times as many; its series is read
-    at its mileage x the run scale (the scale equivalence of the module docstring)"""
+    at its mileage x the run scale (a run at scale c reaches at m what the scale-1 run
+    reaches at c m: ``physics_diagnosis``'s module docstring)"""
 
     @property
     def categorical(self) -> bool:

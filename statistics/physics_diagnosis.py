@@ -404,15 +404,14 @@ def diagnose_physics(simulate: Callable[[Mapping[str, Any]], Any], measured: pd.
                 "rms_mm_by_series": rms_by_series(chosen0, scale0)}
     rows = []
     for cause in catalogue:
-        failed = [by_params[_run_key(cause.run_params(v))] for v in cause.values
-                  if v != cause.null]
-        failed = [r for r in failed if isinstance(r, BaseException)]
+        made = {v: by_params[_run_key(cause.run_params(v))] for v in cause.values
+                if v != cause.null}
+        failed = [r for r in made.values() if isinstance(r, BaseException)]
         if failed:  # a run that fails leaves the cause unscored, saying why
             skipped[cause.name] = f"the loop failed for this extension: {failed[0]}"
             continue
         cause_runs = {v: (null_runs[None] if v == cause.null else
-                          _Series(by_params[_run_key(cause.run_params(v))], cols,
-                                  cause.run_scale(v)))
+                          _Series(made[v], cols, cause.run_scale(v)))
                       for v in cause.values}
         runs[cause.name] = cause_runs
         after = held_out(cause, cause_runs)
